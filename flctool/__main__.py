@@ -1,0 +1,3 @@
+from flctool.cli import run
+
+run()

@@ -1,0 +1,74 @@
+"""The typer app, its global options, and the one place errors become exit codes."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+
+from flctool import __version__
+from flctool.errors import FlcError, SpecError
+
+app = typer.Typer(
+    name="flctool",
+    help="Learned fuzzy logic controllers for reactive robot behaviours: declare a behaviour "
+    "in YAML, learn its rules, export the controller.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+console = Console()
+err_console = Console(stderr=True)
+
+_state = {"debug": False}
+
+
+def _version(value: bool) -> None:
+    if value:
+        console.print(f"flctool {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def main(
+    debug: Annotated[bool, typer.Option("--debug", help="Show full tracebacks on errors.")] = False,
+    version: Annotated[bool | None, typer.Option(
+        "--version", callback=_version, is_eager=True, help="Print the version and exit.")] = None,
+) -> None:
+    _state["debug"] = debug
+
+
+def print_error(error: FlcError) -> None:
+    """Render a flctool error for a person: one located line per problem."""
+    if isinstance(error, SpecError):
+        count = len(error.problems)
+        err_console.print(f"[bold red]error:[/] {escape(error.file or 'input')} has "
+                          f"{count} problem{'s' if count != 1 else ''}")
+        for problem in error.problems:
+            err_console.print(f"  {escape(str(problem))}", soft_wrap=True, highlight=False)
+        return
+    err_console.print(f"[bold red]error:[/] {escape(str(error))}", soft_wrap=True,
+                      highlight=False)
+
+
+@contextmanager
+def user_errors() -> Iterator[None]:
+    """Turn flctool errors into a message and exit code 1 (a traceback only with --debug)."""
+    try:
+        yield
+    except FlcError as error:
+        if _state["debug"]:
+            raise
+        print_error(error)
+        raise typer.Exit(1) from None
+    except KeyboardInterrupt:
+        err_console.print("[yellow]interrupted[/]")
+        raise typer.Exit(130) from None
+    except BrokenPipeError:  # e.g. `flctool infer ... | head`
+        sys.stderr.close()
+        raise typer.Exit(0) from None

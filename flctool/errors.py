@@ -1,0 +1,115 @@
+"""One exception tree for flctool.
+
+Every message says what is wrong, where (file, line, field path) and how to fix it.
+The library raises these; only the CLI turns them into exit codes and coloured text.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+PathPart = str | int
+
+
+def format_path(path: Sequence[PathPart]) -> str:
+    """Render a field path as the user wrote it: ``inputs.pan.sets.left`` or ``rules[3].then``."""
+    text = ""
+    for part in path:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        else:
+            text += f".{part}" if text else str(part)
+    return text or "(top level)"
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with an input file, located as precisely as the file allows."""
+
+    path: tuple[PathPart, ...]
+    message: str
+    hint: str = ""
+    file: str | None = None
+    line: int | None = None  # 1-based
+    column: int | None = None  # 1-based
+
+    def location(self) -> str:
+        where = self.file or "<behaviour>"
+        if self.line is not None:
+            where += f":{self.line}"
+            if self.column is not None:
+                where += f":{self.column}"
+        return where
+
+    def __str__(self) -> str:
+        text = f"{self.location()}: {format_path(self.path)}: {self.message}"
+        if self.hint:
+            text += f" (fix: {self.hint})"
+        return text
+
+
+class FlcError(Exception):
+    """Base of every error flctool raises on purpose."""
+
+    #: A short, imperative suggestion shown after the message.
+    hint: str = ""
+
+    def __init__(self, message: str, hint: str = "") -> None:
+        super().__init__(message)
+        if hint:
+            self.hint = hint
+
+    def __str__(self) -> str:
+        text = super().__str__()
+        return f"{text} (fix: {self.hint})" if self.hint else text
+
+
+class SpecError(FlcError):
+    """A behaviour file (or another input file) is invalid; carries every problem found."""
+
+    def __init__(self, problems: Sequence[Problem], file: str | None = None) -> None:
+        self.problems = list(problems)
+        self.file = file
+        count = len(self.problems)
+        head = f"{file or 'behaviour'}: {count} problem{'s' if count != 1 else ''}"
+        super().__init__(head + "".join(f"\n  {p}" for p in self.problems))
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+
+class InferenceError(FlcError):
+    """Inference was asked something it cannot answer (NaN input, wrong shape)."""
+
+
+class EnvError(FlcError):
+    """An environment adapter could not be built or misbehaved."""
+
+
+class LinkError(EnvError):
+    """The connection to a robot (or its bridge) failed or timed out."""
+
+
+class LearnError(FlcError):
+    """A learner could not start, resume or finish a run."""
+
+
+class RunDirError(FlcError):
+    """A run directory is missing, incomplete or does not match the request."""
+
+
+class ExportError(FlcError):
+    """A controller cannot be written in (or read from) the requested format."""
+
+
+class MissingDependencyError(FlcError):
+    """An optional dependency is not installed; the hint says which extra installs it."""
+
+    def __init__(self, package: str, extra: str, purpose: str) -> None:
+        self.package = package
+        self.extra = extra
+        super().__init__(
+            f"{purpose} needs the optional package '{package}', which is not installed",
+            hint=f"pip install 'flctool[{extra}]'",
+        )

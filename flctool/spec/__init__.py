@@ -1,0 +1,18 @@
+"""Behaviour files: pydantic models, YAML loading with line numbers, and writing back."""
+
+from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
+from flctool.spec.load import behaviour_from_data, load_behaviour, parse_behaviour
+from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Output, Rule
+
+__all__ = [
+    "FORMAT_VERSION",
+    "Behaviour",
+    "InputVariable",
+    "Output",
+    "Rule",
+    "behaviour_from_data",
+    "behaviour_to_data",
+    "behaviour_to_yaml",
+    "load_behaviour",
+    "parse_behaviour",
+]

@@ -1,0 +1,59 @@
+"""Writing a behaviour back out: plain data (for JSON) and readable YAML.
+
+Floats are written with ``repr``, the shortest text that reads back to the same double, so a
+controller written and loaded again gives bit-for-bit the same outputs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import yaml
+
+from flctool.spec.models import Behaviour
+
+
+def behaviour_to_data(behaviour: Behaviour) -> dict[str, Any]:
+    """The behaviour as JSON-compatible data with the file's keys, in the file's order."""
+    data: dict[str, Any] = behaviour.model_dump(mode="json", by_alias=True, exclude_none=True)
+    if not data.get("description"):
+        data.pop("description", None)
+    return data
+
+
+class _Flow(list[Any]):
+    """A list written on one line: ``[0.0, 0.0, 0.1, 0.3]``."""
+
+
+class _FlowMap(dict[str, Any]):
+    """A mapping written on one line: ``{if: {...}, then: forward}``."""
+
+
+class _Dumper(yaml.SafeDumper):
+    pass
+
+
+_Dumper.add_representer(_Flow, lambda d, v: d.represent_sequence(
+    "tag:yaml.org,2002:seq", v, flow_style=True))
+_Dumper.add_representer(_FlowMap, lambda d, v: d.represent_mapping(
+    "tag:yaml.org,2002:map", v.items(), flow_style=True))
+
+
+def _styled(value: Any, key: str = "") -> Any:
+    if isinstance(value, dict):
+        if key == "rule":
+            return _FlowMap({k: _styled(v) for k, v in value.items()})
+        return {k: _styled(v, k) for k, v in value.items()}
+    if isinstance(value, list):
+        if key == "rules":
+            return [_styled(rule, "rule") for rule in value]
+        return _Flow(value)
+    return value
+
+
+def behaviour_to_yaml(behaviour: Behaviour, header: str = "") -> str:
+    """A complete behaviour file; ``header`` lines become ``#`` comments at the top."""
+    body = yaml.dump(_styled(behaviour_to_data(behaviour)), Dumper=_Dumper, sort_keys=False,
+                     allow_unicode=True, width=100)
+    comment = "".join(f"# {line}".rstrip() + "\n" for line in header.splitlines())
+    return comment + body

@@ -1,0 +1,59 @@
+"""The ``learning:`` section: which learner, and its hyperparameters (paper Sec. IV)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, field_validator
+
+from flctool.registry import did_you_mean
+from flctool.spec.base import Section
+
+LEARNER_NAMES = ("pitt", "fuzzy_q", "hybrid")
+
+
+class QConfig(Section):
+    """Fuzzy Q-learning (eq. 4-9)."""
+
+    alpha: float = Field(0.1, gt=0, le=1, description="learning rate of eq. 7")
+    gamma: float = Field(0.9, ge=0, le=1, description="discount factor of eq. 6")
+    lambda_: float = Field(0.7, ge=0, le=1, alias="lambda",
+                           description="eligibility trace decay of eq. 8 (0: one-step)")
+    temperature: float = Field(0.15, gt=0, description=(
+        "Boltzmann temperature over rule strengths (hybrid mutation, fuzzy_q exploration)"))
+    initial: float = Field(0.0, description="initial value of every q")
+
+
+class ExplorationConfig(Section):
+    """How ``fuzzy_q`` picks each rule's consequent during a trial."""
+
+    policy: Literal["boltzmann", "epsilon_greedy"] = "boltzmann"
+    epsilon: float = Field(0.1, ge=0, le=1, description="epsilon of epsilon_greedy")
+    decay: float = Field(1.0, gt=0, le=1, description=(
+        "multiplies temperature (boltzmann) or epsilon (epsilon_greedy) after each generation"))
+    minimum: float = Field(0.0, ge=0, description="floor of the decayed temperature or epsilon")
+
+
+class LearningConfig(Section):
+    """Defaults are the paper's protocol: population 10, pc 0.2, pm 0.1, 30 generations."""
+
+    learner: str = Field("hybrid", description="one of: " + ", ".join(LEARNER_NAMES))
+    seed: int = Field(0, ge=0, description="seeds every random choice of the run")
+    population: int = Field(10, ge=2)
+    generations: int = Field(30, ge=1)
+    crossover: float = Field(0.2, ge=0, le=1, description="crossover probability pc")
+    mutation: float = Field(0.1, ge=0, le=1, description="mutation probability pm, per gene")
+    elites: int = Field(1, ge=0, description="best individuals copied unchanged")
+    trials: int = Field(1, ge=1, description="trials per individual per generation")
+    common_starts: bool = Field(False, description=(
+        "every individual of a generation gets the same start states"))
+    q: QConfig = QConfig()
+    exploration: ExplorationConfig = ExplorationConfig()
+
+    @field_validator("learner")
+    @classmethod
+    def _known_learner(cls, name: str) -> str:
+        if name not in LEARNER_NAMES:
+            raise ValueError(f"unknown learner '{name}'.{did_you_mean(name, LEARNER_NAMES)} "
+                             f"Use one of: {', '.join(LEARNER_NAMES)}")
+        return name

@@ -1,0 +1,127 @@
+"""The behaviour file as pydantic models (paper Sec. II).
+
+A behaviour declares N inputs, each partitioned into L_i fuzzy sets given as trapezoid
+quadruples ``(pa, pb, pc, pd)``; one output with K singleton commands; and optionally the rule
+consequents. Structure and types are checked here; the checks that relate fields to each other
+(coverage, rule references) live in :mod:`flctool.spec.checks`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Annotated, Any
+
+from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
+
+from flctool.spec.base import Name, Section
+from flctool.spec.environment import EnvironmentConfig
+from flctool.spec.learning import LearningConfig
+
+FORMAT_VERSION = 1
+
+
+def _ordered(quad: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    pa, pb, pc, pd = quad
+    if not pa <= pb <= pc <= pd:
+        raise ValueError(
+            f"the quadruple [{pa:g}, {pb:g}, {pc:g}, {pd:g}] must satisfy pa <= pb <= pc <= pd; "
+            "write the left foot, left shoulder, right shoulder, right foot in that order")
+    return quad
+
+
+Quadruple = Annotated[tuple[float, float, float, float], AfterValidator(_ordered)]
+
+
+def _increasing(bounds: tuple[float, float]) -> tuple[float, float]:
+    lo, hi = bounds
+    if not lo < hi:
+        raise ValueError(f"range [{lo:g}, {hi:g}] must be [low, high] with low < high")
+    return bounds
+
+
+class InputVariable(Section):
+    """One sensor input s_i with its L_i fuzzy sets."""
+
+    range: Annotated[tuple[float, float], AfterValidator(_increasing)] = Field(
+        description="[low, high]; inputs outside it are clipped to it")
+    unit: str | None = None
+    sets: dict[Name, Quadruple] = Field(min_length=1, description=(
+        "set name -> [pa, pb, pc, pd]; pb == pc is a triangle, pa == pb or pc == pd a "
+        "vertical edge"))
+
+
+class Output(Section):
+    """The single output a, with its K singleton commands c^k."""
+
+    name: Name
+    unit: str | None = None
+    commands: dict[Name, float] = Field(min_length=1, description="command name -> singleton")
+
+
+class Rule(Section):
+    """Rule R_m of eq. 1: IF s_1 is F^{j_1} AND ... THEN a is c^k."""
+
+    if_: dict[Name, Name] = Field(alias="if", min_length=1)
+    then: Name
+
+
+class Behaviour(Section):
+    """A whole behaviour file. Build it with :func:`flctool.load_behaviour`."""
+
+    flctool: int = Field(description=f"file format version; this flctool writes {FORMAT_VERSION}")
+    name: Name
+    description: str = ""
+    inputs: dict[Name, InputVariable] = Field(min_length=1, description=(
+        "input name -> variable; file order is the order of the state vector"))
+    output: Output
+    rules: list[Rule] = Field(default_factory=list, description=(
+        "rule consequents; empty or partial for a behaviour still to be learned"))
+    learning: LearningConfig = LearningConfig()
+    environment: EnvironmentConfig | None = None
+
+    @field_validator("flctool")
+    @classmethod
+    def _supported_version(cls, version: int) -> int:
+        if version > FORMAT_VERSION:
+            raise ValueError(
+                f"this file uses format version {version}, but this flctool reads version "
+                f"{FORMAT_VERSION} only; upgrade flctool (pip install --upgrade flctool)")
+        if version < 1:
+            raise ValueError(f"format version must be {FORMAT_VERSION}, got {version}")
+        return version
+
+    @model_validator(mode="after")
+    def _consistent(self, info: ValidationInfo) -> Behaviour:
+        from flctool.spec.checks import find_problems
+
+        problems = find_problems(self)
+        context: Any = info.context
+        if isinstance(context, dict) and "problems" in context:
+            context["problems"].extend(problems)  # the loader locates and reports them all
+        elif problems:
+            raise ValueError("; ".join(f"{p.path}: {p.message}" for p in problems))
+        return self
+
+    # -- derived facts -------------------------------------------------------------------
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return tuple(self.inputs)
+
+    @property
+    def rule_count(self) -> int:
+        """M = prod(L_i), the size of the full rule grid."""
+        return math.prod(len(v.sets) for v in self.inputs.values())
+
+    def antecedents(self) -> list[tuple[str, ...]]:
+        """Every rule's set names in grid order: the last input varies fastest (eq. 1)."""
+        return list(itertools.product(*(tuple(v.sets) for v in self.inputs.values())))
+
+    def missing_rules(self) -> list[tuple[str, ...]]:
+        """Antecedents that have no rule yet; empty for a deployable controller."""
+        given = {tuple(r.if_[n] for n in self.input_names) for r in self.rules}
+        return [a for a in self.antecedents() if a not in given]
+
+    @property
+    def is_deployable(self) -> bool:
+        return len(self.rules) == self.rule_count and not self.missing_rules()
