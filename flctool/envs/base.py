@@ -1,0 +1,85 @@
+"""The environment adapter protocol: Gymnasium-shaped, batched first.
+
+A :class:`BatchEnv` runs B independent episodes in lock-step as numpy arrays -- a population,
+or a thousand evaluation episodes, in one call. :class:`SingleEnv` is the one-episode form with
+Gymnasium's signatures (``reset(seed) -> obs, info``; ``step(action) -> obs, reward,
+terminated, truncated, info``).
+
+The action is the controller's crisp output ``a`` of eq. 3, one float per episode: the adapter
+decides how ``a`` drives its world (blend the commands' motions, take the nearest command,
+map to a Gymnasium action). Observations are ordered like the behaviour's inputs.
+
+Episode ``b`` draws all its randomness from ``seeds[b]`` alone, so stepping B episodes
+together gives exactly what stepping each on its own gives. Once an episode has ended, further
+steps leave it unchanged (reward 0, flags still set): callers step until all are done.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+@dataclass
+class Step:
+    """What one batched step returns; each array has one entry per episode."""
+
+    observations: FloatArray  # (B, N)
+    rewards: FloatArray  # (B,)
+    terminated: BoolArray  # (B,) ended by the task: reached the goal, or failed
+    truncated: BoolArray  # (B,) ended by the time limit
+    info: dict[str, Any] = field(default_factory=dict)
+
+
+class BatchEnv(ABC):
+    """B episodes at once. Subclasses implement :meth:`reset` and :meth:`step`."""
+
+    #: Names of the observation components, in the order of the behaviour's inputs.
+    observation_names: tuple[str, ...]
+    #: Steps after which an episode is truncated.
+    max_steps: int
+
+    @abstractmethod
+    def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:
+        """Start one episode per seed; returns observations (B, N) and info."""
+
+    @abstractmethod
+    def step(self, actions: FloatArray) -> Step:
+        """Apply the crisp outputs ``actions (B,)`` to every episode."""
+
+    @abstractmethod
+    def success(self) -> BoolArray:
+        """(B,) whether each current episode has ended in success so far."""
+
+    def episode_fitness(self, returns: FloatArray, lengths: NDArray[np.int64],
+                        success: BoolArray) -> FloatArray:
+        """The GA's fitness of finished trials; by default the undiscounted return."""
+        del lengths, success
+        return np.asarray(returns, dtype=np.float64)
+
+    def close(self) -> None:
+        """Release resources (sockets, subprocesses); the default holds none."""
+
+
+class SingleEnv:
+    """One episode with Gymnasium's signatures, over any :class:`BatchEnv` of size 1."""
+
+    def __init__(self, batch: BatchEnv) -> None:
+        self.batch = batch
+        self.observation_names = batch.observation_names
+
+    def reset(self, seed: int) -> tuple[FloatArray, dict[str, Any]]:
+        obs, info = self.batch.reset(np.array([seed], dtype=np.int64))
+        return obs[0], info
+
+    def step(self, action: float) -> tuple[FloatArray, float, bool, bool, dict[str, Any]]:
+        out = self.batch.step(np.array([action], dtype=np.float64))
+        return (out.observations[0], float(out.rewards[0]), bool(out.terminated[0]),
+                bool(out.truncated[0]), out.info)
