@@ -100,6 +100,23 @@ class Controller:
             alpha = np.minimum(alpha, mus[i][:, self.rule_grid[:, i]])
         return alpha
 
+    def active_rules(self, state: FloatArray) -> tuple[IntArray, FloatArray]:
+        """The rules that fire for one state (N,), and their activations (eq. 2).
+
+        Returns ``(rules (A,), alpha (A,))`` with ``alpha > 0``, rules in increasing order.
+        With overlapping trapezoids A <= 2^N however large M is, so per-step work that uses
+        only these follows the active rules, not M.
+        """
+        clipped = self.check_states(state)[0]
+        rules = np.zeros(1, dtype=np.intp)
+        alpha = np.ones(1)
+        for i, quads in enumerate(self.quadruples):
+            mu = trapezoid(clipped[i : i + 1], quads)[0]
+            (active,) = np.nonzero(mu)
+            rules = (rules[:, None] * len(quads) + active[None, :]).ravel()
+            alpha = np.minimum(alpha[:, None], mu[active][None, :]).ravel()
+        return rules, alpha
+
     def output(self, states: FloatArray, consequents: IntArray | None = None) -> FloatArray:
         """Crisp output by centre of area over singletons (eq. 3).
 
