@@ -105,6 +105,9 @@ def _translate(error: Any, source: SourceMap) -> Problem:
         loc.append("adapter")
         message = "the environment names no 'adapter'"
         hint = f"add 'adapter:' with one of: {', '.join(ADAPTER_NAMES)}"
+    elif kind == "too_short":
+        message = f"'{loc[-1]}' is empty"
+        hint = f"give at least {error['ctx']['min_length']} entry"
     elif kind == "value_error":
         message = message.removeprefix("Value error, ")
     else:

@@ -1,0 +1,193 @@
+"""Loading behaviour files: valid ones load, and each kind of mistake gets its own located
+message. Every bad file here asserts the exact line and the message a person would read."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from flctool.errors import SpecError
+from flctool.spec import load_behaviour, parse_behaviour
+
+GOOD = """\
+flctool: 1
+name: chase
+inputs:
+  size:
+    range: [0, 1]
+    sets:
+      small: [0, 0, 0.2, 0.6]
+      large: [0.4, 0.8, 1, 1]
+  pan:
+    range: [-90, 90]
+    unit: deg
+    sets:
+      right: [-90, -90, -30, 10]
+      left: [-10, 30, 90, 90]
+output:
+  name: turn
+  commands: {right: -1, ahead: 0, left: 1}
+rules:
+  - {if: {size: small, pan: right}, then: right}
+  - {if: {size: small, pan: left}, then: left}
+  - {if: {size: large, pan: right}, then: ahead}
+  - {if: {size: large, pan: left}, then: ahead}
+"""
+
+
+def _problems(text: str) -> list[tuple[int | None, str, str]]:
+    with pytest.raises(SpecError) as info:
+        parse_behaviour(text, "bad.yaml")
+    return [(p.line, ".".join(map(str, p.path)), p.message) for p in info.value.problems]
+
+
+def test_good_file_loads() -> None:
+    behaviour = parse_behaviour(GOOD, "good.yaml")
+    assert behaviour.input_names == ("size", "pan")
+    assert behaviour.rule_count == 4
+    assert behaviour.is_deployable
+    assert behaviour.inputs["pan"].unit == "deg"
+    assert behaviour.learning.population == 10  # the paper's defaults where the file is silent
+    assert behaviour.learning.crossover == 0.2
+    assert behaviour.learning.mutation == 0.1
+    assert behaviour.learning.generations == 30
+
+
+def test_partial_rules_are_allowed_for_learning() -> None:
+    text = GOOD.split("rules:")[0] + "rules:\n  - {if: {size: small, pan: right}, then: right}\n"
+    behaviour = parse_behaviour(text)
+    assert not behaviour.is_deployable
+    assert len(behaviour.missing_rules()) == 3
+    assert behaviour.missing_rules()[0] == ("small", "left")
+
+
+# (case, text, line, path, message) -- message is matched as a substring of the full text.
+BAD = [
+    ("malformed YAML", GOOD.replace("  name: turn", "  name: [turn"), 17,
+     "", "not valid YAML"),
+    ("tab indentation", GOOD.replace("    unit: deg", "\tunit: deg"), 11,
+     "", "a tab character is used for indentation"),
+    ("duplicate key", GOOD.replace("      large: [0.4, 0.8, 1, 1]",
+                                   "      large: [0.4, 0.8, 1, 1]\n      small: [0, 0, .1, .3]"),
+     9, "inputs.size.sets.small", "duplicate key 'small' (first given on line 7)"),
+    ("wrong type", GOOD.replace("range: [0, 1]", "range: [0, big]"), 5,
+     "inputs.size.range.1", "input should be a valid number"),
+    ("unordered quadruple", GOOD.replace("[0.4, 0.8, 1, 1]", "[0.8, 0.4, 1, 1]"), 8,
+     "inputs.size.sets.large", "must satisfy pa <= pb <= pc <= pd"),
+    ("set outside the range", GOOD.replace("[0.4, 0.8, 1, 1]", "[0.4, 0.8, 1, 1.5]"), 8,
+     "inputs.size.sets.large", "reaches outside the input's range [0, 1]"),
+    ("uncovered gap", GOOD.replace("[0, 0, 0.2, 0.6]", "[0, 0, 0.2, 0.3]"), 6,
+     "inputs.size.sets", "the values between 0.3 and 0.4 belong to no set"),
+    ("uncovered point", GOOD.replace("[0, 0, 0.2, 0.6]", "[0, 0, 0.2, 0.4]"), 6,
+     "inputs.size.sets", "the point 0.4 belong to no set"),
+    ("unknown set in a rule", GOOD.replace("{size: small, pan: left}", "{size: small, pan: lefft}"),
+     20, "rules.1.if.pan", "input 'pan' has no set 'lefft'. Did you mean 'left'?"),
+    ("unknown command", GOOD.replace("then: left}", "then: leftt}"), 20,
+     "rules.1.then", "unknown command 'leftt'. Did you mean 'left'?"),
+    ("missing version", GOOD.replace("flctool: 1\n", ""), 1,
+     "", "the format version 'flctool' is missing"),
+    ("future version", GOOD.replace("flctool: 1", "flctool: 2"), 1,
+     "flctool", "this file uses format version 2, but this flctool reads version 1 only"),
+    ("no inputs", GOOD.split("inputs:")[0] + "inputs: {}\noutput:" + GOOD.split("output:")[1]
+     .split("rules:")[0], 3, "inputs", "'inputs' is empty"),
+    ("no commands", GOOD.replace("commands: {right: -1, ahead: 0, left: 1}", "commands: {}")
+     .split("rules:")[0], 17, "output.commands", "'commands' is empty"),
+    ("duplicate rule", GOOD + "  - {if: {size: small, pan: left}, then: right}\n", 23,
+     "rules.4", "duplicate rule: the same antecedent as rules[1]"),
+    ("unknown key", GOOD.replace("    unit: deg", "    units: deg"), 11,
+     "inputs.pan.units", "unknown key 'units'. Did you mean 'unit'?"),
+    ("rule misses an input", GOOD.replace("{size: large, pan: left}", "{size: large}"), 22,
+     "rules.3.if", "rule gives no set for input(s) pan"),
+    ("unknown input in a rule", GOOD.replace("{size: large, pan: left}",
+                                             "{size: large, pann: left, pan: left}"), 22,
+     "rules.3.if.pann", "rule names an unknown input 'pann'. Did you mean 'pan'?"),
+    ("object-building tag", GOOD.replace("name: chase", "name: !!python/object:os.system chase"),
+     2, "name", "the YAML tag 'tag:yaml.org,2002:python/object:os.system' is not allowed"),
+    ("empty range", GOOD.replace("range: [0, 1]", "range: [1, 1]"), 5,
+     "inputs.size.range", "range [1, 1] must be [low, high] with low < high"),
+    ("infinite number", GOOD.replace("range: [0, 1]", "range: [0, .inf]"), 5,
+     "inputs.size.range.1", "input should be a finite number"),
+    ("bad name", GOOD.replace("      left: [-10", "      far-left: [-10"), 14,
+     "inputs.pan.sets.far-left", "'far-left' is not a valid name"),
+    ("missing field", GOOD.replace("  name: turn\n", ""), 15,
+     "output.name", "required field 'name' is missing"),
+    ("bad learning value", GOOD + "learning: {crossover: 1.5}\n", 23,
+     "learning.crossover", "input should be less than or equal to 1"),
+    ("unknown learner", GOOD + "learning: {learner: hybird}\n", 23,
+     "learning.learner", "unknown learner 'hybird'. Did you mean 'hybrid'?"),
+    ("unknown adapter", GOOD + "environment: {adapter: ballchase-simm}\n", 23,
+     "environment.adapter", "unknown adapter 'ballchase-simm'. Did you mean 'ballchase-sim'?"),
+    ("not a mapping", "- just\n- a list\n", 1, "", "a behaviour file must be a mapping"),
+    ("output named like an input", GOOD.replace("name: turn", "name: pan"), 16,
+     "output.name", "the output is named 'pan', like an input"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "path", "message"),
+                         [case[1:] for case in BAD], ids=[case[0] for case in BAD])
+def test_bad_file_is_reported_at_its_line(text: str, line: int | None, path: str,
+                                          message: str) -> None:
+    problems = _problems(text)
+    assert any(p_line == line and p_path == path and message in p_msg
+               for p_line, p_path, p_msg in problems), problems
+
+
+def test_bad_files_are_distinct() -> None:
+    assert len({case[1] for case in BAD}) == len(BAD) >= 15
+
+
+def test_every_problem_is_reported_not_just_the_first() -> None:
+    text = (GOOD.replace("[0.4, 0.8, 1, 1]", "[0.8, 0.4, 1, 1]")
+            .replace("    unit: deg", "    units: deg")
+            .replace("range: [-90, 90]", "range: [-90, x]"))
+    problems = _problems(text)
+    assert [p[1] for p in problems] == ["inputs.size.sets.large", "inputs.pan.range.1",
+                                        "inputs.pan.units"]
+
+
+def test_every_rule_problem_is_reported() -> None:
+    text = GOOD.replace("then: left}", "then: nowhere}").replace("pan: right}, then: ahead",
+                                                                  "pan: rihgt}, then: ahead")
+    assert [p[0] for p in _problems(text)] == [20, 21]
+
+
+def test_messages_carry_file_line_column_and_a_fix() -> None:
+    with pytest.raises(SpecError) as info:
+        parse_behaviour(GOOD.replace("    units: deg", "").replace("    unit: deg",
+                                                                     "    units: deg"), "b.yaml")
+    text = str(info.value.problems[0])
+    assert text == ("b.yaml:11:5: inputs.pan.units: unknown key 'units'. Did you mean 'unit'? "
+                    "(fix: allowed keys here: range, unit, sets)")
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(SpecError, match="no such file"):
+        load_behaviour(tmp_path / "absent.yaml")
+
+
+def test_empty_file(tmp_path: Path) -> None:
+    path = tmp_path / "empty.yaml"
+    path.write_text("")
+    with pytest.raises(SpecError, match="must be a mapping, but this is empty"):
+        load_behaviour(path)
+
+
+def test_anchors_of_plain_data_are_fine() -> None:
+    text = GOOD.replace("      small: [0, 0, 0.2, 0.6]", "      small: &s [0, 0, 0.2, 0.6]")
+    assert parse_behaviour(text).inputs["size"].sets["small"] == (0, 0, 0.2, 0.6)
+
+
+def test_behaviour_is_frozen() -> None:
+    behaviour = parse_behaviour(GOOD)
+    with pytest.raises(Exception, match="frozen"):
+        behaviour.name = "other"  # type: ignore[misc]
+
+
+def test_model_validation_outside_the_loader_still_checks_consistency() -> None:
+    from flctool.spec.models import Behaviour
+
+    data = parse_behaviour(GOOD).model_dump(by_alias=True)
+    data["rules"][0]["then"] = "nowhere"
+    with pytest.raises(ValueError, match="unknown command 'nowhere'"):
+        Behaviour.model_validate(data)
