@@ -9,8 +9,8 @@ The public API::
 
 __version__ = "0.1.0"
 
-from flctool.compile import Controller, compile_behaviour, with_rules  # noqa: E402
-from flctool.errors import (  # noqa: E402
+from flctool.compile import Controller, compile_behaviour, with_rules
+from flctool.errors import (
     EnvError,
     ExportError,
     FlcError,
@@ -19,7 +19,7 @@ from flctool.errors import (  # noqa: E402
     LinkError,
     SpecError,
 )
-from flctool.spec import (  # noqa: E402
+from flctool.spec import (
     Behaviour,
     behaviour_to_yaml,
     load_behaviour,

@@ -76,7 +76,7 @@ class SpecError(FlcError):
         super().__init__(head + "".join(f"\n  {p}" for p in self.problems))
 
     def __str__(self) -> str:
-        return self.args[0]
+        return str(self.args[0])
 
 
 class InferenceError(FlcError):

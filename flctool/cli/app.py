@@ -22,8 +22,9 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-console = Console()
-err_console = Console(stderr=True)
+# soft_wrap: messages carry long file paths; hard-wrapping them breaks copy-paste and grep.
+console = Console(soft_wrap=True)
+err_console = Console(stderr=True, soft_wrap=True)
 
 _state = {"debug": False}
 
@@ -50,10 +51,9 @@ def print_error(error: FlcError) -> None:
         err_console.print(f"[bold red]error:[/] {escape(error.file or 'input')} has "
                           f"{count} problem{'s' if count != 1 else ''}")
         for problem in error.problems:
-            err_console.print(f"  {escape(str(problem))}", soft_wrap=True, highlight=False)
+            err_console.print(f"  {escape(str(problem))}", highlight=False)
         return
-    err_console.print(f"[bold red]error:[/] {escape(str(error))}", soft_wrap=True,
-                      highlight=False)
+    err_console.print(f"[bold red]error:[/] {escape(str(error))}", highlight=False)
 
 
 @contextmanager

@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 from typing import Annotated
 
+import numpy as np
 import typer
 from rich.markup import escape
 from rich.table import Table
@@ -110,7 +111,7 @@ def infer(
                 raise typer.Exit(2)
             text, source = path.read_text(encoding="utf-8"), input
         header, rows, states = read_states(text, controller.input_names, source)
-        values = controller.output(states) if len(states) else []
+        values = controller.output(states) if len(states) else np.empty(0)
         result = write_table([*header, controller.output_name],
                              [[*row, repr(float(v))] for row, v in zip(rows, values, strict=True)])
         if output is None:

@@ -1,0 +1,151 @@
+"""``flctool validate / show / infer / schema`` as a user runs them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from typer.testing import CliRunner
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.cli import app
+
+from ..conftest import BEHAVIOURS, ROOT
+
+runner = CliRunner()
+
+BAD = """\
+flctool: 1
+name: bad
+inputs:
+  x:
+    range: [0, 1]
+    sets: {a: [0, 0, 0.5, 0.4], b: [0.3, 0.6, 1, 1]}
+    colour: red
+output: {name: y, commands: {up: 1}}
+"""
+
+
+def test_version() -> None:
+    result = runner.invoke(app, ["--version"])
+    assert result.exit_code == 0
+    assert result.output.startswith("flctool ")
+
+
+def test_help_on_every_command() -> None:
+    for command in ([], ["validate"], ["show"], ["infer"], ["schema"]):
+        result = runner.invoke(app, [*command, "--help"])
+        assert result.exit_code == 0, command
+        assert "Usage" in result.output
+
+
+def test_validate_shipped_files() -> None:
+    files = sorted(str(p) for p in BEHAVIOURS.glob("*.yaml"))
+    result = runner.invoke(app, ["validate", *files])
+    assert result.exit_code == 0, result.output
+    assert result.output.count("ok ") == len(files)
+    assert "ballchase-handmade.yaml: ballchase_handmade (deployable)" in result.output
+
+
+def test_validate_reports_every_problem_and_exits_1(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(BAD)
+    result = runner.invoke(app, ["validate", str(bad), str(BEHAVIOURS / "ballchase.yaml")])
+    assert result.exit_code == 1
+    assert "bad.yaml has 2 problems" in result.output
+    assert "bad.yaml:6:" in result.output and "pa <= pb <= pc <= pd" in result.output
+    assert "bad.yaml:7:5: inputs.x.colour: unknown key 'colour'" in result.output
+    assert "ok " in result.output  # the good file is still checked
+    assert "Traceback" not in result.output
+
+
+def test_missing_file_and_unknown_option_are_usage_errors(tmp_path: Path) -> None:
+    assert runner.invoke(app, ["validate", str(tmp_path / "none.yaml")]).exit_code == 2
+    assert runner.invoke(app, ["validate", "--frobnicate"]).exit_code == 2
+
+
+def test_debug_shows_the_traceback(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(BAD)
+    result = runner.invoke(app, ["--debug", "show", str(bad)])
+    assert result.exit_code == 1
+    assert result.exc_info is not None and result.exc_info[0].__name__ == "SpecError"
+
+
+def test_show_prints_sets_counts_and_rule_grid() -> None:
+    result = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase-handmade.yaml")],
+                           env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "M = 15 rules, K = 5 commands" in result.output
+    assert "far_right" in result.output and "forward_right" in result.output
+    assert "rules: rows ball_size, columns pan" in result.output
+
+
+def test_show_behaviour_to_learn() -> None:
+    result = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase.yaml")])
+    assert result.exit_code == 0
+    assert "15 rules still to learn" in result.output
+
+
+def test_infer_csv_round_trip(tmp_path: Path) -> None:
+    states = tmp_path / "states.csv"
+    states.write_text("pan,ball_size,note\n10,0.2,a\n-80,0.9,b\n")
+    out = tmp_path / "out.csv"
+    path = BEHAVIOURS / "ballchase-handmade.yaml"
+    result = runner.invoke(app, ["infer", str(path), "--input", str(states), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    lines = out.read_text().splitlines()
+    assert lines[0] == "pan,ball_size,note,turn"
+    controller = compile_behaviour(load_behaviour(path))
+    expected = controller.output(np.array([[0.2, 10.0], [0.9, -80.0]]))
+    assert [float(line.split(",")[-1]) for line in lines[1:]] == expected.tolist()
+
+
+def test_infer_from_stdin() -> None:
+    result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase-handmade.yaml")],
+                           input="ball_size,pan\n0.5,0\n")
+    assert result.exit_code == 0
+    assert result.output.splitlines() == ["ball_size,pan,turn", "0.5,0,0.0"]
+
+
+def test_infer_reports_bad_cells_with_lines(tmp_path: Path) -> None:
+    states = tmp_path / "states.csv"
+    states.write_text("ball_size,pan\n0.2,x\n0.3\n")
+    result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase-handmade.yaml"),
+                                 "-i", str(states)])
+    assert result.exit_code == 1
+    assert "states.csv:2:2: pan: 'x' is not a number" in result.output
+    assert "states.csv:3: (top level): expected 2 cells, found 1" in result.output
+
+
+def test_infer_missing_column_and_nan(tmp_path: Path) -> None:
+    path = str(BEHAVIOURS / "ballchase-handmade.yaml")
+    result = runner.invoke(app, ["infer", path], input="ball_size\n0.2\n")
+    assert result.exit_code == 1
+    assert "lacks the column(s) pan" in result.output
+    result = runner.invoke(app, ["infer", path], input="ball_size,pan\n0.2,nan\n")
+    assert result.exit_code == 1
+    assert "input 'pan' is NaN in state 0" in result.output
+
+
+def test_infer_on_a_behaviour_still_to_learn() -> None:
+    result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase.yaml")],
+                           input="ball_size,pan\n0.2,1\n")
+    assert result.exit_code == 1
+    assert "not deployable" in result.output
+
+
+def test_schema_check_passes_on_the_committed_file() -> None:
+    result = runner.invoke(app, ["schema", "--check", "--path",
+                                 str(ROOT / "schemas" / "behaviour.schema.json")])
+    assert result.exit_code == 0, result.output
+
+
+def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
+    stale = tmp_path / "schema.json"
+    stale.write_text("{}\n")
+    result = runner.invoke(app, ["schema", "--check", "--path", str(stale)])
+    assert result.exit_code == 1
+    assert "stale" in result.output
+    assert runner.invoke(app, ["schema", "--path", str(stale)]).exit_code == 0
+    assert runner.invoke(app, ["schema", "--check", "--path", str(stale)]).exit_code == 0

@@ -1,0 +1,33 @@
+"""Writing behaviours back out gives the same behaviour, bit for bit."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from flctool import compile_behaviour
+from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml, parse_behaviour
+
+from ..compile.reference import random_behaviour_data
+
+
+def test_yaml_and_json_round_trip_exactly() -> None:
+    rng = np.random.default_rng(5)
+    for _ in range(30):
+        behaviour = behaviour_from_data(random_behaviour_data(rng))
+        text = behaviour_to_yaml(behaviour, header="made by a test\nsecond line")
+        assert text.startswith("# made by a test\n# second line\n")
+        again = parse_behaviour(text)
+        assert again == behaviour
+        from_json = behaviour_from_data(json.loads(json.dumps(behaviour_to_data(behaviour))))
+        assert from_json == behaviour
+        states = rng.uniform(-20, 20, size=(100, len(behaviour.inputs)))
+        np.testing.assert_array_equal(compile_behaviour(again).output(states),
+                                      compile_behaviour(behaviour).output(states))
+
+
+def test_rules_are_written_one_per_line(minimal_text: str) -> None:
+    text = behaviour_to_yaml(parse_behaviour(minimal_text))
+    assert "- {if: {x: low}, then: up}" in text
+    assert "low: [0.0, 0.0, 2.0, 6.0]" in text
