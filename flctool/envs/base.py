@@ -45,6 +45,8 @@ class BatchEnv(ABC):
     observation_names: tuple[str, ...]
     #: Steps after which an episode is truncated.
     max_steps: int
+    #: [low, high] of the crisp output ``a`` the adapter expects (the commands' singletons).
+    action_bounds: tuple[float, float]
 
     @abstractmethod
     def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:
@@ -64,7 +66,27 @@ class BatchEnv(ABC):
         del lengths, success
         return np.asarray(returns, dtype=np.float64)
 
-    def close(self) -> None:
+    def reset_one(self, seed: int) -> FloatArray:
+        """Start a single episode (B = 1); returns its observation (N,).
+
+        The fast path for learners that run trials one after another; adapters may override
+        it (and :meth:`step_one`) to skip building arrays, with identical results.
+        """
+        obs, _ = self.reset(np.array([seed], dtype=np.int64))
+        return obs[0]
+
+    def step_one(self, action: float) -> tuple[FloatArray, float, bool, bool]:
+        """Step the episode started by :meth:`reset_one`: (obs (N,), reward, terminated,
+        truncated)."""
+        out = self.step(np.array([action], dtype=np.float64))
+        return (out.observations[0], float(out.rewards[0]), bool(out.terminated[0]),
+                bool(out.truncated[0]))
+
+    def trace_state(self) -> dict[str, FloatArray]:
+        """Extra per-episode state for trajectory traces: column name -> (B,); default none."""
+        return {}
+
+    def close(self) -> None:  # noqa: B027 - an optional hook, not every adapter holds resources
         """Release resources (sockets, subprocesses); the default holds none."""
 
 
