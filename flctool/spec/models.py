@@ -15,6 +15,7 @@ from typing import Annotated, Any
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
 
 from flctool.spec.base import Name, Section
+from flctool.spec.checks import find_problems
 from flctool.spec.environment import EnvironmentConfig
 from flctool.spec.learning import LearningConfig
 
@@ -93,8 +94,6 @@ class Behaviour(Section):
 
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo) -> Behaviour:
-        from flctool.spec.checks import find_problems
-
         problems = find_problems(self)
         context: Any = info.context
         if isinstance(context, dict) and "problems" in context:
