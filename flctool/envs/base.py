@@ -73,7 +73,8 @@ class BatchEnv(ABC):
         it (and :meth:`step_one`) to skip building arrays, with identical results.
         """
         obs, _ = self.reset(np.array([seed], dtype=np.int64))
-        return obs[0]
+        first: FloatArray = obs[0]
+        return first
 
     def step_one(self, action: float) -> tuple[FloatArray, float, bool, bool]:
         """Step the episode started by :meth:`reset_one`: (obs (N,), reward, terminated,

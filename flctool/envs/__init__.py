@@ -1,0 +1,50 @@
+"""Environment adapters, found by name: learners and the CLI never import a concrete one.
+
+    env = make_env(behaviour, batch_size=1000)   # the adapter named by environment.adapter
+    obs, info = env.reset(seeds)                 # (B,) -> (B, N)
+
+The protocol is :class:`flctool.envs.base.BatchEnv`; :func:`check_env` checks an adapter
+against it.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from flctool.envs.base import BatchEnv, SingleEnv, Step
+from flctool.envs.checker import check_env
+from flctool.errors import EnvError
+from flctool.registry import Registry
+from flctool.spec.models import Behaviour
+
+
+class EnvFactory(Protocol):
+    """What the registry holds: builds an adapter for a behaviour."""
+
+    def from_behaviour(self, behaviour: Behaviour, batch_size: int = 1) -> BatchEnv: ...
+
+
+ENVIRONMENTS: Registry[EnvFactory] = Registry("environment adapter")
+ENVIRONMENTS.register("ballchase-sim", "flctool.envs.ballchase:BallchaseSim")
+ENVIRONMENTS.register("gymnasium", "flctool.envs.gym_adapter:GymnasiumEnv")
+
+
+def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
+    """The adapter named by ``behaviour.environment.adapter``, built for this behaviour.
+
+    ``batch_size`` is a hint (adapters that hold one world per episode build that many up
+    front); the number of seeds given to ``reset`` decides B. Raises :class:`SpecError`
+    naming the field when the environment does not fit the behaviour,
+    :class:`MissingDependencyError` when the adapter's optional package is missing.
+    """
+    if behaviour.environment is None:
+        raise EnvError(f"behaviour '{behaviour.name}' has no 'environment' section",
+                       hint="add e.g. 'environment: {adapter: ballchase-sim}'")
+    if batch_size < 1:
+        raise EnvError(f"batch_size must be at least 1, got {batch_size}")
+    factory = ENVIRONMENTS.get(behaviour.environment.adapter)
+    return factory.from_behaviour(behaviour, batch_size)
+
+
+__all__ = ["ENVIRONMENTS", "BatchEnv", "EnvFactory", "SingleEnv", "Step", "check_env",
+           "make_env"]

@@ -1,0 +1,177 @@
+"""Running a controller in an environment: evaluation with confidence intervals, and traces.
+
+Shared by ``flctool evaluate`` and the learners (held-out success). All evaluation episodes
+step in lock-step as one batch, so a thousand episodes cost about as many numpy calls as one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from flctool.compile import Controller
+from flctool.envs.base import BatchEnv, BoolArray, FloatArray
+from flctool.errors import EnvError
+
+Z95 = 1.959963984540054  # two-sided 95 % quantile of the standard normal
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """A mean (or rate) with its 95 % confidence interval [low, high] over n samples.
+
+    With no samples the value is NaN; with one sample a mean has no interval (NaN bounds).
+    """
+
+    value: float
+    low: float
+    high: float
+    n: int
+
+    def to_dict(self) -> dict[str, float | int | None]:
+        def clean(x: float) -> float | None:
+            return None if math.isnan(x) else x
+        return {"value": clean(self.value), "low": clean(self.low), "high": clean(self.high),
+                "n": self.n}
+
+
+def wilson_interval(successes: int, n: int) -> Estimate:
+    """Success rate with the Wilson score interval (good near 0 and 1, unlike p +- z se)."""
+    if n == 0:
+        return Estimate(math.nan, math.nan, math.nan, 0)
+    p = successes / n
+    z2 = Z95 * Z95
+    denominator = 1.0 + z2 / n
+    centre = (p + z2 / (2 * n)) / denominator
+    half = Z95 * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / denominator
+    return Estimate(p, max(0.0, centre - half), min(1.0, centre + half), n)
+
+
+def mean_interval(values: FloatArray) -> Estimate:
+    """Mean with Student's t interval (the normal interval for large n, exact for normal data)."""
+    from scipy.special import stdtrit
+
+    data = np.asarray(values, dtype=np.float64)
+    n = int(data.shape[0])
+    if n == 0:
+        return Estimate(math.nan, math.nan, math.nan, 0)
+    mean = float(data.mean())
+    if n == 1:
+        return Estimate(mean, math.nan, math.nan, 1)
+    half = float(stdtrit(n - 1, 0.975)) * float(data.std(ddof=1)) / math.sqrt(n)
+    return Estimate(mean, mean - half, mean + half, n)
+
+
+@dataclass(frozen=True)
+class EvaluationResult:
+    """Per-episode outcomes of an evaluation, E episodes, and their summary statistics."""
+
+    seeds: NDArray[np.int64]  # (E,)
+    returns: FloatArray  # (E,) undiscounted
+    lengths: NDArray[np.int64]  # (E,) steps taken
+    success: BoolArray  # (E,)
+    fitness: FloatArray  # (E,) the GA's trial fitness (env.episode_fitness)
+
+    @property
+    def episodes(self) -> int:
+        return int(self.seeds.shape[0])
+
+    @property
+    def success_rate(self) -> Estimate:
+        return wilson_interval(int(self.success.sum()), self.episodes)
+
+    @property
+    def steps_to_success(self) -> Estimate:
+        """Mean episode length over the successful episodes only."""
+        return mean_interval(self.lengths[self.success].astype(np.float64))
+
+    @property
+    def mean_fitness(self) -> Estimate:
+        return mean_interval(self.fitness)
+
+    @property
+    def mean_return(self) -> Estimate:
+        return mean_interval(self.returns)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready summary: each statistic as {value, low, high, n} (None for NaN)."""
+        return {"episodes": self.episodes,
+                "success_rate": self.success_rate.to_dict(),
+                "steps_to_success": self.steps_to_success.to_dict(),
+                "mean_fitness": self.mean_fitness.to_dict(),
+                "mean_return": self.mean_return.to_dict()}
+
+
+def _controller(controller: Controller, consequents: NDArray[np.integer] | None) -> Controller:
+    if consequents is not None:
+        return controller.with_consequents(np.asarray(consequents, dtype=np.intp))
+    if controller.consequents is None:
+        raise EnvError("this controller has no rule consequents to evaluate",
+                       hint="pass consequents, or evaluate a deployable behaviour")
+    return controller
+
+
+def evaluate(controller: Controller, env: BatchEnv, seeds: NDArray[np.int64] | list[int],
+             consequents: NDArray[np.integer] | None = None) -> EvaluationResult:
+    """Run one episode per seed, all in lock-step, with the controller's rules (or the given
+    ``consequents (M,)``), and collect their outcomes."""
+    flc = _controller(controller, consequents)
+    seeds = np.asarray(seeds, dtype=np.int64).reshape(-1)
+    count = seeds.shape[0]
+    if count == 0:
+        raise EnvError("evaluate needs at least one seed")
+    obs, _ = env.reset(seeds)
+    returns = np.zeros(count)
+    lengths = np.zeros(count, dtype=np.int64)
+    done = np.zeros(count, dtype=bool)
+    actions = np.zeros(count)
+    for _ in range(env.max_steps):
+        active = ~done
+        # Finished episodes ignore their actions; only the running ones need inference.
+        actions[active] = flc.output(obs[active])
+        step = env.step(actions)
+        returns += np.where(active, step.rewards, 0.0)
+        lengths += active
+        obs = step.observations
+        done = step.terminated | step.truncated
+        if done.all():
+            break
+    else:
+        raise EnvError(f"episodes still running after max_steps = {env.max_steps} steps",
+                       hint="the adapter must truncate episodes at max_steps")
+    success = env.success()
+    return EvaluationResult(seeds, returns, lengths, success,
+                            env.episode_fitness(returns, lengths, success))
+
+
+def trace_episode(controller: Controller, env: BatchEnv, seed: int,
+                  consequents: NDArray[np.integer] | None = None) -> list[dict[str, Any]]:
+    """One episode step by step, as rows for a CSV: step, the adapter's trace state (e.g. robot
+    pose, ball), the observations, the crisp output and the command nearest to it. The last
+    row is the final state, with no output."""
+    flc = _controller(controller, consequents)
+    obs, _ = env.reset(np.array([seed], dtype=np.int64))
+    rows: list[dict[str, Any]] = []
+    for t in range(env.max_steps + 1):
+        row: dict[str, Any] = {"step": t}
+        row.update({name: float(values[0]) for name, values in env.trace_state().items()})
+        row.update({name: float(obs[0, i]) for i, name in enumerate(env.observation_names)})
+        if rows and (rows[-1]["terminated"] or rows[-1]["truncated"]):
+            row.update({flc.output_name: "", "command": "", "reward": "",
+                        "terminated": "", "truncated": ""})
+            rows.append(row)
+            return rows
+        output = float(flc.output(obs)[0])
+        nearest = int(np.argmin(np.abs(flc.singletons - output)))
+        step = env.step(np.array([output]))
+        row.update({flc.output_name: output, "command": flc.command_names[nearest],
+                    "reward": float(step.rewards[0]), "terminated": bool(step.terminated[0]),
+                    "truncated": bool(step.truncated[0])})
+        rows.append(row)
+        obs = step.observations
+    raise EnvError(f"the episode was still running after max_steps = {env.max_steps} steps",
+                   hint="the adapter must truncate episodes at max_steps")
