@@ -1,6 +1,9 @@
 """The ``flctool`` command line. Each module registers its commands on the shared app."""
 
-from flctool.cli import spec_commands  # noqa: F401  (registers validate, show, infer, schema)
+from flctool.cli import (
+    export_commands,  # noqa: F401  (registers export, import)
+    spec_commands,  # noqa: F401  (registers validate, show, infer, schema)
+)
 from flctool.cli.app import app
 
 __all__ = ["app"]

@@ -1,0 +1,149 @@
+"""The exporter / importer contract, and what every format shares.
+
+An :class:`Exporter` turns a deployable behaviour into the text of one format (``to_string``)
+and writes it atomically (``to_file``); an :class:`Importer` reads that text back
+(``from_string`` / ``from_file``). Each format module supplies one of each, registered by
+format name in :mod:`flctool.export`.
+"""
+
+from __future__ import annotations
+
+import os
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+from flctool import __version__
+from flctool.atomic import write_text_atomic
+from flctool.errors import ExportError
+from flctool.spec import Behaviour
+
+#: How many missing rules an error message lists before it summarises the rest.
+LISTED_MISSING = 10
+
+
+@dataclass(frozen=True)
+class ExportOptions:
+    """What an export may be told besides the behaviour.
+
+    ``provenance`` (source, learner, seed, generation, individual, fitness; any may be absent)
+    becomes a header comment where the format has comments. ``prefix`` and ``single`` only
+    concern the C exporter: the prefix of its public names, and ``float`` instead of
+    ``double`` arithmetic.
+    """
+
+    provenance: Mapping[str, object] = field(default_factory=dict)
+    prefix: str = "flc_"
+    single: bool = False
+
+
+class Exporter(ABC):
+    """Writes a deployable behaviour in one format."""
+
+    #: The format's name in the registry and on the command line.
+    format: ClassVar[str]
+    #: The file name suffix of the format, with its dot.
+    suffix: ClassVar[str]
+
+    def __init__(self, options: ExportOptions | None = None) -> None:
+        self.options = options or ExportOptions()
+
+    @abstractmethod
+    def to_string(self, behaviour: Behaviour) -> str:
+        """The whole controller as this format's text (raises ExportError if it cannot)."""
+
+    def texts(self, behaviour: Behaviour, path: Path) -> dict[Path, str]:
+        """The text of every file that :meth:`to_file` writes for ``path``."""
+        return {path: self.to_string(behaviour)}
+
+    def to_file(self, behaviour: Behaviour, path: str | Path, *, force: bool = False
+                ) -> list[Path]:
+        """Write the export atomically; returns the files written.
+
+        Everything is checked before anything is written: the controller must be exportable,
+        no target may exist unless ``force``, and the folder must exist and be writable.
+        """
+        texts = self.texts(behaviour, Path(path))
+        for target in texts:
+            check_writable(target, force=force)
+        for target, text in texts.items():
+            try:
+                write_text_atomic(target, text)
+            except OSError as exc:
+                raise ExportError(f"cannot write {target}: {exc.strerror or exc}",
+                                  hint="choose another path with -o") from None
+        return list(texts)
+
+
+class Importer(ABC):
+    """Reads the subset of one format that flctool can express."""
+
+    format: ClassVar[str]
+    suffix: ClassVar[str]
+
+    @abstractmethod
+    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+        """The controller in ``text`` as a behaviour (``file`` names it in messages)."""
+
+    def from_file(self, path: str | Path) -> Behaviour:
+        path = Path(path)
+        try:
+            text = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise ExportError(f"{path}: no such file", hint="check the path") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ExportError(f"{path}: cannot read the file: {exc}") from None
+        return self.from_string(text, str(path))
+
+
+def check_writable(path: Path, *, force: bool) -> None:
+    """Refuse to overwrite without ``force``, and say early when a path cannot be written."""
+    if path.is_dir():
+        raise ExportError(f"{path} is a folder", hint="give a file name with -o")
+    if path.exists() and not force:
+        raise ExportError(f"{path} already exists", hint="pass --force to overwrite it")
+    folder = path.parent
+    if not folder.is_dir():
+        raise ExportError(f"cannot write {path}: the folder {folder} does not exist",
+                          hint=f"create it first (mkdir -p {folder}) or choose another path")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise ExportError(f"cannot write {path}: the folder {folder} is not writable",
+                          hint="choose another path with -o")
+
+
+def require_deployable(behaviour: Behaviour) -> None:
+    """An exported controller needs all M rules (eq. 1); list the missing ones if not."""
+    missing = behaviour.missing_rules()
+    if not missing:
+        return
+    names = behaviour.input_names
+    listed = [" AND ".join(f"{n} IS {s}" for n, s in zip(names, sets, strict=True))
+              for sets in missing[:LISTED_MISSING]]
+    more = len(missing) - len(listed)
+    text = "".join(f"\n  IF {rule}" for rule in listed)
+    if more:
+        text += f"\n  ... and {more} more"
+    raise ExportError(
+        f"behaviour '{behaviour.name}' is not deployable: {len(missing)} of "
+        f"{behaviour.rule_count} rules have no consequent:{text}",
+        hint="learn them (flctool learn) and export the run directory, or add the rules")
+
+
+def header_lines(behaviour: Behaviour, provenance: Mapping[str, object]) -> list[str]:
+    """Where an export came from, as comment lines (without comment markers)."""
+    lines = [f"{behaviour.name}: exported by flctool {__version__}"]
+    if "source" in provenance:
+        lines.append(f"source: {provenance['source']}")
+    facts = [f"{key}: {provenance[key]}"
+             for key in ("learner", "seed", "generation", "individual", "fitness")
+             if provenance.get(key) is not None]
+    if facts:
+        lines.append(", ".join(facts))
+    return lines
+
+
+def number(value: float) -> str:
+    """The shortest text that reads back to the same double (never rounded)."""
+    return repr(float(value))

@@ -1,0 +1,209 @@
+"""C: a dependency-free C99 header and source computing eq. 1-3, ready for a robot.
+
+``-o NAME`` (or ``NAME.c`` / ``NAME.h``) writes ``NAME.h`` and ``NAME.c``; the source includes
+the header by its file name. Without a file the export is one self-contained translation
+unit (header, then source) on stdout. The tables are ``static const`` data; the one public
+function is ``<prefix>output(const double state[N])`` (``float`` with ``single``). No heap, no
+libm: clipping is two comparisons, and the arithmetic is exactly flctool's (membership as in
+flctool/compile/membership.py, minimum activation, sums over the rules in rule order).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from flctool.errors import ExportError
+from flctool.export.base import Exporter, header_lines, number, require_deployable
+from flctool.spec import Behaviour
+
+_PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+FLOAT_MAX = float(np.finfo(np.float32).max)
+
+
+class CExporter(Exporter):
+    format = "c"
+    suffix = ".c"
+
+    def to_string(self, behaviour: Behaviour) -> str:
+        """One translation unit: the header followed by the source."""
+        return self.header(behaviour) + "\n" + self.source(behaviour, include=None)
+
+    def texts(self, behaviour: Behaviour, path: Path) -> dict[Path, str]:
+        stem = path.with_suffix("") if path.suffix in (".c", ".h") else path
+        header = stem.with_name(stem.name + ".h")
+        source = stem.with_name(stem.name + ".c")
+        return {header: self.header(behaviour),
+                source: self.source(behaviour, include=header.name)}
+
+    # -- pieces ----------------------------------------------------------------------------
+    @property
+    def real(self) -> str:
+        return "float" if self.options.single else "double"
+
+    def literal(self, value: float) -> str:
+        if not self.options.single:
+            return number(value)
+        if abs(value) > FLOAT_MAX:
+            raise ExportError(f"{value!r} does not fit in a float",
+                              hint="export without --float")
+        # The shortest text of the float nearest to the value; the f suffix keeps it a float.
+        return f"{np.float32(value)!s}f"
+
+    def names(self) -> tuple[str, str]:
+        prefix = self.options.prefix
+        if not _PREFIX.match(prefix):
+            raise ExportError(f"the prefix '{prefix}' cannot start a C identifier",
+                              hint="use letters, digits and _, e.g. --prefix ballchase_")
+        return prefix, prefix.upper()
+
+    def header(self, behaviour: Behaviour) -> str:
+        require_deployable(behaviour)
+        prefix, macro = self.names()
+        real = self.real
+        guard = f"{macro}{behaviour.name.upper()}_H"
+        enums = [f"{macro}IN_{name.upper()}" for name in behaviour.inputs]
+        if len(set(enums)) != len(enums):
+            raise ExportError("two inputs differ only in case, so their C names collide",
+                              hint="rename one of them in the behaviour file")
+        about = header_lines(behaviour, self.options.provenance)
+        lines = ["/*", *(f" * {line}" for line in about), " *",
+                 f" * A fuzzy logic controller: {len(behaviour.inputs)} inputs, "
+                 f"{behaviour.rule_count} rules, {len(behaviour.output.commands)} commands.",
+                 " * C99, no heap, no libm. The state holds the inputs in this order; a value "
+                 "outside",
+                 " * its range is clipped to it, and a NaN input gives a NaN output:"]
+        for i, (name, variable) in enumerate(behaviour.inputs.items()):
+            unit = f" {variable.unit}" if variable.unit else ""
+            lines.append(f" *   state[{i}] {name} in [{number(variable.range[0])}, "
+                         f"{number(variable.range[1])}]{unit}")
+        unit = f" ({behaviour.output.unit})" if behaviour.output.unit else ""
+        lines += [f" * The output is {behaviour.output.name}{unit}. Compile without -ffast-math"
+                  ": it would reorder the sums.", " */",
+                  f"#ifndef {guard}", f"#define {guard}", "",
+                  f"#define {macro}N_INPUTS {len(behaviour.inputs)}", "",
+                  "enum {", *(f"    {e} = {i}," for i, e in enumerate(enums)), "};", "",
+                  "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
+                  "/* The controller's output for one state (paper eq. 1-3). */",
+                  f"{real} {prefix}output(const {real} state[{macro}N_INPUTS]);", "",
+                  "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */"]
+        return "\n".join(lines) + "\n"
+
+    def source(self, behaviour: Behaviour, include: str | None) -> str:
+        prefix, macro = self.names()
+        real = self.real
+        lit = self.literal
+        variables = list(behaviour.inputs.values())
+        quads = [q for v in variables for q in v.sets.values()]
+        first = [0]
+        for variable in variables:
+            first.append(first[-1] + len(variable.sets))
+        commands = tuple(behaviour.output.commands)
+        index = {tuple(r.if_[n] for n in behaviour.input_names): commands.index(r.then)
+                 for r in behaviour.rules}
+        consequents = [index[a] for a in behaviour.antecedents()]
+        k = len(commands)
+        ctype = ("unsigned char" if k <= 256 else "unsigned short" if k <= 65536
+                 else "unsigned int")
+        lines = [f'#include "{include}"', ""] if include else []
+        lines += [
+            f"#define {macro}N_SETS {first[-1]}",
+            f"#define {macro}N_RULES {behaviour.rule_count}L", "",
+            "/* Each input's [low, high]. */",
+            f"static const {real} {prefix}ranges[{macro}N_INPUTS][2] = {{",
+            *(f"    {{{lit(v.range[0])}, {lit(v.range[1])}}}," for v in variables), "};", "",
+            "/* Every input's sets as (pa, pb, pc, pd) (paper Sec. II); the sets of input i are",
+            f"   {prefix}first_set[i] to {prefix}first_set[i + 1] - 1. */",
+            f"static const {real} {prefix}sets[{macro}N_SETS][4] = {{",
+            *(f"    {{{', '.join(lit(x) for x in q)}}}," for q in quads), "};",
+            f"static const long {prefix}first_set[{macro}N_INPUTS + 1] = "
+            f"{{{', '.join(map(str, first))}}};", "",
+            "/* The commands' singletons c^k. */",
+            f"static const {real} {prefix}singletons[{k}] = "
+            f"{{{', '.join(lit(v) for v in behaviour.output.commands.values())}}};", "",
+            "/* The command of each rule, in rule order: the last input varies fastest (eq. 1). */",
+            f"static const {ctype} {prefix}consequents[{macro}N_RULES] = {{",
+            *_wrapped([str(c) for c in consequents]), "};", "",
+            *_functions(prefix, macro, real),
+        ]
+        return "\n".join(lines) + "\n"
+
+
+def _wrapped(items: list[str], width: int = 96) -> list[str]:
+    lines, line = [], "   "
+    for item in items:
+        if len(line) + len(item) + 2 > width:
+            lines.append(line)
+            line = "   "
+        line += f" {item},"
+    return [*lines, line]
+
+
+def _functions(prefix: str, macro: str, real: str) -> list[str]:
+    zero, one = ("0.0f", "1.0f") if real == "float" else ("0.0", "1.0")
+    return f"""\
+/* Trapezoid membership (paper Sec. II), written as flctool computes it: a vertical edge
+   (pa == pb or pc == pd) jumps without dividing by zero. */
+static {real} {prefix}membership({real} s, const {real} q[4])
+{{
+    {real} mu;
+    if (s > q[2]) {{
+        if (!(q[3] > q[2])) return {zero};
+        mu = (q[3] - s) / (q[3] - q[2]);
+        return mu > {zero} ? mu : {zero};
+    }}
+    if (s < q[1]) {{
+        if (!(q[1] > q[0])) return {zero};
+        mu = (s - q[0]) / (q[1] - q[0]);
+        return mu > {zero} ? mu : {zero};
+    }}
+    return {one};
+}}
+
+{real} {prefix}output(const {real} state[{macro}N_INPUTS])
+{{
+    {real} mu[{macro}N_SETS];
+    long active[{macro}N_SETS]; /* input i's sets with mu > 0 start at active[first_set[i]] */
+    long count[{macro}N_INPUTS];
+    long pick[{macro}N_INPUTS];
+    {real} weighted = {zero}, total = {zero};
+    long i, j;
+
+    for (i = 0; i < {macro}N_INPUTS; ++i) {{
+        {real} s = state[i];
+        if (s != s) return s; /* NaN has no membership */
+        if (s < {prefix}ranges[i][0]) s = {prefix}ranges[i][0];
+        else if (s > {prefix}ranges[i][1]) s = {prefix}ranges[i][1];
+        count[i] = 0;
+        pick[i] = 0;
+        for (j = {prefix}first_set[i]; j < {prefix}first_set[i + 1]; ++j) {{
+            mu[j] = {prefix}membership(s, {prefix}sets[j]);
+            if (mu[j] > {zero}) active[{prefix}first_set[i] + count[i]++] = j;
+        }}
+        /* flctool validated that the sets cover the range, so count[i] >= 1. */
+    }}
+
+    /* Only the rules whose sets are all active fire. An odometer over each input's active
+       sets, the last input turning fastest, visits them in increasing rule index m, so the
+       sums below add the rules in rule order. */
+    for (;;) {{
+        long m = 0;
+        {real} alpha = {one};
+        for (i = 0; i < {macro}N_INPUTS; ++i) {{
+            j = active[{prefix}first_set[i] + pick[i]];
+            m = m * ({prefix}first_set[i + 1] - {prefix}first_set[i])
+                + (j - {prefix}first_set[i]);
+            if (i == 0 || mu[j] < alpha) alpha = mu[j]; /* eq. 2: minimum */
+        }}
+        weighted += alpha * {prefix}singletons[{prefix}consequents[m]]; /* eq. 3 */
+        total += alpha;
+        for (i = {macro}N_INPUTS - 1; i >= 0; --i) {{
+            if (++pick[i] < count[i]) break;
+            pick[i] = 0;
+        }}
+        if (i < 0) break;
+    }}
+    return weighted / total;
+}}""".splitlines()

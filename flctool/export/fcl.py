@@ -1,0 +1,449 @@
+"""FCL, the Fuzzy Control Language of IEC 61131-7.
+
+Sets are point lists ``TERM name := (x, mu) ...``; commands are singleton terms of the output,
+defuzzified by ``METHOD : COGS`` (centre of gravity for singletons, eq. 3); the rule block
+combines memberships by ``AND : MIN`` (eq. 2). Its accumulation is ``ACCU : NSUM``: COGS
+divides by the accumulated total, so the sum's normalisation cancels and every rule counts as
+in eq. 3, while ``MAX`` (the usual default) would merge the rules that share a command.
+
+IEC reads a point list as constant before its first point and after its last, so a shoulder
+at the end of the range is written from its plateau on, and an edge inside the range that is
+vertical (``pa == pb``) is two points at the same x.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from flctool.errors import ExportError
+from flctool.export.base import Exporter, Importer, header_lines, require_deployable
+from flctool.export.imported import (
+    ImportedCommand,
+    ImportedController,
+    ImportedInput,
+    ImportedRule,
+    ImportedSet,
+    build_behaviour,
+    check_rules_share_no_term,
+    parse_number,
+    quad_from_points,
+    unsupported,
+)
+from flctool.spec import Behaviour
+
+#: FCL keywords (case does not matter): they cannot name a variable or a term.
+KEYWORDS = frozenset({
+    "ACCU", "ACT", "AND", "BDIF", "BSUM", "COA", "COG", "COGS", "DEFAULT", "DEFUZZIFY",
+    "END_DEFUZZIFY", "END_FUNCTION_BLOCK", "END_FUZZIFY", "END_RULEBLOCK", "END_VAR",
+    "FUNCTION_BLOCK", "FUZZIFY", "IF", "IS", "LM", "MAX", "METHOD", "MIN", "NC", "NOT", "NSUM",
+    "OR", "PROD", "RANGE", "REAL", "RM", "RULE", "RULEBLOCK", "TERM", "THEN", "VAR_INPUT",
+    "VAR_OUTPUT", "WITH",
+})
+INDENT = "    "
+
+
+def fcl_number(value: float) -> str:
+    """repr's digits, with the decimal point IEC 61131-3 real literals require (1.0e-05)."""
+    text = repr(float(value))
+    if "." not in text:
+        mantissa, _, exponent = text.partition("e")
+        text = f"{mantissa}.0" + (f"e{exponent}" if exponent else "")
+    return text
+
+
+def set_points(quad: tuple[float, float, float, float],
+               span: tuple[float, float]) -> list[tuple[float, int]]:
+    """The point list of a trapezoid, in IEC's reading (see the module docstring)."""
+    pa, pb, pc, pd = quad
+    lo, hi = span
+    points: list[tuple[float, int]] = []
+    if not pa == pb == lo:  # a vertical edge at the range's end needs no foot: inputs clip
+        points.append((pa, 0))
+    points.append((pb, 1))
+    if pc != pb:
+        points.append((pc, 1))
+    if not pc == pd == hi:
+        points.append((pd, 0))
+    return points
+
+
+class FclExporter(Exporter):
+    format = "fcl"
+    suffix = ".fcl"
+
+    def to_string(self, behaviour: Behaviour) -> str:
+        require_deployable(behaviour)
+        _check_names(behaviour)
+        output = behaviour.output
+        lines = [f"(* {line} *)" for line in header_lines(behaviour, self.options.provenance)]
+        lines += [f"FUNCTION_BLOCK {behaviour.name}", "", "VAR_INPUT"]
+        lines += [f"{INDENT}{name} : REAL;" for name in behaviour.inputs]
+        lines += ["END_VAR", "", "VAR_OUTPUT", f"{INDENT}{output.name} : REAL;", "END_VAR", ""]
+        for name, variable in behaviour.inputs.items():
+            lines.append(f"FUZZIFY {name}")
+            for set_name, quad in variable.sets.items():
+                points = " ".join(f"({fcl_number(x)}, {mu})"
+                                  for x, mu in set_points(quad, variable.range))
+                lines.append(f"{INDENT}TERM {set_name} := {points};")
+            lo, hi = variable.range
+            lines += [f"{INDENT}RANGE := ({fcl_number(lo)} .. {fcl_number(hi)});",
+                      "END_FUZZIFY", ""]
+        values = list(output.commands.values())
+        lines.append(f"DEFUZZIFY {output.name}")
+        lines += [f"{INDENT}TERM {command} := {fcl_number(value)};"
+                  for command, value in output.commands.items()]
+        lines += [f"{INDENT}METHOD : COGS;", f"{INDENT}DEFAULT := 0.0;",
+                  f"{INDENT}RANGE := ({fcl_number(min(values))} .. {fcl_number(max(values))});",
+                  "END_DEFUZZIFY", "", "RULEBLOCK rules", f"{INDENT}AND : MIN;",
+                  f"{INDENT}ACT : MIN;", f"{INDENT}ACCU : NSUM;"]
+        for index, rule in enumerate(behaviour.rules, start=1):
+            condition = " AND ".join(f"{n} IS {rule.if_[n]}" for n in behaviour.input_names)
+            lines.append(f"{INDENT}RULE {index} : IF {condition} THEN {output.name} IS "
+                         f"{rule.then};")
+        lines += ["END_RULEBLOCK", "", "END_FUNCTION_BLOCK"]
+        return "\n".join(lines) + "\n"
+
+
+def _check_names(behaviour: Behaviour) -> None:
+    names = [behaviour.name, *behaviour.inputs, behaviour.output.name, *behaviour.output.commands]
+    names += [s for v in behaviour.inputs.values() for s in v.sets]
+    for name in names:
+        if name.upper() in KEYWORDS:
+            raise ExportError(f"'{name}' is an FCL keyword, so it cannot name a variable, a "
+                              "term or the function block", hint="rename it in the behaviour")
+
+
+# -- reading ---------------------------------------------------------------------------------
+_TOKEN = re.compile(r"""
+    (?P<space>\s+) | (?P<comment>\(\*.*?\*\)|//[^\n]*|/\*.*?\*/)
+  | (?P<number>[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?)
+  | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
+  | (?P<symbol>:=|\.\.|[:;(),])
+""", re.VERBOSE | re.DOTALL)
+
+
+@dataclass(frozen=True)
+class Token:
+    kind: str
+    text: str
+    line: int
+
+    @property
+    def word(self) -> str:
+        """The token as a keyword would be spelled: keywords are case-insensitive."""
+        return self.text.upper() if self.kind == "name" else self.text
+
+
+def tokenize(text: str, file: str) -> list[Token]:
+    tokens = []
+    position, line = 0, 1
+    while position < len(text):
+        match = _TOKEN.match(text, position)
+        if match is None:
+            raise unsupported(file, line, f"unexpected character {text[position]!r}")
+        kind = match.lastgroup or ""
+        if kind not in ("space", "comment"):
+            tokens.append(Token(kind, match.group(), line))
+        line += match.group().count("\n")
+        position = match.end()
+    return tokens
+
+
+class FclImporter(Importer):
+    """Reads the IEC 61131-7 subset that the FclExporter writes (singleton outputs, COGS)."""
+
+    format = "fcl"
+    suffix = ".fcl"
+
+    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+        return build_behaviour(_FclParser(tokenize(text, file), file).parse())
+
+
+class _FclParser:
+    def __init__(self, tokens: list[Token], file: str) -> None:
+        self.tokens = tokens
+        self.file = file
+        self.at = 0
+        self.result = ImportedController(file)
+        self.input_names: list[tuple[str, int]] = []
+        self.accu: tuple[str, int] | None = None
+        self.conjunction: tuple[str, int] = ("MIN", 1)
+        self.method: tuple[str, int] | None = None
+
+    # -- token helpers ---------------------------------------------------------------------
+    def peek(self) -> Token:
+        if self.at >= len(self.tokens):
+            last = self.tokens[-1].line if self.tokens else 1
+            raise unsupported(self.file, last, "the file ends before END_FUNCTION_BLOCK")
+        return self.tokens[self.at]
+
+    def take(self) -> Token:
+        token = self.peek()
+        self.at += 1
+        return token
+
+    def expect(self, word: str) -> Token:
+        token = self.take()
+        if token.word != word:
+            raise unsupported(self.file, token.line, f"expected '{word}' but found "
+                              f"'{token.text}'")
+        return token
+
+    def name(self) -> Token:
+        token = self.take()
+        if token.kind != "name" or token.word in KEYWORDS:
+            raise unsupported(self.file, token.line, f"expected a name but found "
+                              f"'{token.text}'")
+        return token
+
+    def number(self) -> float:
+        token = self.take()
+        if token.kind != "number":
+            raise unsupported(self.file, token.line, f"expected a number but found "
+                              f"'{token.text}'")
+        return parse_number(token.text, self.file, token.line, "number")
+
+    def fail(self, token: Token, construct: str, hint: str = "") -> ExportError:
+        return unsupported(self.file, token.line, construct, hint)
+
+    # -- grammar ---------------------------------------------------------------------------
+    def parse(self) -> ImportedController:
+        self.expect("FUNCTION_BLOCK")
+        if self.peek().kind == "name" and self.peek().word not in KEYWORDS:
+            token = self.take()
+            self.result.name, self.result.name_line = token.text, token.line
+        fuzzified: set[str] = set()
+        while self.peek().word != "END_FUNCTION_BLOCK":
+            token = self.take()
+            if token.word == "VAR_INPUT":
+                self.variables(self.input_names)
+            elif token.word == "VAR_OUTPUT":
+                outputs: list[tuple[str, int]] = []
+                self.variables(outputs)
+                self.outputs(outputs)
+            elif token.word == "FUZZIFY":
+                fuzzified.add(self.fuzzify())
+            elif token.word == "DEFUZZIFY":
+                self.defuzzify()
+            elif token.word == "RULEBLOCK":
+                self.ruleblock(token)
+            else:
+                raise self.fail(token, f"'{token.text}' where a block (VAR_INPUT, FUZZIFY, "
+                                "DEFUZZIFY, RULEBLOCK) should start")
+        self.take()
+        self.finish(fuzzified)
+        return self.result
+
+    def finish(self, fuzzified: set[str]) -> None:
+        for name, line in self.input_names:
+            if name not in fuzzified:
+                raise unsupported(self.file, line, f"input '{name}' has no FUZZIFY block")
+        if self.method is None:
+            raise unsupported(self.file, self.result.output_line,
+                              "the output has no 'METHOD : COGS'")
+        if self.accu is None:
+            check_rules_share_no_term(self.result, self.result.output_line,
+                                      "the default accumulation (ACCU : MAX)")
+        elif self.accu[0] not in ("NSUM", "SUM"):
+            check_rules_share_no_term(self.result, self.accu[1], f"ACCU : {self.accu[0]}")
+        if self.conjunction[0] != "MIN" and any(len(r.antecedent) > 1
+                                                for r in self.result.rules):
+            raise unsupported(self.file, self.conjunction[1],
+                              f"AND : {self.conjunction[0]}: flctool's rules combine their "
+                              "memberships by MIN (eq. 2)", "use AND : MIN")
+
+    def variables(self, into: list[tuple[str, int]]) -> None:
+        while self.peek().word != "END_VAR":
+            name = self.name()
+            self.expect(":")
+            kind = self.take()
+            if kind.word != "REAL":
+                raise self.fail(kind, f"variable '{name.text}' of type {kind.text}",
+                                "declare it REAL")
+            self.expect(";")
+            into.append((name.text, name.line))
+        self.take()
+
+    def outputs(self, outputs: list[tuple[str, int]]) -> None:
+        if self.result.output_name:
+            outputs.insert(0, (self.result.output_name, self.result.output_line))
+        if len(outputs) > 1:
+            raise unsupported(self.file, outputs[1][1], f"a second output '{outputs[1][0]}'",
+                              "flctool controllers have one output")
+        if outputs:
+            self.result.output_name, self.result.output_line = outputs[0]
+
+    def fuzzify(self) -> str:
+        token = self.name()
+        if token.text not in [n for n, _ in self.input_names]:
+            raise self.fail(token, f"FUZZIFY of '{token.text}', which is not a VAR_INPUT")
+        variable = ImportedInput(token.text, token.line)
+        self.result.inputs.append(variable)
+        terms: list[tuple[Token, list[tuple[float, float]]]] = []
+        while self.peek().word != "END_FUZZIFY":
+            key = self.take()
+            if key.word == "TERM":
+                term = self.name()
+                self.expect(":=")
+                terms.append((term, self.points(term)))
+                self.expect(";")
+            elif key.word == "RANGE":
+                variable.range = self.range_()
+            else:
+                raise self.fail(key, f"'{key.text}' in FUZZIFY {token.text}")
+        self.take()
+        span = variable.range or _span(terms)
+        for term, points in terms:
+            quad = quad_from_points(points, span, (self.file, term.line), term.text)
+            variable.sets.append(ImportedSet(term.text, quad, term.line))
+        return token.text
+
+    def points(self, term: Token) -> list[tuple[float, float]]:
+        points = []
+        while self.peek().word == "(":
+            self.take()
+            x = self.number()
+            self.expect(",")
+            mu = self.number()
+            self.expect(")")
+            points.append((x, mu))
+        if not points:
+            found = self.peek()
+            raise self.fail(found, f"term '{term.text}' is '{found.text} ...', not a point "
+                            "list: flctool's sets are trapezoids written as points",
+                            "write TERM name := (pa, 0) (pb, 1) (pc, 1) (pd, 0);")
+        return points
+
+    def range_(self) -> tuple[float, float]:
+        self.expect(":=")
+        self.expect("(")
+        lo = self.number()
+        self.expect("..")
+        hi = self.number()
+        self.expect(")")
+        self.expect(";")
+        return lo, hi
+
+    def defuzzify(self) -> None:
+        token = self.name()
+        if token.text != self.result.output_name:
+            raise self.fail(token, f"DEFUZZIFY of '{token.text}', which is not the VAR_OUTPUT")
+        self.result.output_line = token.line
+        while self.peek().word != "END_DEFUZZIFY":
+            key = self.take()
+            if key.word == "TERM":
+                term = self.name()
+                self.expect(":=")
+                if self.peek().kind != "number":
+                    raise self.fail(term, f"output term '{term.text}' is not a singleton: "
+                                    "a Mamdani output set cannot be expressed (flctool's "
+                                    "commands are singletons)", "write TERM name := value;")
+                value = self.number()
+                self.expect(";")
+                self.result.commands.append(ImportedCommand(term.text, value, term.line))
+            elif key.word == "METHOD":
+                self.expect(":")
+                method = self.take()
+                if method.word != "COGS":
+                    raise self.fail(method, f"METHOD : {method.text}: flctool's output is the "
+                                    "centre of gravity of singletons (eq. 3)",
+                                    "use METHOD : COGS")
+                self.method = (method.word, method.line)
+                self.expect(";")
+            elif key.word == "ACCU":
+                self.accumulation()
+            elif key.word in ("DEFAULT", "RANGE"):
+                # Never used: every state fires a rule, and COGS lies between the singletons.
+                while self.take().word != ";":
+                    pass
+            else:
+                raise self.fail(key, f"'{key.text}' in DEFUZZIFY {token.text}")
+        self.take()
+
+    def accumulation(self) -> None:
+        self.expect(":")
+        method = self.take()
+        self.accu = (method.word, method.line)
+        self.expect(";")
+
+    def ruleblock(self, start: Token) -> None:
+        if self.result.rules:
+            raise self.fail(start, "a second RULEBLOCK", "put every rule in one block")
+        if self.peek().kind == "name" and self.peek().word not in KEYWORDS:
+            self.take()
+        while self.peek().word != "END_RULEBLOCK":
+            key = self.take()
+            if key.word == "AND":
+                self.expect(":")
+                method = self.take()
+                self.conjunction = (method.word, method.line)
+                self.expect(";")
+            elif key.word in ("OR", "ACT"):
+                # OR rules are refused one by one; activation does not change a singleton.
+                self.expect(":")
+                self.take()
+                self.expect(";")
+            elif key.word == "ACCU":
+                self.accumulation()
+            elif key.word == "RULE":
+                self.rule(key)
+            else:
+                raise self.fail(key, f"'{key.text}' in a RULEBLOCK")
+        self.take()
+
+    def rule(self, start: Token) -> None:
+        self.take()  # the rule's number or name
+        self.expect(":")
+        self.expect("IF")
+        antecedent: dict[str, str] = {}
+        while True:
+            name, term = self.proposition()
+            if name.text in antecedent:
+                raise self.fail(name, f"the rule names input '{name.text}' twice")
+            antecedent[name.text] = term
+            joint = self.take()
+            if joint.word == "THEN":
+                break
+            if joint.word == "OR":
+                raise self.fail(joint, "an OR rule: flctool's rules are one AND chain (eq. 1)")
+            if joint.word != "AND":
+                raise self.fail(joint, f"'{joint.text}' in a rule's condition")
+        output, command = self.proposition()
+        if output.text != self.result.output_name:
+            raise self.fail(output, f"the rule concludes on '{output.text}', not on the "
+                            f"output '{self.result.output_name}'")
+        end = self.take()
+        if end.word == "WITH":
+            weight = self.number()
+            if weight != 1.0:
+                raise self.fail(end, f"a rule weight of {weight!r}: flctool's rules all weigh 1")
+            end = self.take()
+        if end.word == ",":
+            raise self.fail(end, "a rule with several conclusions")
+        if end.word != ";":
+            raise self.fail(end, f"'{end.text}' where the rule should end with ';'")
+        self.result.rules.append(ImportedRule(antecedent, command, start.line))
+
+    def proposition(self) -> tuple[Token, str]:
+        first = self.take()
+        if first.word == "(":
+            raise self.fail(first, "a rule with parentheses", "write one AND chain")
+        if first.kind != "name":
+            raise self.fail(first, f"'{first.text}' where a variable name should be")
+        self.expect("IS")
+        term = self.take()
+        if term.word == "NOT":
+            raise self.fail(term, "NOT in a rule: flctool's rules use plain terms")
+        if term.kind != "name":
+            raise self.fail(term, f"'{term.text}' where a term name should be")
+        following = self.peek()
+        if following.kind == "name" and following.word not in ("AND", "OR", "THEN", "WITH"):
+            raise self.fail(term, f"the hedge '{term.text}' before '{following.text}': "
+                            "flctool's rules use plain terms")
+        return first, term.text
+
+
+def _span(terms: list[tuple[Token, list[tuple[float, float]]]]) -> tuple[float, float]:
+    xs = [x for _, points in terms for x, _ in points]
+    return (min(xs), max(xs)) if xs else (0.0, 1.0)

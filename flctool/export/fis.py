@@ -1,0 +1,254 @@
+"""FIS, the text format of MATLAB's Fuzzy Logic Toolbox: a Sugeno system, constant outputs.
+
+Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``), commands are ``constant`` output MFs,
+``AndMethod='min'`` is eq. 2 and ``DefuzzMethod='wtaver'`` is eq. 3. A rule line lists the set
+index of every input, then the command index, the weight (1) and the connection (1 = AND).
+MATLAB does not clip inputs to their range: clip states before evaluating to match flctool.
+"""
+
+from __future__ import annotations
+
+import re
+
+from flctool.errors import ExportError
+from flctool.export.base import Exporter, Importer, number, require_deployable
+from flctool.export.imported import (
+    ImportedCommand,
+    ImportedController,
+    ImportedInput,
+    ImportedRule,
+    ImportedSet,
+    build_behaviour,
+    check_rules_share_no_term,
+    parse_number,
+    unsupported,
+)
+from flctool.spec import Behaviour
+
+
+def _vector(values: list[float]) -> str:
+    return "[" + " ".join(number(v) for v in values) + "]"
+
+
+class FisExporter(Exporter):
+    format = "fis"
+    suffix = ".fis"
+
+    def to_string(self, behaviour: Behaviour) -> str:
+        # FIS has no comment syntax that every reader skips, so no provenance header.
+        require_deployable(behaviour)
+        output = behaviour.output
+        lines = ["[System]", f"Name='{behaviour.name}'", "Type='sugeno'", "Version=2.0",
+                 f"NumInputs={len(behaviour.inputs)}", "NumOutputs=1",
+                 f"NumRules={len(behaviour.rules)}", "AndMethod='min'", "OrMethod='max'",
+                 "ImpMethod='prod'", "AggMethod='sum'", "DefuzzMethod='wtaver'"]
+        for index, (name, variable) in enumerate(behaviour.inputs.items(), start=1):
+            lines += ["", f"[Input{index}]", f"Name='{name}'",
+                      f"Range={_vector(list(variable.range))}", f"NumMFs={len(variable.sets)}"]
+            for k, (set_name, (pa, pb, pc, pd)) in enumerate(variable.sets.items(), start=1):
+                shape = (f"'trimf',{_vector([pa, pb, pd])}" if pb == pc
+                         else f"'trapmf',{_vector([pa, pb, pc, pd])}")
+                lines.append(f"MF{k}='{set_name}':{shape}")
+        values = list(output.commands.values())
+        lo, hi = min(values), max(values)
+        if lo == hi:  # MATLAB wants a range of positive width
+            lo, hi = lo - 1.0, hi + 1.0
+        lines += ["", "[Output1]", f"Name='{output.name}'", f"Range={_vector([lo, hi])}",
+                  f"NumMFs={len(values)}"]
+        lines += [f"MF{k}='{command}':'constant',[{number(value)}]"
+                  for k, (command, value) in enumerate(output.commands.items(), start=1)]
+        lines += ["", "[Rules]"]
+        set_index = [{s: k for k, s in enumerate(v.sets, start=1)}
+                     for v in behaviour.inputs.values()]
+        command_index = {c: k for k, c in enumerate(output.commands, start=1)}
+        for rule in behaviour.rules:
+            sets = " ".join(str(index[rule.if_[name]])
+                            for index, name in zip(set_index, behaviour.input_names, strict=True))
+            lines.append(f"{sets}, {command_index[rule.then]} (1) : 1")
+        return "\n".join(lines) + "\n"
+
+
+_SECTION = re.compile(r"^\[(\w+?)(\d*)\]$")
+_KEY = re.compile(r"^(\w+)\s*=\s*(.*)$")
+_MF = re.compile(r"^'([^']*)'\s*:\s*'([^']*)'\s*,\s*\[([^\]]*)\]$")
+_RULE = re.compile(r"^([-\d\s.]+),([-\d\s.]+)\(\s*([^)]*?)\s*\)\s*:\s*(\d+)$")
+
+
+class FisImporter(Importer):
+    """Reads a Sugeno FIS with constant outputs, trapmf / trimf inputs and AND rules."""
+
+    format = "fis"
+    suffix = ".fis"
+
+    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+        return build_behaviour(_FisReader(file).read(text))
+
+
+class _FisReader:
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.result = ImportedController(file)
+        self.system: dict[str, tuple[str, int]] = {}
+        self.outputs = 0
+        self.section = ("", 0)
+        self.rule_lines: list[tuple[str, int]] = []
+
+    def fail(self, line: int, construct: str, hint: str = "") -> ExportError:
+        return unsupported(self.file, line, construct, hint)
+
+    def read(self, text: str) -> ImportedController:
+        for line_number, raw in enumerate(text.splitlines(), start=1):
+            line = raw.strip()
+            if not line or line.startswith(("%", "#")):
+                continue
+            section = _SECTION.match(line)
+            if section is not None:
+                self.begin(section.group(1), section.group(2), line_number)
+            elif self.section[0] == "Rules":
+                self.rule_lines.append((line, line_number))
+            else:
+                key = _KEY.match(line)
+                if key is None:
+                    raise self.fail(line_number, f"'{line}' is not a 'Key=value' line")
+                self.entry(key.group(1), key.group(2).strip(), line_number)
+        self.check_system()
+        for line, line_number in self.rule_lines:
+            self.result.rules.append(self.rule(line, line_number))
+        self.check_methods()
+        return self.result
+
+    def begin(self, name: str, index: str, line: int) -> None:
+        if name == "Input" and index:
+            self.result.inputs.append(ImportedInput("", line))
+        elif name == "Output" and index:
+            self.outputs += 1
+            if self.outputs > 1:
+                raise self.fail(line, "a second output", "flctool controllers have one output")
+            self.result.output_line = line
+        elif (name, index) not in (("System", ""), ("Rules", "")):
+            raise self.fail(line, f"an unknown section [{name}{index}]")
+        self.section = (name, line)
+
+    def entry(self, key: str, value: str, line: int) -> None:
+        section = self.section[0]
+        if section == "System":
+            self.system[key] = (value.strip("'"), line)
+            if key == "Name":
+                self.result.name, self.result.name_line = value.strip("'"), line
+        elif section == "Input":
+            self.input_entry(self.result.inputs[-1], key, value, line)
+        elif section == "Output":
+            self.output_entry(key, value, line)
+        else:
+            raise self.fail(line, f"'{key}' outside a section")
+
+    def input_entry(self, variable: ImportedInput, key: str, value: str, line: int) -> None:
+        if key == "Name":
+            variable.name, variable.line = value.strip("'"), line
+        elif key == "Range":
+            values = self.vector(value, line, "Range")
+            if len(values) != 2:
+                raise self.fail(line, f"Range {value} is not [low high]")
+            variable.range = (values[0], values[1])
+        elif key.startswith("MF"):
+            name, kind, params = self.mf(value, line)
+            arity = {"trapmf": 4, "trimf": 3}
+            if kind not in arity:
+                raise self.fail(line, f"membership function '{name}' is a {kind}: flctool's "
+                                "sets are trapezoids", "use trapmf or trimf")
+            if len(params) != arity[kind]:
+                raise self.fail(line, f"a {kind} takes {arity[kind]} parameters")
+            quad = ((params[0], params[1], params[1], params[2]) if kind == "trimf"
+                    else (params[0], params[1], params[2], params[3]))
+            variable.sets.append(ImportedSet(name, quad, line))
+        elif key != "NumMFs":
+            raise self.fail(line, f"'{key}' in an input section")
+
+    def output_entry(self, key: str, value: str, line: int) -> None:
+        if key == "Name":
+            self.result.output_name, self.result.output_line = value.strip("'"), line
+        elif key.startswith("MF"):
+            name, kind, params = self.mf(value, line)
+            if kind != "constant" or len(params) != 1:
+                raise self.fail(line, f"output membership function '{name}' is a {kind}: "
+                                "flctool's commands are constants (singletons); a linear "
+                                "output or a Mamdani output set cannot be expressed")
+            self.result.commands.append(ImportedCommand(name, params[0], line))
+        elif key not in ("Range", "NumMFs"):
+            raise self.fail(line, f"'{key}' in the output section")
+
+    def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
+        match = _MF.match(value)
+        if match is None:
+            raise self.fail(line, f"'{value}' is not 'name':'type',[parameters]")
+        return match.group(1), match.group(2), self.vector(f"[{match.group(3)}]", line, "MF")
+
+    def vector(self, value: str, line: int, what: str) -> list[float]:
+        inner = value.strip()
+        if not (inner.startswith("[") and inner.endswith("]")):
+            raise self.fail(line, f"{what} '{value}' is not a [vector]")
+        return [parse_number(p, self.file, line, what)
+                for p in re.split(r"[\s,]+", inner[1:-1].strip()) if p]
+
+    def check_system(self) -> None:
+        kind, line = self.system.get("Type", ("", 1))
+        if kind.lower() != "sugeno":
+            raise self.fail(line, f"Type='{kind}': flctool reads Sugeno systems with constant "
+                            "outputs; Mamdani output sets that are not singletons cannot be "
+                            "expressed")
+        outputs, line = self.system.get("NumOutputs", ("1", 1))
+        if outputs != "1":
+            raise self.fail(line, f"NumOutputs={outputs}: flctool controllers have one output")
+        method, line = self.system.get("DefuzzMethod", ("wtaver", 1))
+        if method != "wtaver":
+            raise self.fail(line, f"DefuzzMethod='{method}': flctool's output is the weighted "
+                            "average (eq. 3)", "use DefuzzMethod='wtaver'")
+
+    def check_methods(self) -> None:
+        method, line = self.system.get("AndMethod", ("min", 1))
+        if method != "min" and any(len(r.antecedent) > 1 for r in self.result.rules):
+            raise self.fail(line, f"AndMethod='{method}': flctool's rules combine their "
+                            "memberships by min (eq. 2)", "use AndMethod='min'")
+        method, line = self.system.get("AggMethod", ("sum", 1))
+        if method != "sum":
+            check_rules_share_no_term(self.result, line, f"AggMethod='{method}'")
+
+    def rule(self, text: str, line: int) -> ImportedRule:
+        match = _RULE.match(text)
+        if match is None:
+            raise self.fail(line, f"rule '{text}' is not 'sets, command (weight) : connection'")
+        sets, outputs = match.group(1).split(), match.group(2).split()
+        weight = parse_number(match.group(3), self.file, line, "rule weight")
+        if weight != 1.0:
+            raise self.fail(line, f"a rule weight of {match.group(3)}: flctool's rules all "
+                            "weigh 1")
+        if match.group(4) != "1" and len(sets) > 1:
+            raise self.fail(line, "an OR rule (connection 2): flctool's rules are one AND chain "
+                            "(eq. 1)")
+        if len(sets) != len(self.result.inputs) or len(outputs) != 1:
+            raise self.fail(line, f"the rule has {len(sets)} input and {len(outputs)} output "
+                            f"indices; the system has {len(self.result.inputs)} inputs and 1 "
+                            "output")
+        antecedent: dict[str, str] = {}
+        for variable, index in zip(self.result.inputs, sets, strict=True):
+            k = self.index(index, line, f"input '{variable.name}'")
+            if k == 0:
+                raise self.fail(line, f"the rule leaves out input '{variable.name}' (index 0)",
+                                "flctool rules name one set of every input (eq. 1)")
+            if k < 0:
+                raise self.fail(line, f"NOT (a negative index) on input '{variable.name}'")
+            if k > len(variable.sets):
+                raise self.fail(line, f"input '{variable.name}' has no MF{k}")
+            antecedent[variable.name] = variable.sets[k - 1].name
+        k = self.index(outputs[0], line, "the output")
+        if not 1 <= k <= len(self.result.commands):
+            raise self.fail(line, f"the output has no MF{k}" if k > 0 else
+                            "the rule gives no (or a negated) output MF")
+        return ImportedRule(antecedent, self.result.commands[k - 1].name, line)
+
+    def index(self, text: str, line: int, what: str) -> int:
+        value = parse_number(text, self.file, line, what)
+        if value != int(value):
+            raise self.fail(line, f"the index {text} of {what} is not a whole number "
+                            "(a hedge)")
+        return int(value)

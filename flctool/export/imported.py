@@ -1,0 +1,220 @@
+"""What the importers share: a controller read from a file, located line by line.
+
+Each importer parses its format into an :class:`ImportedController`, refusing on the spot any
+construct flctool cannot express. :func:`build_behaviour` then checks the rules against each
+other and validates the result as a behaviour, with every problem located at its line in the
+imported file.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from flctool.errors import ExportError, PathPart
+from flctool.spec import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
+from flctool.spec.yaml_source import SourceMap
+
+Quad = tuple[float, float, float, float]
+
+
+def unsupported(file: str, line: int, construct: str, hint: str = "") -> ExportError:
+    """An import error naming the construct flctool cannot express, and where it is."""
+    return ExportError(f"{file}:{line}: {construct}", hint=hint)
+
+
+@dataclass
+class ImportedSet:
+    name: str
+    quad: Quad
+    line: int
+
+
+@dataclass
+class ImportedInput:
+    name: str
+    line: int
+    range: tuple[float, float] | None = None
+    sets: list[ImportedSet] = field(default_factory=list)
+
+    def resolved_range(self) -> tuple[float, float]:
+        """The declared range, or the span of the sets when the format declares none."""
+        if self.range is not None:
+            return self.range
+        feet = [v for s in self.sets for v in (s.quad[0], s.quad[3])]
+        return (min(feet), max(feet)) if feet else (0.0, 1.0)
+
+
+@dataclass
+class ImportedCommand:
+    name: str
+    value: float
+    line: int
+
+
+@dataclass
+class ImportedRule:
+    """IF input_1 IS set AND ... THEN output IS command, as read at ``line``."""
+
+    antecedent: dict[str, str]
+    command: str
+    line: int
+
+
+@dataclass
+class ImportedController:
+    file: str
+    name: str = ""
+    name_line: int = 1
+    description: str = ""
+    inputs: list[ImportedInput] = field(default_factory=list)
+    output_name: str = ""
+    output_line: int = 1
+    commands: list[ImportedCommand] = field(default_factory=list)
+    rules: list[ImportedRule] = field(default_factory=list)
+
+    def input(self, name: str) -> ImportedInput | None:
+        return next((i for i in self.inputs if i.name == name), None)
+
+
+def quad_from_points(points: list[tuple[float, float]], span: tuple[float, float],
+                     where: tuple[str, int], term: str) -> Quad:
+    """A trapezoid from a piecewise-linear point list, or an error naming the term.
+
+    The point list is read as IEC 61131-7 does: before the first point and after the last the
+    membership stays at that point's value. So a list that starts at 1 is a left shoulder
+    reaching the range's low end, one that ends at 1 a right shoulder reaching its high end.
+    """
+    file, line = where
+    xs = [x for x, _ in points]
+    if not points or any(b < a for a, b in itertools.pairwise(xs)):
+        raise unsupported(file, line, f"term '{term}': the points must be in increasing x")
+    low, high = min(span[0], xs[0]), max(span[1], xs[-1])
+    written = [y for _, y in points]
+    if points[0][1] == 1:  # a left shoulder: a vertical edge at the range's low end
+        points = [(low, 0.0), (low, 1.0), *points]
+    if points[-1][1] == 1:
+        points = [*points, (high, 1.0), (high, 0.0)]
+    top = [i for i, (_, y) in enumerate(points) if y == 1]
+    if top and top == list(range(top[0], top[-1] + 1)):  # a plateau: its two ends
+        points = points[: top[0] + 1] + points[top[-1]:] if len(top) > 1 else points
+    xs = [x for x, _ in points]
+    ys = tuple(y for _, y in points)
+    quad: Quad | None = None
+    if ys == (0, 1, 1, 0):
+        quad = (xs[0], xs[1], xs[2], xs[3])
+    elif ys == (0, 1, 0):
+        quad = (xs[0], xs[1], xs[1], xs[2])
+    if quad is None:
+        raise unsupported(
+            file, line, f"term '{term}' with membership values {written} is not a trapezoid",
+            "flctool sets are trapezoids: points (pa, 0) (pb, 1) (pc, 1) (pd, 0), "
+            "a triangle (pa, 0) (pb, 1) (pd, 0), or shoulders that start or end at 1")
+    return quad
+
+
+def build_behaviour(imported: ImportedController) -> Behaviour:
+    """Check the rules and validate the controller; errors point at lines of the file."""
+    file = imported.file
+    if not imported.inputs:
+        raise unsupported(file, 1, "the controller has no input variable")
+    if not imported.output_name:
+        raise unsupported(file, 1, "the controller has no output variable")
+    _check_rules(imported)
+    marks: dict[tuple[PathPart, ...], tuple[int, int]] = {
+        (): (1, 1), ("name",): (imported.name_line, 1), ("output",): (imported.output_line, 1)}
+    data: dict[str, Any] = {"flctool": FORMAT_VERSION, "name": imported.name or "imported"}
+    if imported.description:
+        data["description"] = imported.description
+    data["inputs"] = {}
+    for variable in imported.inputs:
+        marks[("inputs", variable.name)] = (variable.line, 1)
+        sets = {}
+        for item in variable.sets:
+            marks[("inputs", variable.name, "sets", item.name)] = (item.line, 1)
+            sets[item.name] = list(item.quad)
+        data["inputs"][variable.name] = {"range": list(variable.resolved_range()), "sets": sets}
+    for command in imported.commands:
+        marks[("output", "commands", command.name)] = (command.line, 1)
+    data["output"] = {"name": imported.output_name,
+                      "commands": {c.name: c.value for c in imported.commands}}
+    for index, rule in enumerate(imported.rules):
+        marks[("rules", index)] = (rule.line, 1)
+    data["rules"] = [{"if": {i.name: rule.antecedent[i.name] for i in imported.inputs},
+                      "then": rule.command} for rule in imported.rules]
+    return behaviour_from_data(data, SourceMap(file, marks))
+
+
+def _check_rules(imported: ImportedController) -> None:
+    file = imported.file
+    inputs = {i.name: {s.name for s in i.sets} for i in imported.inputs}
+    commands = {c.name for c in imported.commands}
+    seen: dict[tuple[str, ...], int] = {}
+    for rule in imported.rules:
+        for name, term in rule.antecedent.items():
+            if name not in inputs:
+                raise unsupported(file, rule.line, f"the rule names an unknown input '{name}'")
+            if term not in inputs[name]:
+                raise unsupported(file, rule.line,
+                                  f"input '{name}' has no term '{term}' (in a rule)")
+        left_out = [n for n in inputs if n not in rule.antecedent]
+        if left_out:
+            raise unsupported(
+                file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}",
+                "flctool rules name one set of every input (the full grid of eq. 1)")
+        if rule.command not in commands:
+            raise unsupported(file, rule.line,
+                              f"the output has no term '{rule.command}' (in a rule)")
+        key = tuple(rule.antecedent[n] for n in inputs)
+        if key in seen:
+            raise unsupported(
+                file, rule.line, f"the rule repeats the antecedent of the rule at line "
+                f"{seen[key]}; flctool has one rule per combination of sets",
+                "merge the two rules into one")
+        seen[key] = rule.line
+
+
+def check_rules_share_no_term(imported: ImportedController, line: int, setting: str) -> None:
+    """Refuse a max-style accumulation where it would change eq. 3 (rules sharing a term).
+
+    Eq. 3 sums every rule's activation; accumulating by maximum merges the rules that share
+    an output term, which gives the same output only when no two rules share one.
+    """
+    first: dict[str, int] = {}
+    for rule in imported.rules:
+        if rule.command in first:
+            raise unsupported(
+                imported.file, line,
+                f"{setting} merges rules that share an output term (lines {first[rule.command]} "
+                f"and {rule.line} both conclude '{rule.command}'), so the output is not the "
+                "weighted average of every rule (eq. 3)",
+                "accumulate by sum instead")
+        first[rule.command] = rule.line
+
+
+def parse_number(text: str, file: str, line: int, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise unsupported(file, line, f"{what}: '{text}' is not a number") from None
+    if not math.isfinite(value):
+        raise unsupported(file, line, f"{what}: '{text}' is not a finite number")
+    return value
+
+
+def imported_yaml(behaviour: Behaviour, header: str) -> str:
+    """An imported controller as a behaviour file: ``flctool: 1`` and no learning section.
+
+    The file format only knows the controller, so the learning defaults that the model fills
+    in are left out rather than presented as if the file had chosen them.
+    """
+    kept: list[str] = []
+    skipping = False
+    for line in behaviour_to_yaml(behaviour, header).splitlines(keepends=True):
+        if line[:1] not in (" ", "#", "\n", ""):
+            skipping = line.startswith(("learning:", "environment:"))
+        if not skipping:
+            kept.append(line)
+    return "".join(kept)
