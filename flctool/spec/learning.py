@@ -43,6 +43,8 @@ class LearningConfig(Section):
     generations: int = Field(30, ge=1)
     crossover: float = Field(0.2, ge=0, le=1, description="crossover probability pc")
     mutation: float = Field(0.1, ge=0, le=1, description="mutation probability pm, per gene")
+    pitt_crossover: Literal["uniform", "one_point"] = Field("uniform", description=(
+        "the pitt learner's crossover (the hybrid takes, gene by gene, the stronger rule)"))
     elites: int = Field(1, ge=0, description="best individuals copied unchanged")
     trials: int = Field(1, ge=1, description="trials per individual per generation")
     common_starts: bool = Field(False, description=(

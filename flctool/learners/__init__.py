@@ -1,0 +1,46 @@
+"""Learners of rule consequents: ``pitt``, ``fuzzy_q`` and the paper's ``hybrid``.
+
+Each is registered by the name that ``learning.learner`` takes in a behaviour file; all run
+the same training loop (:func:`train`) with callbacks, and know environments only through
+the adapter protocol.
+"""
+
+from __future__ import annotations
+
+from flctool.envs.base import BatchEnv
+from flctool.learners.base import TRAIN_SEED_LOW, GenerationResult, Learner, train
+from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback, StopAtFitness
+from flctool.learners.metrics import GenerationMetrics
+from flctool.registry import Registry
+from flctool.spec.models import Behaviour
+
+LEARNERS: Registry[type[Learner]] = Registry("learner")
+LEARNERS.register("pitt", "flctool.learners.pitt:PittLearner")
+LEARNERS.register("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner")
+LEARNERS.register("hybrid", "flctool.learners.hybrid:HybridLearner")
+
+
+def make_learner(behaviour: Behaviour, env: BatchEnv | None = None) -> Learner:
+    """The learner ``behaviour.learning.learner``, on ``env`` or on a batch-of-one
+    environment built from the behaviour's ``environment:`` section."""
+    learner_class = LEARNERS.get(behaviour.learning.learner)
+    if env is None:
+        from flctool.envs import make_env
+
+        env = make_env(behaviour, 1)
+    return learner_class(behaviour, env)
+
+
+__all__ = [
+    "LEARNERS",
+    "TRAIN_SEED_LOW",
+    "Callback",
+    "CallbackList",
+    "FunctionCallback",
+    "GenerationMetrics",
+    "GenerationResult",
+    "Learner",
+    "StopAtFitness",
+    "make_learner",
+    "train",
+]

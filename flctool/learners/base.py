@@ -1,0 +1,179 @@
+"""The learner protocol and the one training loop every learner runs.
+
+A learner keeps a population of controllers (chromosomes of M consequent indices, paper
+Sec. IV; ``fuzzy_q`` keeps one, its greedy controller) with their fitness, and supplies two
+steps: :meth:`Learner.evaluate` runs a generation's trials, :meth:`Learner.advance` makes the
+next generation. :func:`train` does the rest -- timing, metrics, callbacks, stopping -- the
+same way for all of them.
+
+Randomness: the run's seed feeds one ``SeedSequence`` that spawns three generators, ``ga``
+(initialisation, selection, crossover, mutation), ``env`` (episode start seeds) and
+``explore`` (fuzzy_q's choices). Their states are part of every checkpoint, so a resumed run
+draws exactly what an uninterrupted one would. Training episodes use seeds of at least
+:data:`TRAIN_SEED_LOW` = 2^32, so evaluating with seeds below it (``flctool evaluate`` counts
+from 0) never replays a training start.
+"""
+
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from flctool.compile import compile_behaviour
+from flctool.envs.base import BatchEnv
+from flctool.errors import LearnError
+from flctool.learners.callbacks import Callback, CallbackList
+from flctool.learners.metrics import GenerationMetrics
+from flctool.learners.trial import SparseRules
+from flctool.spec.models import Behaviour
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+TRAIN_SEED_LOW = 2**32
+TRAIN_SEED_HIGH = 2**62
+STREAMS = ("ga", "env", "explore")
+
+
+@dataclass(frozen=True)
+class GenerationResult:
+    """What :meth:`Learner.evaluate` measured."""
+
+    fitness: FloatArray  # (P,) per individual, or (E,) per episode for fuzzy_q
+    episodes: int
+    steps: int
+
+
+class Learner(ABC):
+    """Base of every learner; subclasses supply :meth:`evaluate` and :meth:`advance`.
+
+    Attributes: ``population (P, M)`` command indices, ``fitness (P,)`` of the last evaluated
+    generation, ``generation`` (-1 before the first), ``elapsed`` seconds of training so far.
+    """
+
+    name: ClassVar[str]
+    #: Whether the learner keeps rule strengths (a q table) -- then :meth:`strengths` is set.
+    uses_strengths: ClassVar[bool] = False
+
+    def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
+        self.behaviour = behaviour
+        self.config = behaviour.learning
+        self.controller = compile_behaviour(behaviour)
+        self.rules = SparseRules(self.controller)
+        self.env = env
+        children = np.random.SeedSequence(self.config.seed).spawn(len(STREAMS))
+        self.rngs = {name: np.random.default_rng(seq) for name, seq in zip(STREAMS, children,
+                                                                           strict=True)}
+        self.generation = -1
+        self.elapsed = 0.0
+        self.population: IntArray = np.zeros((1, self.controller.n_rules), dtype=np.intp)
+        self.fitness: FloatArray = np.zeros(1)
+
+    # -- what each learner supplies ----------------------------------------------------
+    @abstractmethod
+    def evaluate(self, generation: int) -> GenerationResult:
+        """Run the trials of ``generation`` and set :attr:`fitness` (and, for fuzzy_q,
+        :attr:`population`)."""
+
+    @abstractmethod
+    def advance(self) -> None:
+        """Turn the evaluated generation into the next one (breed, decay exploration)."""
+
+    def strengths(self) -> FloatArray | None:
+        """The q table (M, K), for learners that keep one."""
+        return None
+
+    def extra_state(self) -> dict[str, Any]:
+        """Learner-specific checkpoint data (JSON-compatible)."""
+        return {}
+
+    def load_extra_state(self, state: dict[str, Any]) -> None:
+        """Restore what :meth:`extra_state` saved."""
+        del state
+
+    # -- shared helpers ------------------------------------------------------------------
+    def best(self) -> tuple[int, IntArray, float]:
+        """The last evaluated generation's best individual: (index, consequents (M,), fitness).
+
+        Ties go to the lower index (elites come first).
+        """
+        index = int(np.argmax(self.fitness))
+        return index, self.population[index].copy(), float(self.fitness[index])
+
+    def episode_seeds(self, individuals: int, trials: int, common: bool) -> NDArray[np.int64]:
+        """Start seeds (individuals, trials) of one generation, from the ``env`` stream.
+
+        With ``common``, every individual gets the same ``trials`` seeds (common random
+        starts: fitness differences then come from the controllers, not the ball placement).
+        """
+        rng = self.rngs["env"]
+        if common:
+            row = rng.integers(TRAIN_SEED_LOW, TRAIN_SEED_HIGH, size=trials, dtype=np.int64)
+            return np.tile(row, (individuals, 1))
+        return rng.integers(TRAIN_SEED_LOW, TRAIN_SEED_HIGH, size=(individuals, trials),
+                            dtype=np.int64)
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything needed to continue bit for bit after the last evaluated generation."""
+        return {
+            "learner": self.name,
+            "generation": self.generation,
+            "elapsed": self.elapsed,
+            "population": self.population.tolist(),
+            "fitness": self.fitness.tolist(),
+            "rng": {name: rng.bit_generator.state for name, rng in self.rngs.items()},
+            **self.extra_state(),
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        if state.get("learner") != self.name:
+            raise LearnError(f"the checkpoint is of learner '{state.get('learner')}', "
+                             f"not '{self.name}'",
+                             hint="resume with the learner the run was started with")
+        try:
+            self.generation = int(state["generation"])
+            self.elapsed = float(state["elapsed"])
+            self.population = np.array(state["population"], dtype=np.intp)
+            self.fitness = np.array(state["fitness"], dtype=np.float64)
+            for name, rng in self.rngs.items():
+                rng.bit_generator.state = state["rng"][name]
+            self.load_extra_state(state)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise LearnError(f"the checkpoint is incomplete or damaged ({exc!r})",
+                             hint="resume from an earlier checkpoint or start a new run") from None
+        if self.population.shape[1:] != (self.controller.n_rules,):
+            raise LearnError(f"the checkpoint's controllers have {self.population.shape[-1]} "
+                             f"rules, the behaviour {self.controller.n_rules}",
+                             hint="resume with the behaviour the run was started with")
+
+
+def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[GenerationMetrics]:
+    """Run generations from the learner's current one to ``learning.generations``.
+
+    A fresh learner starts at generation 0; one restored from a checkpoint continues after
+    it. Returns this session's metrics, one per generation.
+    """
+    callback = CallbackList(callbacks)
+    callback.on_start(learner)
+    history: list[GenerationMetrics] = []
+    started = time.perf_counter()
+    before = learner.elapsed
+    for generation in range(learner.generation + 1, learner.config.generations):
+        if generation > 0:
+            learner.advance()
+        result = learner.evaluate(generation)
+        learner.generation = generation
+        learner.elapsed = before + time.perf_counter() - started
+        metrics = GenerationMetrics.from_fitness(generation, result.fitness, result.episodes,
+                                                 result.steps, learner.elapsed)
+        history.append(metrics)
+        if not callback.on_generation(metrics):
+            break
+    callback.on_end()
+    return history

@@ -1,0 +1,78 @@
+"""Callbacks of the training loop: progress, run-directory records, early stop.
+
+A callback sees the learner at the start, every generation's metrics, and the end; returning
+False from :meth:`Callback.on_generation` stops training after that generation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING
+
+from flctool.learners.metrics import GenerationMetrics
+
+if TYPE_CHECKING:
+    from flctool.learners.base import Learner
+
+
+class Callback:
+    """Base class: override any of the three hooks."""
+
+    learner: Learner | None = None
+
+    def on_start(self, learner: Learner) -> None:
+        """Called once before the first generation (of this session: also on resume)."""
+        self.learner = learner
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        """Called after each generation; return False to stop training early."""
+        del metrics
+        return True
+
+    def on_end(self) -> None:
+        """Called once when training ends (finished, stopped early, or on an error)."""
+
+
+class CallbackList(Callback):
+    """Several callbacks as one; training stops if any of them asks to."""
+
+    def __init__(self, callbacks: Iterable[Callback]) -> None:
+        self.callbacks = list(callbacks)
+
+    def on_start(self, learner: Learner) -> None:
+        super().on_start(learner)
+        for callback in self.callbacks:
+            callback.on_start(learner)
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        answers = [callback.on_generation(metrics) for callback in self.callbacks]
+        return all(answers)
+
+    def on_end(self) -> None:
+        for callback in self.callbacks:
+            callback.on_end()
+
+
+class FunctionCallback(Callback):
+    """Calls ``function(metrics)`` every generation (progress bars, logging)."""
+
+    def __init__(self, function: Callable[[GenerationMetrics], object]) -> None:
+        self.function = function
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        self.function(metrics)
+        return True
+
+
+class StopAtFitness(Callback):
+    """Stops training once a generation's mean (or best) fitness reaches ``target``."""
+
+    def __init__(self, target: float, statistic: str = "mean") -> None:
+        if statistic not in ("mean", "best"):
+            raise ValueError("statistic must be 'mean' or 'best'")
+        self.target = target
+        self.statistic = statistic
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        value = metrics.mean if self.statistic == "mean" else metrics.best
+        return value < self.target

@@ -1,0 +1,257 @@
+"""Fuzzy Q-learning (paper Sec. III, eq. 4-9) and the ``fuzzy_q`` learner built on it.
+
+Every rule m has one strength q_m^k per command k (eq. 4). In a state S with normalised
+activations phi_m = alpha_m(S) / sum(alpha) and chosen commands k_m of the firing rules:
+
+- eq. 5: ``Q(S, a) = sum_m phi_m q_m^{k_m}``
+- eq. 6: ``dQ = r + gamma * max Q(S', .) - Q(S, a)``, with ``max Q(S', .) = sum_m phi_m(S')
+  max_k q_m^k`` (each rule's best strength, weighted by the next state's activations); a
+  terminal step has no next state, so ``dQ = r - Q(S, a)``. A truncated step (time limit)
+  does bootstrap.
+- eq. 7-9, read as in Glorennec & Jouffe's fuzzy Q-learning: a *replacing* eligibility trace
+  per (rule, command), ``e(m, k) <- phi_m(S_t)`` for the chosen k of each firing rule and
+  ``e <- lambda * gamma * e`` for every other pair, then ``q += alpha * dQ * e`` for all
+  pairs. (Read literally, eq. 9 multiplies the trace by the *current* activation, which makes
+  it inert; with ``lambda = 0`` both readings are eq. 7 exactly.) Traces start at zero in
+  every trial and are not cut after exploratory choices (Peng's rather than Watkins' Q(lambda));
+  traces that have decayed below :data:`TRACE_FLOOR` are dropped, which changes q by less than
+  ``alpha * |dQ| * 1e-12``.
+
+The q table lives in a flat Python list (index ``m * K + k``) because the per-step work
+touches a handful of entries, where plain floats beat numpy calls.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from flctool.envs.base import BatchEnv
+from flctool.learners.base import GenerationResult, Learner
+from flctool.learners.trial import run_trial
+from flctool.spec.models import Behaviour
+
+FloatArray = NDArray[np.float64]
+
+TRACE_FLOOR = 1e-12
+_BLOCK = 1024  # uniforms drawn per refill of an exploration stream
+
+
+class FuzzyQ:
+    """A q table (M, K) with replacing eligibility traces, learning by eq. 5-9."""
+
+    def __init__(self, q: FloatArray, alpha: float, gamma: float, lambda_: float) -> None:
+        self.n_rules, self.n_commands = (int(n) for n in q.shape)
+        self.q: list[float] = [float(v) for v in np.asarray(q, dtype=np.float64).ravel()]
+        self.alpha = alpha
+        self.gamma = gamma
+        self.decay = lambda_ * gamma
+        self.trace: dict[int, float] = {}  # m * K + k -> e(m, k); absent means 0
+
+    def table(self) -> FloatArray:
+        """The q table as an (M, K) array (a copy)."""
+        return np.array(self.q, dtype=np.float64).reshape(self.n_rules, self.n_commands)
+
+    def traces(self) -> FloatArray:
+        """The eligibility traces as an (M, K) array (a copy)."""
+        e = np.zeros(self.n_rules * self.n_commands)
+        for index, value in self.trace.items():
+            e[index] = value
+        return e.reshape(self.n_rules, self.n_commands)
+
+    def load(self, q: FloatArray, traces: FloatArray) -> None:
+        self.q = [float(v) for v in np.asarray(q, dtype=np.float64).ravel()]
+        flat = np.asarray(traces, dtype=np.float64).ravel()
+        self.trace = {int(i): float(flat[i]) for i in np.flatnonzero(flat)}
+
+    def state_dict(self) -> dict[str, Any]:
+        """The q table and traces as JSON-compatible lists (checkpoints)."""
+        return {"q": self.table().tolist(), "traces": self.traces().tolist()}
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.load(np.array(state["q"], dtype=np.float64),
+                  np.array(state["traces"], dtype=np.float64))
+
+    def reset_traces(self) -> None:
+        self.trace.clear()
+
+    def value(self, rules: list[int], phi: list[float], commands: list[int]) -> float:
+        """Q(S, a) of eq. 5 for the firing rules, their phi and chosen commands."""
+        q, width = self.q, self.n_commands
+        return sum(p * q[m * width + k] for m, p, k in zip(rules, phi, commands, strict=True))
+
+    def greedy_value(self, rules: list[int], phi: list[float]) -> float:
+        """max_a Q(S, a) of eq. 6: each firing rule's best q, weighted by phi."""
+        q, width = self.q, self.n_commands
+        return sum(p * max(q[m * width : m * width + width])
+                   for m, p in zip(rules, phi, strict=True))
+
+    def learn(self, rules: list[int], phi: list[float], commands: list[int], reward: float,
+              next_rules: list[int], next_phi: list[float], terminal: bool) -> float:
+        """One step of eq. 6-9; returns the TD error dQ."""
+        q, width, trace = self.q, self.n_commands, self.trace
+        target = reward if terminal else reward + self.gamma * self.greedy_value(next_rules,
+                                                                                 next_phi)
+        delta = target - self.value(rules, phi, commands)  # eq. 6
+        decay = self.decay
+        if decay > 0.0:  # eq. 8, "otherwise" branch
+            for index in list(trace):
+                e = trace[index] * decay
+                if e < TRACE_FLOOR:
+                    del trace[index]
+                else:
+                    trace[index] = e
+        else:
+            trace.clear()
+        for m, p, k in zip(rules, phi, commands, strict=True):  # eq. 8, replacing
+            trace[m * width + k] = p
+        step = self.alpha * delta
+        for index, e in trace.items():  # eq. 7 and 9
+            q[index] += step * e
+        return delta
+
+
+class UniformStream:
+    """Uniform [0, 1) numbers from a generator, drawn in blocks (one numpy call per block)."""
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+        self._block: list[float] = []
+        self._next = 0
+
+    def __call__(self) -> float:
+        if self._next == len(self._block):
+            self._block = self.rng.random(_BLOCK).tolist()
+            self._next = 0
+        value = self._block[self._next]
+        self._next += 1
+        return value
+
+
+class BoltzmannChooser:
+    """Each firing rule picks command k with probability ``exp(q_m^k / T) / sum_j ...``."""
+
+    def __init__(self, fuzzy_q: FuzzyQ, temperature: float, uniform: UniformStream) -> None:
+        self.fuzzy_q = fuzzy_q
+        self.temperature = temperature
+        self.uniform = uniform
+
+    def choose(self, rules: list[int]) -> list[int]:
+        q, width = self.fuzzy_q.q, self.fuzzy_q.n_commands
+        choices = []
+        for m in rules:
+            row = q[m * width : m * width + width]
+            top = max(row)
+            weights = [math.exp((v - top) / self.temperature) for v in row]
+            threshold = self.uniform() * sum(weights)
+            k, cumulative = 0, weights[0]
+            while cumulative <= threshold and k < width - 1:
+                k += 1
+                cumulative += weights[k]
+            choices.append(k)
+        return choices
+
+
+class EpsilonGreedyChooser:
+    """Each firing rule explores (a uniform command) with probability epsilon, otherwise takes
+    its strongest command (ties broken uniformly)."""
+
+    def __init__(self, fuzzy_q: FuzzyQ, epsilon: float, uniform: UniformStream) -> None:
+        self.fuzzy_q = fuzzy_q
+        self.epsilon = epsilon
+        self.uniform = uniform
+
+    def choose(self, rules: list[int]) -> list[int]:
+        q, width = self.fuzzy_q.q, self.fuzzy_q.n_commands
+        choices = []
+        for m in rules:
+            if self.uniform() < self.epsilon:
+                choices.append(min(int(self.uniform() * width), width - 1))
+                continue
+            row = q[m * width : m * width + width]
+            top = max(row)
+            best = [k for k, v in enumerate(row) if v == top]
+            pick = best[0] if len(best) == 1 else best[min(int(self.uniform() * len(best)),
+                                                               len(best) - 1)]
+            choices.append(pick)
+        return choices
+
+
+def new_fuzzy_q(behaviour: Behaviour, n_rules: int, n_commands: int) -> FuzzyQ:
+    """A q table filled with ``learning.q.initial`` and the run's alpha, gamma, lambda."""
+    config = behaviour.learning.q
+    return FuzzyQ(np.full((n_rules, n_commands), config.initial), config.alpha, config.gamma,
+                  config.lambda_)
+
+
+def greedy_consequents(table: FloatArray) -> NDArray[np.intp]:
+    """Each rule's strongest command (M,), ties to the lowest index: the learned controller."""
+    consequents: NDArray[np.intp] = np.argmax(table, axis=1).astype(np.intp)
+    return consequents
+
+
+class FuzzyQLearner(Learner):
+    """Pure fuzzy Q-learning: one controller, its commands chosen per step by exploration.
+
+    A generation is ``population x trials`` episodes, so a generation costs what the GAs'
+    does; ``common_starts`` does not apply. After each generation the exploration parameter
+    (Boltzmann temperature ``q.temperature`` or ``exploration.epsilon``) is multiplied by
+    ``exploration.decay``, down to ``exploration.minimum``. The learned controller is the
+    greedy one (each rule's strongest command); its fitness in the run records is the
+    generation's mean episode fitness, measured while exploring.
+    """
+
+    name: ClassVar[str] = "fuzzy_q"
+    uses_strengths: ClassVar[bool] = True
+
+    def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
+        super().__init__(behaviour, env)
+        self.fuzzy_q = new_fuzzy_q(behaviour, self.controller.n_rules,
+                                   self.controller.n_commands)
+        self.population = greedy_consequents(self.fuzzy_q.table())[None, :]
+
+    def exploration(self, generation: int) -> float:
+        """The temperature or epsilon used in ``generation``."""
+        explore = self.config.exploration
+        start = (self.config.q.temperature if explore.policy == "boltzmann"
+                 else explore.epsilon)
+        return max(explore.minimum, start * explore.decay ** generation)
+
+    def evaluate(self, generation: int) -> GenerationResult:
+        episodes = self.config.population * self.config.trials
+        seeds = self.episode_seeds(episodes, 1, common=False)[:, 0].tolist()
+        uniform = UniformStream(np.random.default_rng(
+            int(self.rngs["explore"].integers(2**63))))
+        level = self.exploration(generation)
+        policy = self.config.exploration.policy
+        chooser: BoltzmannChooser | EpsilonGreedyChooser
+        if policy == "boltzmann" and level > 0.0:
+            chooser = BoltzmannChooser(self.fuzzy_q, level, uniform)
+        else:  # epsilon-greedy; a temperature decayed to zero is plain greedy
+            epsilon = min(level, 1.0) if policy == "epsilon_greedy" else 0.0
+            chooser = EpsilonGreedyChooser(self.fuzzy_q, epsilon, uniform)
+        returns = np.empty(episodes)
+        lengths = np.empty(episodes, dtype=np.int64)
+        success = np.empty(episodes, dtype=np.bool_)
+        for i, seed in enumerate(seeds):
+            trial = run_trial(self.env, self.rules, seed, None, chooser=chooser, td=self.fuzzy_q)
+            returns[i], lengths[i], success[i] = trial.ret, trial.length, trial.success
+        fitness = self.env.episode_fitness(returns, lengths, success)
+        self.population = greedy_consequents(self.fuzzy_q.table())[None, :]
+        self.fitness = np.array([float(np.mean(fitness))])
+        return GenerationResult(fitness, episodes, int(lengths.sum()))
+
+    def advance(self) -> None:
+        """Nothing to breed; the exploration schedule follows the generation number."""
+
+    def strengths(self) -> FloatArray:
+        return self.fuzzy_q.table()
+
+    def extra_state(self) -> dict[str, Any]:
+        return self.fuzzy_q.state_dict()
+
+    def load_extra_state(self, state: dict[str, Any]) -> None:
+        self.fuzzy_q.load_state_dict(state)

@@ -1,0 +1,124 @@
+"""One trial (episode) of one controller: the hot loop every learner shares.
+
+All three learners spend nearly all their time here, so the loop works on plain Python floats
+and lists: with overlapping trapezoids only 2-4 of the M rules fire per state, and numpy's
+per-call overhead on arrays that small costs more than the arithmetic (``Controller.
+active_rules`` takes ~30 us a call, :meth:`SparseRules.fire` ~3 us). Everything the loop needs
+is passed in explicitly, so it can be replaced by a compiled version without touching the
+learners.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from flctool.compile import Controller
+from flctool.compile.membership import trapezoid_scalar
+from flctool.envs.base import BatchEnv
+
+
+class SparseRules:
+    """The rule base of a controller as plain Python data, evaluated one state at a time.
+
+    Gives exactly the activations of :meth:`Controller.active_rules` (same formulas, same
+    floating-point operations), normalised to phi_m = alpha_m / sum(alpha) (eq. 7).
+    """
+
+    def __init__(self, controller: Controller) -> None:
+        self.n_rules = controller.n_rules
+        self.n_commands = controller.n_commands
+        self.singletons: list[float] = [float(v) for v in controller.singletons]
+        self._lows = [float(v) for v in controller.ranges[:, 0]]
+        self._highs = [float(v) for v in controller.ranges[:, 1]]
+        self._sets = [[tuple(float(v) for v in quad) for quad in quads]
+                      for quads in controller.quadruples]
+
+    def fire(self, state: list[float]) -> tuple[list[int], list[float]]:
+        """Active rules of one state (N,) in increasing order, and their phi_m (eq. 2, 7)."""
+        rules = [0]
+        alphas = [1.0]
+        for value, low, high, sets in zip(state, self._lows, self._highs, self._sets,
+                                          strict=True):
+            s = low if value < low else high if value > high else value  # clip to the range
+            mus = [(j, mu) for j, (pa, pb, pc, pd) in enumerate(sets)
+                   if (mu := trapezoid_scalar(s, pa, pb, pc, pd)) > 0.0]
+            width = len(sets)
+            rules = [r * width + j for r in rules for j, _ in mus]
+            alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
+        total = sum(alphas)
+        return rules, [a / total for a in alphas]
+
+    def output(self, phi: list[float], commands: list[int]) -> float:
+        """Crisp output of eq. 3 from the firing rules' phi and their command indices."""
+        singletons = self.singletons
+        return sum(p * singletons[k] for p, k in zip(phi, commands, strict=True))
+
+
+class Chooser(Protocol):
+    """Picks each firing rule's command for one step (exploration of ``fuzzy_q``)."""
+
+    def choose(self, rules: list[int]) -> list[int]: ...
+
+
+class TemporalDifference(Protocol):
+    """Learns from one step (eq. 6-9); see :class:`flctool.learners.fuzzy_q.FuzzyQ`."""
+
+    def reset_traces(self) -> None: ...
+
+    def learn(self, rules: list[int], phi: list[float], commands: list[int], reward: float,
+              next_rules: list[int], next_phi: list[float], terminal: bool) -> float: ...
+
+
+@dataclass(frozen=True)
+class Trial:
+    """The outcome of one episode."""
+
+    ret: float  # undiscounted return
+    length: int  # steps taken
+    success: bool
+
+
+def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int] | None,
+              chooser: Chooser | None = None, td: TemporalDifference | None = None) -> Trial:
+    """Run one episode from ``seed`` on a batch-of-one ``env``.
+
+    The commands come from the fixed ``consequents (M,)`` (pitt, hybrid) or, step by step, from
+    ``chooser`` (fuzzy_q). With ``td``, every step updates the q table (eq. 4-9): trial after
+    trial, never summed over simultaneous episodes. A terminal step does not bootstrap; a
+    truncated one does (the time limit is not part of the task).
+    """
+    if td is not None:
+        td.reset_traces()
+    observations, _ = env.reset(np.array([seed], dtype=np.int64))
+    active, phi = rules.fire(observations[0].tolist())
+    singletons = rules.singletons
+    total = 0.0
+    steps = 0
+    action = np.empty(1, dtype=np.float64)
+    while True:
+        if chooser is not None:
+            commands = chooser.choose(active)
+        elif consequents is not None:
+            commands = [consequents[m] for m in active]
+        else:
+            raise ValueError("run_trial needs consequents or a chooser")
+        action[0] = sum(p * singletons[k] for p, k in zip(phi, commands, strict=True))  # eq. 3
+        out = env.step(action)
+        reward = float(out.rewards[0])
+        terminal = bool(out.terminated[0])
+        done = terminal or bool(out.truncated[0])
+        total += reward
+        steps += 1
+        if terminal:
+            next_active: list[int] = []
+            next_phi: list[float] = []
+        else:
+            next_active, next_phi = rules.fire(out.observations[0].tolist())
+        if td is not None:
+            td.learn(active, phi, commands, reward, next_active, next_phi, terminal)
+        if done:
+            return Trial(total, steps, bool(env.success()[0]))
+        active, phi = next_active, next_phi

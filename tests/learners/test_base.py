@@ -1,0 +1,125 @@
+"""Contract tests run over every registered learner: the template loop, determinism, resume."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from flctool.learners import (
+    LEARNERS,
+    TRAIN_SEED_LOW,
+    Callback,
+    GenerationMetrics,
+    Learner,
+    StopAtFitness,
+    make_learner,
+    train,
+)
+from flctool.registry import UnknownNameError
+from flctool.spec.learning import LEARNER_NAMES
+from tests.learners.line_env import LineEnv, line_behaviour
+
+
+class Recorder(Callback):
+    def __init__(self, stop_after: int | None = None) -> None:
+        self.events: list[str] = []
+        self.stop_after = stop_after
+
+    def on_start(self, learner: Learner) -> None:
+        super().on_start(learner)
+        self.events.append("start")
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        self.events.append(f"gen{metrics.generation}")
+        return self.stop_after is None or metrics.generation < self.stop_after
+
+    def on_end(self) -> None:
+        self.events.append("end")
+
+
+def test_registry_holds_exactly_the_configurable_learners() -> None:
+    assert set(LEARNERS.names()) == set(LEARNER_NAMES)
+    with pytest.raises(UnknownNameError, match="Did you mean 'hybrid'"):
+        LEARNERS.get("hybird")
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_training_runs_every_generation_through_the_callbacks(name: str) -> None:
+    recorder = Recorder()
+    learner = make_learner(line_behaviour(learner=name), LineEnv())
+    history = train(learner, [recorder])
+    assert recorder.events == ["start", *(f"gen{g}" for g in range(6)), "end"]
+    assert [m.generation for m in history] == list(range(6))
+    assert learner.generation == 5
+    assert all(m.min <= m.mean <= m.best and m.steps >= m.episodes for m in history)
+    assert learner.population.shape[1] == 3
+    _, consequents, fitness = learner.best()
+    assert fitness == learner.fitness.max() and consequents.shape == (3,)
+    assert (learner.strengths() is not None) == learner.uses_strengths
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_a_callback_can_stop_training_early(name: str) -> None:
+    recorder = Recorder(stop_after=2)
+    history = train(make_learner(line_behaviour(learner=name), LineEnv()), [recorder])
+    assert len(history) == 3 and recorder.events[-1] == "end"
+    assert len(train(make_learner(line_behaviour(learner=name), LineEnv()),
+                     [StopAtFitness(-10.0)])) == 1
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_the_same_seed_gives_the_same_run(name: str) -> None:
+    runs = []
+    for _ in range(2):
+        learner = make_learner(line_behaviour(learner=name), LineEnv())
+        history = train(learner)
+        runs.append(([(m.mean, m.best, m.steps) for m in history], learner.state_dict()))
+    for run in runs:
+        run[1].pop("elapsed")
+    assert runs[0] == runs[1]
+    other = make_learner(line_behaviour(learner=name, seed=4), LineEnv())
+    train(other)
+    assert other.state_dict()["rng"] != runs[0][1]["rng"]
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_resuming_from_a_json_checkpoint_ends_where_an_uninterrupted_run_ends(
+        name: str) -> None:
+    behaviour = line_behaviour(learner=name, generations=7)
+    whole = make_learner(behaviour, LineEnv())
+    whole_history = train(whole)
+
+    class StopAt(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            return metrics.generation < 3
+
+    first = make_learner(behaviour, LineEnv())
+    train(first, [StopAt()])
+    checkpoint = json.loads(json.dumps(first.state_dict()))
+    second = make_learner(behaviour, LineEnv())
+    second.load_state_dict(checkpoint)
+    rest = train(second)
+    assert [m.generation for m in rest] == [4, 5, 6]
+    strip = lambda ms: [(m.mean, m.std, m.best, m.min, m.steps) for m in ms]  # noqa: E731
+    assert strip(rest) == strip(whole_history[4:])
+    a, b = second.state_dict(), whole.state_dict()
+    a.pop("elapsed"), b.pop("elapsed")
+    assert a == b
+
+
+def test_training_seeds_stay_clear_of_evaluation_seeds() -> None:
+    learner = make_learner(line_behaviour(learner="pitt"), LineEnv())
+    seeds = learner.episode_seeds(5, 3, common=False)
+    assert seeds.shape == (5, 3) and seeds.min() >= TRAIN_SEED_LOW
+    assert len(np.unique(seeds)) == 15
+    common = learner.episode_seeds(5, 3, common=True)
+    assert (common == common[0]).all() and len(np.unique(common[0])) == 3
+
+
+def test_a_checkpoint_of_another_learner_is_refused() -> None:
+    pitt = make_learner(line_behaviour(learner="pitt"), LineEnv())
+    hybrid = make_learner(line_behaviour(learner="hybrid"), LineEnv())
+    with pytest.raises(Exception, match="learner 'pitt', not 'hybrid'"):
+        hybrid.load_state_dict(pitt.state_dict())

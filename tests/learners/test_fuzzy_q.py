@@ -1,0 +1,129 @@
+"""Fuzzy Q-learning (eq. 4-9): hand-computed updates, traces, terminal steps, exploration."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flctool.learners import make_learner, train
+from flctool.learners.fuzzy_q import (
+    BoltzmannChooser,
+    EpsilonGreedyChooser,
+    FuzzyQ,
+    FuzzyQLearner,
+    UniformStream,
+    greedy_consequents,
+)
+from tests.learners.line_env import LineEnv, line_behaviour
+
+Q0 = np.array([[0.0, 0.5],
+               [0.2, -0.1]])
+
+
+def test_value_is_eq_5_and_greedy_value_takes_each_rules_best() -> None:
+    fq = FuzzyQ(Q0, alpha=0.5, gamma=0.9, lambda_=0.0)
+    assert fq.value([0, 1], [0.25, 0.75], [1, 0]) == pytest.approx(0.25 * 0.5 + 0.75 * 0.2)
+    assert fq.greedy_value([0, 1], [0.4, 0.6]) == pytest.approx(0.4 * 0.5 + 0.6 * 0.2)
+
+
+def test_one_step_update_without_traces_is_eq_7() -> None:
+    fq = FuzzyQ(Q0, alpha=0.5, gamma=0.9, lambda_=0.0)
+    # Q(S,a) = 0.275; target = 1 + 0.9 * max q_1 = 1.18; dQ = 0.905
+    delta = fq.learn([0, 1], [0.25, 0.75], [1, 0], 1.0, [1], [1.0], terminal=False)
+    assert delta == pytest.approx(0.905)
+    expected = Q0.copy()
+    expected[0, 1] += 0.5 * 0.905 * 0.25
+    expected[1, 0] += 0.5 * 0.905 * 0.75
+    np.testing.assert_allclose(fq.table(), expected, rtol=0, atol=1e-15)
+    assert fq.table()[0, 1] == pytest.approx(0.613125)
+    assert fq.table()[1, 0] == pytest.approx(0.539375)
+    # with lambda = 0 nothing of step t reaches step t + 1
+    fq.learn([1], [1.0], [1], 0.0, [], [], terminal=True)
+    assert fq.table()[0, 1] == pytest.approx(0.613125)
+
+
+def test_two_steps_with_replacing_traces() -> None:
+    fq = FuzzyQ(Q0, alpha=0.5, gamma=0.9, lambda_=0.5)
+    fq.learn([0, 1], [0.25, 0.75], [1, 0], 1.0, [1], [1.0], terminal=False)
+    np.testing.assert_allclose(fq.traces(), [[0.0, 0.25], [0.75, 0.0]])
+    # step 2: Q = q_1^1 = -0.1, terminal, r = 0 -> dQ = 0.1; traces decay by lambda gamma
+    # = 0.45 except the chosen (rule 1, command 1), which is replaced by phi = 1
+    delta = fq.learn([1], [1.0], [1], 0.0, [], [], terminal=True)
+    assert delta == pytest.approx(0.1)
+    np.testing.assert_allclose(fq.traces(), [[0.0, 0.1125], [0.3375, 1.0]])
+    np.testing.assert_allclose(fq.table(), [[0.0, 0.61875], [0.55625, -0.05]], atol=1e-15)
+
+
+def test_a_replacing_trace_is_set_not_accumulated() -> None:
+    fq = FuzzyQ(np.zeros((1, 2)), alpha=0.1, gamma=1.0, lambda_=1.0)
+    fq.learn([0], [1.0], [0], 0.0, [0], [1.0], terminal=False)
+    fq.learn([0], [1.0], [0], 0.0, [0], [1.0], terminal=False)
+    assert fq.traces()[0, 0] == 1.0
+
+
+def test_a_terminal_step_does_not_bootstrap() -> None:
+    q = np.array([[5.0, 7.0]])
+    fq = FuzzyQ(q, alpha=1.0, gamma=1.0, lambda_=0.0)
+    assert fq.learn([0], [1.0], [0], -1.0, [0], [1.0], terminal=True) == pytest.approx(-6.0)
+    fq = FuzzyQ(q, alpha=1.0, gamma=1.0, lambda_=0.0)
+    # the same step cut by the time limit does bootstrap: -1 + 7 - 5
+    assert fq.learn([0], [1.0], [0], -1.0, [0], [1.0], terminal=False) == pytest.approx(1.0)
+
+
+def test_state_round_trips() -> None:
+    fq = FuzzyQ(Q0, alpha=0.5, gamma=0.9, lambda_=0.5)
+    fq.learn([0, 1], [0.25, 0.75], [1, 0], 1.0, [1], [1.0], terminal=False)
+    other = FuzzyQ(np.zeros((2, 2)), alpha=0.5, gamma=0.9, lambda_=0.5)
+    other.load_state_dict(fq.state_dict())
+    assert other.q == fq.q and other.trace == fq.trace
+
+
+def test_boltzmann_choice_frequencies() -> None:
+    row = np.array([0.2, 0.0, -0.1])
+    fq = FuzzyQ(row[None, :], alpha=0.1, gamma=0.9, lambda_=0.0)
+    chooser = BoltzmannChooser(fq, 0.2, UniformStream(np.random.default_rng(0)))
+    draws = 30_000
+    counts = np.bincount([chooser.choose([0])[0] for _ in range(draws)], minlength=3)
+    expected = np.exp(row / 0.2) / np.exp(row / 0.2).sum() * draws
+    assert float(((counts - expected) ** 2 / expected).sum()) < 13.8  # chi2(2) 0.999
+
+
+def test_epsilon_greedy_explores_at_rate_epsilon_and_breaks_ties_evenly() -> None:
+    fq = FuzzyQ(np.array([[0.0, 1.0, 0.0], [0.5, 0.5, 0.0]]), 0.1, 0.9, 0.0)
+    greedy = EpsilonGreedyChooser(fq, 0.0, UniformStream(np.random.default_rng(1)))
+    assert {greedy.choose([0])[0] for _ in range(50)} == {1}
+    ties = np.bincount([greedy.choose([1])[0] for _ in range(4000)], minlength=3)
+    assert ties[2] == 0 and 1800 < ties[0] < 2200
+    explorer = EpsilonGreedyChooser(fq, 0.3, UniformStream(np.random.default_rng(2)))
+    picks = np.array([explorer.choose([0])[0] for _ in range(20_000)])
+    assert (picks != 1).mean() == pytest.approx(0.3 * 2 / 3, abs=0.015)
+
+
+def test_greedy_consequents_take_the_strongest_command() -> None:
+    assert list(greedy_consequents(np.array([[0.0, 1.0], [2.0, 2.0]]))) == [1, 0]
+
+
+def test_exploration_decays_to_its_floor() -> None:
+    behaviour = line_behaviour(learner="fuzzy_q")
+    config = behaviour.learning.exploration.model_copy(update={"decay": 0.5, "minimum": 0.05})
+    learner = FuzzyQLearner(behaviour.model_copy(update={"learning": behaviour.learning.model_copy(
+        update={"exploration": config})}), LineEnv())
+    assert learner.exploration(0) == pytest.approx(0.15)
+    assert learner.exploration(1) == pytest.approx(0.075)
+    assert learner.exploration(5) == pytest.approx(0.05)
+
+
+@pytest.mark.parametrize("policy", ["boltzmann", "epsilon_greedy"])
+def test_fuzzy_q_learns_to_go_up(policy: str) -> None:
+    behaviour = line_behaviour(learner="fuzzy_q", generations=15, population=10)
+    explore = behaviour.learning.exploration.model_copy(update={"policy": policy,
+                                                                "epsilon": 0.5})
+    behaviour = behaviour.model_copy(update={"learning": behaviour.learning.model_copy(
+        update={"exploration": explore})})
+    learner = make_learner(behaviour, LineEnv())
+    history = train(learner)
+    assert len(history) == 15 and history[0].episodes == 10
+    assert learner.population.shape == (1, 3)
+    # "up" wins in the rules the episodes visit most: mid and high
+    assert list(learner.population[0, 1:]) == [2, 2]
+    assert history[-1].mean > history[0].mean

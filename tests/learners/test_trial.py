@@ -1,0 +1,56 @@
+"""The shared trial loop and its plain-Python rule firing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.learners.fuzzy_q import FuzzyQ
+from flctool.learners.trial import SparseRules, run_trial
+from tests.conftest import BEHAVIOURS
+from tests.learners.line_env import LineEnv, line_behaviour
+
+BALLCHASE = compile_behaviour(load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml"))
+SPARSE = SparseRules(BALLCHASE)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-0.2, 1.2), st.floats(-120.0, 120.0))
+def test_fire_equals_controller_active_rules(size: float, pan: float) -> None:
+    rules, phi = SPARSE.fire([size, pan])
+    expected_rules, alpha = BALLCHASE.active_rules(np.array([size, pan]))
+    assert rules == expected_rules.tolist()
+    assert phi == (alpha / alpha.sum()).tolist()
+    assert BALLCHASE.consequents is not None
+    commands = [int(BALLCHASE.consequents[m]) for m in rules]
+    crisp = BALLCHASE.output(np.array([[size, pan]]))[0]
+    assert SPARSE.output(phi, commands) == pytest.approx(crisp, abs=1e-12)
+
+
+def test_a_trial_runs_to_the_end_of_the_episode() -> None:
+    rules = SparseRules(compile_behaviour(line_behaviour()))
+    env = LineEnv(max_steps=20)
+    up = run_trial(env, rules, 5, [2, 2, 2])
+    assert up.success and up.ret == 1.0 and 1 <= up.length <= 7
+    down = run_trial(env, rules, 5, [0, 0, 0])
+    assert not down.success and down.ret == -1.0
+    stay = run_trial(env, rules, 5, [1, 1, 1])
+    assert not stay.success and stay.ret == 0.0 and stay.length == 20
+
+
+def test_the_truncated_last_step_bootstraps() -> None:
+    rules = SparseRules(compile_behaviour(line_behaviour()))
+    fq = FuzzyQ(np.ones((3, 3)), alpha=0.5, gamma=1.0, lambda_=0.0)
+    # staying: reward 0 and target 0 + max q(S') = 1 = Q(S, a), so nothing changes, even on
+    # the truncated last step
+    run_trial(LineEnv(max_steps=3), rules, 5, [1, 1, 1], td=fq)
+    np.testing.assert_array_equal(fq.table(), np.ones((3, 3)))
+
+
+def test_a_trial_needs_consequents_or_a_chooser() -> None:
+    rules = SparseRules(compile_behaviour(line_behaviour()))
+    with pytest.raises(ValueError, match="consequents or a chooser"):
+        run_trial(LineEnv(), rules, 0, None)
