@@ -9,7 +9,10 @@ with L = (3, 5) sets, rule 0 is (set 0, set 0), rule 1 is (set 0, set 1), ..., r
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property, partial
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -18,14 +21,20 @@ from flctool.compile.membership import trapezoid
 from flctool.errors import InferenceError
 from flctool.spec.models import Behaviour, Rule
 
+if TYPE_CHECKING:
+    from flctool.compile.kernels import Layout
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
 
-def _frozen(array: NDArray[np.generic]) -> NDArray[np.generic]:
-    array = np.ascontiguousarray(array)
-    array.setflags(write=False)
-    return array
+_Array = TypeVar("_Array", bound=NDArray[Any])
+
+
+def _frozen(array: _Array) -> _Array:
+    frozen = np.ascontiguousarray(array)
+    frozen.setflags(write=False)
+    return cast(_Array, frozen)
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,21 +78,15 @@ class Controller:
         return tuple(len(names) for names in self.set_names)
 
     # -- inference -----------------------------------------------------------------------
+    # The public methods validate and shape; the work is done by compiled kernels
+    # (flctool.compile.kernels) that walk only the rules that fire and give exactly what the
+    # plain eq. 1-3 give (tests compare with a loop over rules).
+
     def check_states(self, states: FloatArray) -> FloatArray:
         """States as a (B, N) float array, clipped to the ranges; NaN is an error."""
-        array = np.asarray(states, dtype=np.float64)
-        if array.ndim == 1 and array.shape[0] == self.n_inputs:
-            array = array[None, :]
-        if array.ndim != 2 or array.shape[1] != self.n_inputs:
-            raise InferenceError(
-                f"states must have shape (B, {self.n_inputs}) for inputs "
-                f"{', '.join(self.input_names)}; got shape {array.shape}")
-        nan = np.isnan(array)
-        if nan.any():
-            row, col = np.argwhere(nan)[0]
-            raise InferenceError(
-                f"input '{self.input_names[col]}' is NaN in state {row}",
-                hint="NaN has no membership; filter or replace missing sensor readings")
+        array = self._as_states(states)
+        if np.isnan(array).any():
+            self._raise_nan(array)
         # Out-of-range values (and +-inf) are clipped: a sensor past its end reads as the end.
         return np.clip(array, self.ranges[:, 0], self.ranges[:, 1])
 
@@ -93,41 +96,124 @@ class Controller:
         return [trapezoid(clipped[:, i], q) for i, q in enumerate(self.quadruples)]
 
     def activations(self, states: FloatArray) -> FloatArray:
-        """Rule activations alpha_m(S), Mamdani minimum (eq. 2): (B, N) -> (B, M)."""
-        mus = self.memberships(states)
-        alpha = mus[0][:, self.rule_grid[:, 0]]
-        for i in range(1, self.n_inputs):
-            alpha = np.minimum(alpha, mus[i][:, self.rule_grid[:, i]])
+        """Rule activations alpha_m(S), Mamdani minimum (eq. 2): (B, N) -> (B, M).
+
+        Dense by definition; for large M prefer :meth:`active_rules` or :meth:`output`, which
+        never make a (B, M) array.
+        """
+        from flctool.compile import kernels
+
+        array = self._as_states(states)
+        alpha = np.zeros((array.shape[0], self.n_rules))
+        layout = self._layout
+        nan_state = kernels.activations(array, layout.lo, layout.hi, layout.quads,
+                                        layout.offsets, layout.strides, layout.max_sets, alpha)
+        if nan_state >= 0:
+            self._raise_nan(array)
         return alpha
 
     def active_rules(self, state: FloatArray) -> tuple[IntArray, FloatArray]:
         """The rules that fire for one state (N,), and their activations (eq. 2).
 
         Returns ``(rules (A,), alpha (A,))`` with ``alpha > 0``, rules in increasing order.
-        With overlapping trapezoids A <= 2^N however large M is, so per-step work that uses
-        only these follows the active rules, not M.
+        With overlapping trapezoids A <= 2^N however large M is, and the cost of this call
+        follows A, not M: per-step work that uses only these follows the active rules.
         """
-        clipped = self.check_states(state)[0]
-        rules = np.zeros(1, dtype=np.intp)
-        alpha = np.ones(1)
-        for i, quads in enumerate(self.quadruples):
-            mu = trapezoid(clipped[i : i + 1], quads)[0]
-            (active,) = np.nonzero(mu)
-            rules = (rules[:, None] * len(quads) + active[None, :]).ravel()
-            alpha = np.minimum(alpha[:, None], mu[active][None, :]).ravel()
+        x = np.asarray(state, dtype=np.float64)
+        if x.shape != self._state_shape:
+            x = self._as_state(state)
+        rules, alpha, nan_input = self._active_kernel(x)
+        if nan_input >= 0:
+            self._raise_nan(x[None, :])
         return rules, alpha
 
     def output(self, states: FloatArray, consequents: IntArray | None = None) -> FloatArray:
         """Crisp output by centre of area over singletons (eq. 3).
 
         ``states (B, N)`` -> ``(B,)`` with this controller's consequents (or one ``(M,)``
-        vector); with a population ``consequents (P, M)`` -> ``(P, B)``.
+        vector); with a population ``consequents (P, M)`` -> ``(P, B)``. Only the rules that
+        fire are visited and no (B, M) array is made, whatever M is.
         """
+        from flctool.compile import kernels
+
         table = self._consequents(consequents)
-        alpha = self.activations(states)
-        total = alpha.sum(axis=1)
-        values = self.singletons[table]  # (M,) or (P, M)
-        return (values @ alpha.T) / total if values.ndim == 2 else (alpha @ values) / total
+        array = self._as_states(states)
+        tables = table.reshape(-1, self.n_rules)
+        if not tables.flags.writeable:  # one compiled signature: writable C arrays
+            tables = tables.copy()
+        out = np.empty((tables.shape[0], array.shape[0]))
+        layout = self._layout
+        nan_state = kernels.infer(array, layout.lo, layout.hi, layout.quads, layout.offsets,
+                                  layout.strides, layout.max_sets, layout.grid, tables,
+                                  layout.singletons, out)
+        if nan_state >= 0:
+            self._raise_nan(array)
+        return out if table.ndim == 2 else out[0]
+
+    def output_one(self, state: FloatArray) -> float:
+        """Crisp output (eq. 3) of one state ``(N,)`` with this controller's consequents.
+
+        The fast path for a control loop that infers one state at a time (about a
+        microsecond a call); equal to ``output(state[None])[0]``.
+        """
+        x = np.asarray(state, dtype=np.float64)
+        if x.shape != self._state_shape:
+            x = self._as_state(state)
+        value: float = self._one_kernel(x)
+        if value != value:  # NaN only from a NaN input: the partitions cover the ranges
+            self._raise_nan(x[None, :])
+        return value
+
+    @cached_property
+    def _layout(self) -> Layout:
+        from flctool.compile import kernels
+
+        return kernels.layout(self.ranges, self.quadruples, self.rule_grid, self.singletons)
+
+    @cached_property
+    def _state_shape(self) -> tuple[int]:
+        return (self.n_inputs,)
+
+    @cached_property
+    def _one_kernel(self) -> Callable[[FloatArray], float]:
+        # The kernel with this controller's arrays bound: a one-state call pays only for
+        # checking the state and numba's dispatch. The table is copied writable so that the
+        # kernel is compiled for one signature.
+        from flctool.compile import kernels
+
+        table = np.array(self._consequents(None), dtype=np.intp)
+        return partial(kernels.infer_one, self._layout.floats, self._layout.ints, table)
+
+    @cached_property
+    def _active_kernel(self) -> Callable[[FloatArray], tuple[IntArray, FloatArray, int]]:
+        from flctool.compile import kernels
+
+        return partial(kernels.active_one, self._layout.floats, self._layout.ints)
+
+    def _as_states(self, states: FloatArray) -> FloatArray:
+        array = np.asarray(states, dtype=np.float64)
+        if array.ndim == 1 and array.shape[0] == self.n_inputs:
+            array = array[None, :]
+        if array.ndim != 2 or array.shape[1] != self.n_inputs:
+            raise InferenceError(
+                f"states must have shape (B, {self.n_inputs}) for inputs "
+                f"{', '.join(self.input_names)}; got shape {array.shape}")
+        if not array.flags.writeable:
+            return np.array(array, dtype=np.float64)
+        return np.ascontiguousarray(array, dtype=np.float64)
+
+    def _as_state(self, state: FloatArray) -> FloatArray:
+        x = np.asarray(state, dtype=np.float64)
+        if x.shape != (self.n_inputs,) or not x.flags.writeable or not x.flags.c_contiguous:
+            row: FloatArray = self._as_states(state)[0]  # (1, N) is accepted; bad shapes raise
+            return row
+        return x
+
+    def _raise_nan(self, states: FloatArray) -> None:
+        row, col = np.argwhere(np.isnan(states))[0]
+        raise InferenceError(
+            f"input '{self.input_names[col]}' is NaN in state {row}",
+            hint="NaN has no membership; filter or replace missing sensor readings")
 
     def _consequents(self, consequents: IntArray | None) -> IntArray:
         if consequents is None:
@@ -149,9 +235,13 @@ class Controller:
         table = self._consequents(consequents)
         if table.ndim != 1:
             raise InferenceError("with_consequents takes one (M,) vector")
-        return Controller(self.input_names, self.set_names, self.output_name,
-                          self.command_names, self.ranges, self.quadruples, self.rule_grid,
-                          self.singletons, _frozen(table.copy()))
+        controller = Controller(self.input_names, self.set_names, self.output_name,
+                                self.command_names, self.ranges, self.quadruples,
+                                self.rule_grid, self.singletons, _frozen(table.copy()))
+        for shared in ("_layout", "_active_kernel"):  # same sets: share what depends on them
+            if shared in self.__dict__:
+                controller.__dict__[shared] = self.__dict__[shared]
+        return controller
 
 
 def compile_behaviour(behaviour: Behaviour) -> Controller:
