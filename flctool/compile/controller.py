@@ -119,9 +119,9 @@ class Controller:
         With overlapping trapezoids A <= 2^N however large M is, and the cost of this call
         follows A, not M: per-step work that uses only these follows the active rules.
         """
-        x = np.asarray(state, dtype=np.float64)
+        x = np.array(state, dtype=np.float64)  # a copy: writable and contiguous, as compiled
         if x.shape != self._state_shape:
-            x = self._as_state(state)
+            x = self._as_states(x)[0]  # (1, N) is accepted too; other shapes raise
         rules, alpha, nan_input = self._active_kernel(x)
         if nan_input >= 0:
             self._raise_nan(x[None, :])
@@ -156,9 +156,9 @@ class Controller:
         The fast path for a control loop that infers one state at a time (about a
         microsecond a call); equal to ``output(state[None])[0]``.
         """
-        x = np.asarray(state, dtype=np.float64)
+        x = np.array(state, dtype=np.float64)  # a copy: writable and contiguous, as compiled
         if x.shape != self._state_shape:
-            x = self._as_state(state)
+            x = self._as_states(x)[0]  # (1, N) is accepted too; other shapes raise
         value: float = self._one_kernel(x)
         if value != value:  # NaN only from a NaN input: the partitions cover the ranges
             self._raise_nan(x[None, :])
@@ -201,13 +201,6 @@ class Controller:
         if not array.flags.writeable:
             return np.array(array, dtype=np.float64)
         return np.ascontiguousarray(array, dtype=np.float64)
-
-    def _as_state(self, state: FloatArray) -> FloatArray:
-        x = np.asarray(state, dtype=np.float64)
-        if x.shape != (self.n_inputs,) or not x.flags.writeable or not x.flags.c_contiguous:
-            row: FloatArray = self._as_states(state)[0]  # (1, N) is accepted; bad shapes raise
-            return row
-        return x
 
     def _raise_nan(self, states: FloatArray) -> None:
         row, col = np.argwhere(np.isnan(states))[0]

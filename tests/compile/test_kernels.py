@@ -1,0 +1,181 @@
+"""The compiled kernels give exactly what the plain eq. 1-3 give (bit for bit, not close).
+
+Every fast path (batched output on both the all-rules and the fired-rules walk, one-state
+output, dense activations, active rules) is compared with ``reference.py``'s loop over rules
+on random controllers, at set breakpoints, vertical edges, out-of-range and infinite inputs.
+"""
+
+from __future__ import annotations
+
+import itertools
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.compile import Controller, kernels
+from flctool.compile.membership import trapezoid_scalar
+from flctool.errors import InferenceError
+from flctool.spec import behaviour_from_data
+
+from .reference import random_behaviour_data, reference_output
+
+
+def reference_activations(controller: Controller, state: np.ndarray) -> np.ndarray:
+    """(M,) activations (eq. 2) by a loop over rules."""
+    clipped = [min(max(float(s), lo), hi) for s, (lo, hi) in zip(state, controller.ranges,
+                                                                  strict=True)]
+    return np.array([
+        min(trapezoid_scalar(clipped[i], *controller.quadruples[i][j]) for i, j in enumerate(sets))
+        for sets in itertools.product(*(range(len(q)) for q in controller.quadruples))])
+
+
+def awkward_states(controller: Controller, rng: np.random.Generator, count: int) -> np.ndarray:
+    """Random states, plus every set breakpoint, out-of-range values and +-inf per input."""
+    lo, hi = controller.ranges[:, 0], controller.ranges[:, 1]
+    states = rng.uniform(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo),
+                         size=(count, controller.n_inputs))
+    for i, quads in enumerate(controller.quadruples):
+        special = np.concatenate([quads.ravel(), [-np.inf, np.inf, lo[i], hi[i]]])
+        rows = rng.integers(0, count, size=len(special))
+        states[rows, i] = special
+    return states
+
+
+def sparse_output(controller: Controller, states: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """kernels.infer forced onto the fired-rules walk (an empty grid), whatever M is."""
+    layout = controller._layout
+    tables = np.array(table, dtype=np.intp).reshape(-1, controller.n_rules)
+    out = np.empty((tables.shape[0], len(states)))
+    nan_state = kernels.infer(np.ascontiguousarray(states), layout.lo, layout.hi, layout.quads,
+                              layout.offsets, layout.strides, layout.max_sets,
+                              layout.grid[:0], tables, layout.singletons, out)
+    assert nan_state == -1
+    return out
+
+
+def many_overlapping_sets() -> Controller:
+    """Up to four sets of one input non-zero at once, with vertical edges inside the range."""
+    data = {
+        "flctool": 1, "name": "overlap",
+        "inputs": {
+            "a": {"range": [0, 10], "sets": {"wide": [0, 0, 10, 10], "mid": [1, 4, 6, 9],
+                                             "step": [3, 3, 7, 7], "late": [5, 8, 10, 10],
+                                             "tri": [0, 5, 5, 10]}},
+            "b": {"range": [-1, 1], "sets": {"lo": [-1, -1, 0, 1], "hi": [-1, 0, 1, 1],
+                                             "all": [-1, -1, 1, 1]}},
+            "c": {"range": [0, 1], "sets": {"x": [0, 0, 0.5, 1], "y": [0, 0.5, 1, 1],
+                                            "z": [0, 0.2, 0.2, 1]}},
+        },
+        "output": {"name": "u", "commands": {"p": -2.5, "q": 0.1, "r": 3.75}},
+    }
+    controller = compile_behaviour(behaviour_from_data(data))
+    rng = np.random.default_rng(5)
+    return controller.with_consequents(rng.integers(0, 3, size=controller.n_rules))
+
+
+def test_fast_paths_equal_the_reference_exactly_on_random_controllers() -> None:
+    rng = np.random.default_rng(2024)
+    for _ in range(40):
+        controller = compile_behaviour(behaviour_from_data(random_behaviour_data(rng)))
+        assert controller.consequents is not None
+        states = awkward_states(controller, rng, 40)
+        expected = np.array([reference_output(controller, s, controller.consequents)
+                             for s in states])
+        np.testing.assert_array_equal(controller.output(states), expected)
+        np.testing.assert_array_equal(sparse_output(controller, states,
+                                                    controller.consequents)[0], expected)
+        np.testing.assert_array_equal([controller.output_one(s) for s in states], expected)
+        dense = np.array([reference_activations(controller, s) for s in states])
+        np.testing.assert_array_equal(controller.activations(states), dense)
+        for state, row in zip(states, dense, strict=True):
+            rules, alpha = controller.active_rules(state)
+            assert rules.tolist() == np.nonzero(row)[0].tolist()
+            np.testing.assert_array_equal(alpha, row[rules])
+
+
+def test_many_overlapping_sets_per_input() -> None:
+    controller = many_overlapping_sets()
+    assert controller.consequents is not None
+    rng = np.random.default_rng(9)
+    states = awkward_states(controller, rng, 60)
+    expected = np.array([reference_output(controller, s, controller.consequents)
+                         for s in states])
+    assert controller.n_rules > kernels.DENSE_RULES  # output() walks the fired rules
+    np.testing.assert_array_equal(controller.output(states), expected)
+    np.testing.assert_array_equal([controller.output_one(s) for s in states], expected)
+    fired = [len(controller.active_rules(s)[0]) for s in states]
+    assert max(fired) > 2 ** controller.n_inputs  # more than two sets per input fire
+
+
+def test_populations_on_both_walks() -> None:
+    rng = np.random.default_rng(17)
+    for n_inputs in (2, 3):
+        controller = compile_behaviour(behaviour_from_data(
+            random_behaviour_data(rng, n_inputs, 4, rules=False)))
+        population = rng.integers(0, 4, size=(5, controller.n_rules))
+        states = awkward_states(controller, rng, 25)
+        expected = np.array([[reference_output(controller, s, row) for s in states]
+                             for row in population])
+        np.testing.assert_array_equal(controller.output(states, population), expected)
+        np.testing.assert_array_equal(sparse_output(controller, states, population), expected)
+
+
+def test_large_rule_base_never_makes_a_dense_batch_by_rules_array() -> None:
+    # 6 inputs x 5 sets: M = 15,625; a (B, M) float array for B = 400 would be 50 MB.
+    sets = {f"s{j}": [max(0.0, j - 1.0), j - 0.25, j + 0.25, min(4.0, j + 1.0)]
+            for j in range(5)}
+    sets["s0"][:2] = [0.0, 0.0]
+    sets["s4"][2:] = [4.0, 4.0]
+    data = {"flctool": 1, "name": "big",
+            "inputs": {f"x{i}": {"range": [0, 4], "sets": sets} for i in range(6)},
+            "output": {"name": "u", "commands": {"a": -1, "b": 0.5, "c": 2}}}
+    learning = compile_behaviour(behaviour_from_data(data))
+    rng = np.random.default_rng(1)
+    controller = learning.with_consequents(rng.integers(0, 3, size=learning.n_rules))
+    assert controller.consequents is not None
+    states = rng.uniform(-0.5, 4.5, size=(400, 6))
+    controller.output(states[:2])  # compile (or load) the kernels outside the measurement
+    tracemalloc.start()
+    values = controller.output(states)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    assert peak < 1_000_000
+    for row in (0, 199, 399):
+        assert values[row] == reference_output(controller, states[row], controller.consequents)
+
+
+def test_one_state_inputs(handmade_path: Path) -> None:
+    controller = compile_behaviour(load_behaviour(handmade_path))
+    state = np.array([0.35, -12.5])
+    expected = controller.output(state[None, :])[0]
+    readonly = state.copy()
+    readonly.setflags(write=False)
+    for given in (state, [0.35, -12.5], (0.35, -12.5), state[None, :], readonly,
+                  np.array([[0.35, 0.0], [-12.5, 0.0]])[:, 0]):
+        assert controller.output_one(given) == expected
+    with pytest.raises(InferenceError, match=r"shape \(B, 2\)"):
+        controller.output_one([0.1, 0.2, 0.3])
+
+
+def test_nan_raises_on_every_path(handmade_path: Path) -> None:
+    controller = compile_behaviour(load_behaviour(handmade_path))
+    states = np.array([[0.2, 0.0]] * 300 + [[np.nan, 0.0]])
+    with pytest.raises(InferenceError, match="input 'ball_size' is NaN in state 300"):
+        controller.output(states)
+    with pytest.raises(InferenceError, match="input 'ball_size' is NaN in state 300"):
+        controller.activations(states)
+    with pytest.raises(InferenceError, match="input 'pan' is NaN in state 0"):
+        controller.output_one([0.5, np.nan])
+    with pytest.raises(InferenceError, match="input 'pan' is NaN in state 0"):
+        controller.active_rules(np.array([0.5, np.nan]))
+
+
+def test_with_consequents_shares_the_layout(handmade_path: Path) -> None:
+    controller = compile_behaviour(load_behaviour(handmade_path))
+    controller.output_one([0.5, 10.0])
+    flipped = controller.with_consequents(4 - np.asarray(controller.consequents))
+    assert flipped._layout is controller._layout
+    assert flipped.output_one([0.5, 10.0]) == -controller.output_one([0.5, 10.0])
