@@ -1,0 +1,130 @@
+"""C: the generated source compiles with the system C compiler as strict C99 and gives
+flctool's outputs (max abs difference <= 1e-12 in double) on 10,000 random states."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.errors import ExportError
+from flctool.export import ExportOptions
+from flctool.export.c_source import CExporter
+from flctool.spec import Behaviour
+
+from .controllers import random_behaviour, random_states
+from .roundtrip import SHIPPED
+
+CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc, gcc or clang) on PATH")
+FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
+
+
+def build(tmp_path: Path, controllers: list[tuple[Behaviour, ExportOptions]]) -> Path:
+    """One program running controller ``argv[1]`` on the states of stdin (count, then rows).
+
+    Each controller is written as NAME.h + NAME.c and compiled separately; no -lm."""
+    sources, includes, cases = [], [], []
+    for index, (behaviour, options) in enumerate(controllers):
+        files = CExporter(options).to_file(behaviour, tmp_path / f"ctl{index}")
+        sources += [str(f) for f in files if f.suffix == ".c"]
+        includes.append(f'#include "ctl{index}.h"')
+        real = "float" if options.single else "double"
+        n = len(behaviour.inputs)
+        cases.append(f"""    if (which == {index}) {{
+        {real} s[{n}];
+        for (r = 0; r < rows; ++r) {{
+            for (i = 0; i < {n}; ++i) {{ if (scanf("%lf", &v) != 1) return 2; s[i] = ({real})v; }}
+            printf("%.17g\\n", (double){options.prefix}output(s));
+        }}
+        return 0;
+    }}""")
+    driver = tmp_path / "driver.c"
+    driver.write_text("#include <stdio.h>\n#include <stdlib.h>\n" + "\n".join(includes) + """
+int main(int argc, char **argv)
+{
+    int which = atoi(argv[argc - 1]);
+    long rows, r;
+    int i;
+    double v;
+    if (scanf("%ld", &rows) != 1) return 2;
+""" + "\n".join(cases) + "\n    return 3;\n}\n")
+    program = tmp_path / "driver"
+    assert CC is not None
+    subprocess.run([CC, *FLAGS, "-o", str(program), str(driver), *sources],
+                   check=True, capture_output=True, text=True)
+    return program
+
+
+def run(program: Path, which: int, states: np.ndarray) -> np.ndarray:
+    lines = [str(len(states))] + [" ".join(repr(float(v)) for v in row) for row in states]
+    result = subprocess.run([str(program), str(which)], input="\n".join(lines) + "\n",
+                            check=True, capture_output=True, text=True)
+    return np.array([float(v) for v in result.stdout.split()])
+
+
+@needs_cc
+def test_c_matches_python_on_10000_states(tmp_path: Path) -> None:
+    shipped = [load_behaviour(p) for p in SHIPPED]
+    randoms = [random_behaviour(seed, max_sets=5) for seed in range(12)]
+    controllers = [(b, ExportOptions(prefix=f"c{i}_")) for i, b in enumerate(shipped + randoms)]
+    controllers += [(b, ExportOptions(prefix=f"f{i}_", single=True))
+                    for i, b in enumerate(shipped + randoms[:4])]
+    program = build(tmp_path, controllers)
+    for which, (behaviour, options) in enumerate(controllers):
+        states = random_states(behaviour, 10_000 if which < len(shipped) else 2_000, seed=which)
+        want = compile_behaviour(behaviour).output(states)
+        if options.single:
+            # float arithmetic: the float-rounded tables and states, each step rounded
+            scale = max(1.0, float(np.max(np.abs(list(behaviour.output.commands.values())))))
+            assert np.max(np.abs(run(program, which, states) - want)) <= 1e-5 * scale
+        else:
+            assert np.max(np.abs(run(program, which, states) - want)) <= 1e-12
+
+
+@needs_cc
+def test_c_clips_infinities_and_passes_nan_through(tmp_path: Path) -> None:
+    behaviour = load_behaviour(SHIPPED[0])
+    program = build(tmp_path, [(behaviour, ExportOptions())])
+    states = np.array([[np.inf, -np.inf], [-np.inf, np.inf], [np.nan, 0.0], [0.5, np.nan]])
+    got = run(program, 0, states)
+    want = compile_behaviour(behaviour).output(states[:2])
+    assert np.array_equal(got[:2], want)
+    assert np.isnan(got[2:]).all()
+
+
+def test_files_convention(tmp_path: Path) -> None:
+    behaviour = load_behaviour(SHIPPED[0])
+    for name in ("ballchase", "ballchase.c", "ballchase.h"):
+        files = CExporter().to_file(behaviour, tmp_path / name, force=True)
+        assert [f.name for f in files] == ["ballchase.h", "ballchase.c"]
+    source = (tmp_path / "ballchase.c").read_text()
+    assert source.startswith('#include "ballchase.h"')
+    for banned in ("malloc", "math.h", "<stdlib.h>"):
+        assert banned not in source
+    assert "static const double flc_sets" in source
+    assert "double flc_output(const double state[FLC_N_INPUTS]);" in \
+        (tmp_path / "ballchase.h").read_text()
+
+
+def test_prefix_and_float(tmp_path: Path) -> None:
+    behaviour = load_behaviour(SHIPPED[0])
+    text = CExporter(ExportOptions(prefix="ballchase_", single=True)).to_string(behaviour)
+    assert "float ballchase_output(const float state[BALLCHASE_N_INPUTS])" in text
+    assert "double" not in text
+    assert "0.1f" in text
+    with pytest.raises(ExportError, match="the prefix '9x' cannot start a C identifier"):
+        CExporter(ExportOptions(prefix="9x")).to_string(behaviour)
+
+
+def test_an_existing_file_is_kept_without_force(tmp_path: Path) -> None:
+    behaviour = load_behaviour(SHIPPED[0])
+    (tmp_path / "ctl.c").write_text("mine")
+    with pytest.raises(ExportError, match="ctl.c already exists"):
+        CExporter().to_file(behaviour, tmp_path / "ctl")
+    assert (tmp_path / "ctl.c").read_text() == "mine"
+    assert not (tmp_path / "ctl.h").exists()  # nothing written when one target is refused

@@ -1,0 +1,129 @@
+"""FCL: point lists in IEC's reading, NSUM accumulation, and the import's subset."""
+
+from __future__ import annotations
+
+import pytest
+
+from flctool import load_behaviour
+from flctool.errors import ExportError
+from flctool.export.fcl import FclExporter, FclImporter, fcl_number, set_points
+
+from .roundtrip import SHIPPED
+
+
+def test_numbers_are_iec_real_literals() -> None:
+    assert fcl_number(1e-05) == "1.0e-05"
+    assert fcl_number(-90.0) == "-90.0"
+    assert fcl_number(0.1) == "0.1"
+    assert fcl_number(1e16) == "1.0e+16"
+
+
+@pytest.mark.parametrize(("quad", "points"), [
+    ((0.0, 0.0, 0.1, 0.3), [(0.0, 1), (0.1, 1), (0.3, 0)]),  # shoulder at the low end
+    ((0.4, 0.6, 1.0, 1.0), [(0.4, 0), (0.6, 1), (1.0, 1)]),  # shoulder at the high end
+    ((0.2, 0.5, 0.5, 0.7), [(0.2, 0), (0.5, 1), (0.7, 0)]),  # triangle
+    ((0.2, 0.2, 0.5, 0.7), [(0.2, 0), (0.2, 1), (0.5, 1), (0.7, 0)]),  # interior step
+    ((0.2, 0.4, 0.6, 0.6), [(0.2, 0), (0.4, 1), (0.6, 1), (0.6, 0)]),
+    ((0.0, 0.0, 1.0, 1.0), [(0.0, 1), (1.0, 1)]),
+])
+def test_set_points(quad: tuple[float, float, float, float],
+                    points: list[tuple[float, int]]) -> None:
+    assert set_points(quad, (0.0, 1.0)) == points
+
+
+def test_the_block_computes_eq_3() -> None:
+    text = FclExporter().to_string(load_behaviour(SHIPPED[0]))
+    for line in ("METHOD : COGS;", "AND : MIN;", "ACCU : NSUM;", "TERM turn_right := -1.0;",
+                 "RULE 1 : IF ball_size IS small AND pan IS far_right THEN turn IS turn_right;"):
+        assert line in text
+
+
+BLOCK = """\
+FUNCTION_BLOCK tiny (* a comment *)
+VAR_INPUT
+    x : REAL;
+END_VAR
+VAR_OUTPUT
+    u : REAL;
+END_VAR
+FUZZIFY x
+    TERM low := (0, 1) (0.2, 1) (0.8, 0);
+    TERM high := (0.2, 0) (1, 1);
+    RANGE := (0 .. 1);
+END_FUZZIFY
+DEFUZZIFY u
+    TERM down := -1;
+    TERM up := 1;
+    METHOD : COGS;
+    DEFAULT := 0;
+END_DEFUZZIFY
+RULEBLOCK rules
+    AND : MIN;
+    ACCU : NSUM;
+    RULE 1 : IF x IS low THEN u IS up;
+    RULE 2 : IF x IS high THEN u IS down;
+END_RULEBLOCK
+END_FUNCTION_BLOCK
+"""
+
+
+def test_import_reads_the_subset() -> None:
+    behaviour = FclImporter().from_string(BLOCK, "tiny.fcl")
+    assert behaviour.inputs["x"].range == (0.0, 1.0)
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    assert behaviour.output.commands == {"down": -1.0, "up": 1.0}
+    assert behaviour.is_deployable
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("TERM up := 1;", "TERM up := (0, 0) (1, 1) (2, 0);",
+     r"tiny.fcl:15: output term 'up' is not a singleton: a Mamdani output set"),
+    ("IF x IS low THEN", "IF x IS low OR x IS high THEN", r"tiny.fcl:22: an OR rule"),
+    ("IF x IS low THEN", "IF x IS NOT low THEN", r"tiny.fcl:22: NOT in a rule"),
+    ("IF x IS low THEN", "IF x IS very low THEN", r"tiny.fcl:22: the hedge 'very'"),
+    ("THEN u IS up;", "THEN u IS up WITH 0.5;", r"tiny.fcl:22: a rule weight of 0.5"),
+    ("TERM low := (0, 1) (0.2, 1) (0.8, 0);", "TERM low := (0, 1) (0.2, 0.5) (0.8, 0);",
+     r"tiny.fcl:9: term 'low' with membership values \[1.0, 0.5, 0.0\] is not a trapezoid"),
+    ("TERM low := (0, 1) (0.2, 1) (0.8, 0);", "TERM low := gauss 0.2 0.1;",
+     r"tiny.fcl:9: term 'low' is 'gauss ...', not a point list"),
+    ("METHOD : COGS;", "METHOD : COG;", r"tiny.fcl:16: METHOD : COG"),
+    ("    u : REAL;\n", "    u : REAL;\n    v : REAL;\n", r"tiny.fcl:7: a second output 'v'"),
+    ("ACCU : NSUM;", "ACCU : MAX;", None),  # no two rules share a term: MAX changes nothing
+])
+def test_import_names_what_it_cannot_express(old: str, new: str, message: str | None) -> None:
+    text = BLOCK.replace(old, new)
+    assert text != BLOCK
+    if message is None:
+        FclImporter().from_string(text, "tiny.fcl")
+        return
+    with pytest.raises(ExportError, match=message):
+        FclImporter().from_string(text, "tiny.fcl")
+
+
+def test_max_accumulation_of_shared_terms_is_refused() -> None:
+    text = BLOCK.replace("ACCU : NSUM;", "ACCU : MAX;").replace("u IS down", "u IS up")
+    with pytest.raises(ExportError, match=r"tiny.fcl:21: ACCU : MAX merges rules that share "
+                       r"an output term \(lines 22 and 23"):
+        FclImporter().from_string(text, "tiny.fcl")
+
+
+def test_import_refuses_a_conjunction_other_than_min() -> None:
+    text = FclExporter().to_string(load_behaviour(SHIPPED[0])).replace("AND : MIN;",
+                                                                       "AND : PROD;")
+    with pytest.raises(ExportError, match=r"x.fcl:\d+: AND : PROD: flctool's rules combine"):
+        FclImporter().from_string(text, "x.fcl")
+
+
+def test_an_input_without_fuzzify_is_refused() -> None:
+    text = BLOCK.replace(
+        "VAR_INPUT\n    x : REAL;", "VAR_INPUT\n    x : REAL;\n    y : REAL;")
+    with pytest.raises(ExportError, match=r"tiny.fcl:\d+: input 'y' has no FUZZIFY block"):
+        FclImporter().from_string(text, "tiny.fcl")
+
+
+def test_keywords_cannot_be_names() -> None:
+    behaviour = load_behaviour(SHIPPED[0])
+    renamed = behaviour.model_copy(update={"name": "rule"})
+    with pytest.raises(ExportError, match="'rule' is an FCL keyword"):
+        FclExporter().to_string(renamed)

@@ -1,0 +1,156 @@
+"""FLL: the export runs in pyfuzzylite 7.1 with flctool's outputs; the import's subset."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.errors import ExportError
+from flctool.export.fll import FllExporter, FllImporter
+from flctool.spec import Behaviour
+
+from .controllers import random_behaviour, random_states
+from .roundtrip import SHIPPED
+
+fl = pytest.importorskip("fuzzylite", reason="pyfuzzylite (the test extra) checks FLL exports")
+
+
+@pytest.fixture
+def exact_fuzzylite() -> Iterator[None]:
+    """fuzzylite skips rules whose activation is within lib.abs_tolerance (1e-5) of 0, which
+    changes eq. 3 by up to ~1e-5; with tolerance 0 every firing rule counts, as in flctool."""
+    saved = fl.lib.abs_tolerance
+    fl.lib.abs_tolerance = 0.0
+    yield
+    fl.lib.abs_tolerance = saved
+
+
+def fuzzylite_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
+    engine = fl.FllImporter().from_string(FllExporter().to_string(behaviour))
+    inputs, output = engine.input_variables, engine.output_variables[0]
+    result = np.empty(len(states))
+    for row, state in enumerate(states):
+        for variable, value in zip(inputs, state, strict=True):
+            variable.value = float(value)
+        engine.process()
+        result[row] = output.value
+    return result
+
+
+@pytest.mark.usefixtures("exact_fuzzylite")
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
+def test_pyfuzzylite_matches_on_10000_states(path: object) -> None:
+    behaviour = load_behaviour(str(path))
+    # States reach 20 % past both ends of every range: lock-range clips them as flctool does.
+    states = random_states(behaviour, 10_000, seed=7)
+    got = fuzzylite_outputs(behaviour, states)
+    assert np.max(np.abs(got - compile_behaviour(behaviour).output(states))) <= 1e-9
+
+
+@pytest.mark.usefixtures("exact_fuzzylite")
+@pytest.mark.parametrize("seed", [3, 11, 12])
+def test_pyfuzzylite_matches_random_controllers(seed: int) -> None:
+    behaviour = random_behaviour(seed, max_inputs=3)
+    states = random_states(behaviour, 3_000, seed=seed)
+    got = fuzzylite_outputs(behaviour, states)
+    assert np.max(np.abs(got - compile_behaviour(behaviour).output(states))) <= 1e-9
+
+
+def test_numbers_keep_full_precision() -> None:
+    behaviour = random_behaviour(5)
+    text = FllExporter().to_string(behaviour)
+    for variable in behaviour.inputs.values():
+        for quad in variable.sets.values():
+            assert repr(quad[0]) in text
+
+
+def test_the_engine_computes_eq_3() -> None:
+    text = FllExporter().to_string(load_behaviour(SHIPPED[0]))
+    for line in ("conjunction: Minimum", "aggregation: none", "lock-range: true",
+                 "defuzzifier: WeightedAverage TakagiSugeno", "activation: General"):
+        assert line in text
+
+
+def test_reserved_words_cannot_be_names() -> None:
+    behaviour = random_behaviour(1)
+    renamed = behaviour.model_copy(update={"output": behaviour.output.model_copy(
+        update={"name": "very"})})
+    with pytest.raises(ExportError, match="'very' is a keyword of FLL"):
+        FllExporter().to_string(renamed)
+
+
+ENGINE = """\
+Engine: tiny
+InputVariable: x
+  enabled: true
+  range: 0.0 1.0
+  lock-range: true
+  term: low Trapezoid 0.0 0.0 0.2 0.8
+  term: high Triangle 0.2 1.0 1.0
+OutputVariable: u
+  enabled: true
+  range: -1.0 1.0
+  aggregation: none
+  defuzzifier: WeightedAverage TakagiSugeno
+  term: down Constant -1.0
+  term: up Constant 1.0
+RuleBlock: rules
+  enabled: true
+  conjunction: Minimum
+  activation: General
+  rule: if x is low then u is up
+  rule: if x is high then u is down
+"""
+
+
+def test_import_reads_the_subset() -> None:
+    behaviour = FllImporter().from_string(ENGINE, "tiny.fll")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    assert behaviour.output.commands == {"down": -1.0, "up": 1.0}
+    assert behaviour.is_deployable
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1",
+     r"tiny.fll:7: a Gaussian term"),
+    ("term: up Constant 1.0", "term: up Triangle 0.0 0.5 1.0",
+     r"tiny.fll:14: output term 'up' is a Triangle.*Mamdani"),
+    ("rule: if x is low then u is up", "rule: if x is low or x is high then u is up",
+     r"tiny.fll:19: an 'or' rule"),
+    ("rule: if x is low then u is up", "rule: if x is very low then u is up",
+     r"tiny.fll:19: the hedge 'very'"),
+    ("rule: if x is low then u is up", "rule: if x is not low then u is up",
+     r"tiny.fll:19: the hedge 'not'"),
+    ("rule: if x is low then u is up", "rule: if x is low then u is up with 0.5",
+     r"tiny.fll:19: a rule weight of 0.5"),
+    ("term: low Trapezoid 0.0 0.0 0.2 0.8", "term: low Trapezoid 0.0 0.0 0.2 0.8 0.5",
+     r"tiny.fll:6: a term of height 0.5"),
+    ("  defuzzifier: WeightedAverage TakagiSugeno", "  defuzzifier: Centroid 100",
+     r"tiny.fll:12: defuzzifier Centroid"),
+    ("RuleBlock: rules", "OutputVariable: v\nRuleBlock: rules", r"tiny.fll:15: a second output"),
+    ("rule: if x is high then u is down", "rule: if x is high then u is up",
+     None),  # two rules may share a term without aggregation
+    ("  activation: General", "  activation: Highest 1", r"tiny.fll:18: activation Highest"),
+])
+def test_import_names_what_it_cannot_express(old: str, new: str, message: str | None) -> None:
+    text = ENGINE.replace(old, new)
+    assert text != ENGINE
+    if message is None:
+        FllImporter().from_string(text, "tiny.fll")
+        return
+    with pytest.raises(ExportError, match=message):
+        FllImporter().from_string(text, "tiny.fll")
+
+
+def test_aggregation_merging_shared_terms_is_refused() -> None:
+    text = ENGINE.replace("aggregation: none", "aggregation: Maximum").replace(
+        "then u is down", "then u is up")
+    with pytest.raises(ExportError, match=r"tiny.fll:11: aggregation Maximum merges rules "
+                       r"that share an output term \(lines 19 and 20"):
+        FllImporter().from_string(text, "tiny.fll")
+    # with no shared term, a maximum changes nothing
+    FllImporter().from_string(ENGINE.replace("aggregation: none", "aggregation: Maximum"))

@@ -1,0 +1,79 @@
+"""The registries, and the contract every exporter / importer keeps (golden round trips)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from flctool import load_behaviour, parse_behaviour
+from flctool.errors import ExportError
+from flctool.export import EXPORTERS, IMPORTERS, Exporter, Importer
+from flctool.registry import UnknownNameError
+from flctool.spec import Behaviour, behaviour_from_data
+
+from .controllers import random_behaviour, random_states
+from .roundtrip import SHIPPED, assert_same_controller
+
+TEXT_FORMATS = ("yaml", "json", "fll", "fcl", "fis")
+
+
+def read_back(format: str, text: str) -> Behaviour:
+    if format == "yaml":
+        return parse_behaviour(text, "export.yaml")
+    if format == "json":
+        return behaviour_from_data(json.loads(text))
+    return IMPORTERS.get(format)().from_string(text, f"export.{format}")
+
+
+def test_registries_name_every_format() -> None:
+    assert set(EXPORTERS.names()) == {"yaml", "json", "fll", "fcl", "fis", "c"}
+    assert set(IMPORTERS.names()) == {"fll", "fcl", "fis"}
+    for name in EXPORTERS:
+        exporter = EXPORTERS.get(name)
+        assert issubclass(exporter, Exporter) and exporter.format == name
+        assert exporter.suffix == f".{name}"
+    for name in IMPORTERS:
+        importer = IMPORTERS.get(name)
+        assert issubclass(importer, Importer) and importer.format == name
+
+
+def test_unknown_format_suggests_one() -> None:
+    with pytest.raises(UnknownNameError, match="Did you mean 'fll'"):
+        EXPORTERS.get("fl")
+
+
+def test_something_ships_complete() -> None:
+    assert any(p.name == "ballchase-handmade.yaml" for p in SHIPPED)
+
+
+@pytest.mark.parametrize("format", TEXT_FORMATS)
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
+def test_shipped_behaviours_round_trip(path: Path, format: str) -> None:
+    behaviour = load_behaviour(path)
+    text = EXPORTERS.get(format)().to_string(behaviour)
+    again = read_back(format, text)
+    assert_same_controller(again, behaviour, random_states(behaviour, 2000, seed=1))
+    # and exporting the copy gives the same text: the export is a fixed point
+    if format not in ("yaml", "json"):
+        assert EXPORTERS.get(format)().to_string(again).splitlines()[1:] == \
+            text.splitlines()[1:]
+
+
+@pytest.mark.parametrize("format", TEXT_FORMATS)
+def test_random_controllers_round_trip(format: str) -> None:
+    for seed in range(40):
+        behaviour = random_behaviour(seed)
+        text = EXPORTERS.get(format)().to_string(behaviour)
+        assert_same_controller(read_back(format, text), behaviour,
+                               random_states(behaviour, 500, seed=seed))
+
+
+@pytest.mark.parametrize("format", sorted(EXPORTERS.names()))
+def test_every_exporter_refuses_missing_rules(format: str) -> None:
+    incomplete = load_behaviour(Path(SHIPPED[0]).parent / "ballchase.yaml")
+    with pytest.raises(ExportError, match=r"15 of 15 rules have no consequent") as error:
+        EXPORTERS.get(format)().to_string(incomplete)
+    assert "IF ball_size IS small AND pan IS far_right" in str(error.value)
+    assert "... and 5 more" in str(error.value)
