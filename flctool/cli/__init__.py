@@ -2,6 +2,7 @@
 
 from flctool.cli import (
     export_commands,  # noqa: F401  (registers export, import)
+    learn,  # noqa: F401  (registers learn)
     spec_commands,  # noqa: F401  (registers validate, show, infer, schema)
 )
 from flctool.cli.app import app

@@ -1,0 +1,150 @@
+"""``flctool learn``: train a behaviour's rules into a run directory, or resume one."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+import yaml
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from flctool.cli.app import app, console, err_console, user_errors
+from flctool.errors import Problem, RunDirError, SpecError
+from flctool.learners import FunctionCallback, GenerationMetrics
+from flctool.runs import Run, RunSummary, create_run, open_run, resolve_behaviour
+from flctool.spec import Behaviour, behaviour_to_data, load_behaviour
+
+
+def parse_assignments(assignments: list[str]) -> dict[str, Any]:
+    """``["q.temperature=0.2", "common_starts=true"]`` -> a mapping; values read as YAML."""
+    overrides: dict[str, Any] = {}
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SpecError([Problem(("--set",), f"'{text}' is not key=value",
+                                     "write e.g. --set q.temperature=0.2", file="command line")],
+                            "command line")
+        try:
+            overrides[key] = yaml.safe_load(value) if value.strip() else ""
+        except yaml.YAMLError:
+            overrides[key] = value
+    return overrides
+
+
+def _differences(a: Any, b: Any, path: str = "") -> list[str]:
+    if isinstance(a, dict) and isinstance(b, dict):
+        found: list[str] = []
+        for key in sorted(set(a) | set(b), key=str):
+            found += _differences(a.get(key), b.get(key), f"{path}.{key}" if path else str(key))
+        return found
+    return [] if a == b else [path or "(top level)"]
+
+
+def _check_same_run(run: Run, requested: Behaviour) -> None:
+    recorded = behaviour_to_data(run.behaviour)
+    wanted = behaviour_to_data(requested)
+    for data in (recorded, wanted):
+        data.get("learning", {}).pop("generations", None)
+    changed = _differences(recorded, wanted)
+    if changed:
+        raise RunDirError(f"--resume continues the run recorded in {run.path}, but the file "
+                          f"and options given differ from it at: {', '.join(changed)}",
+                          hint="leave them out (only --generations may change), or start a "
+                          "new run with --out")
+
+
+@app.command()
+def learn(
+    file: Annotated[Path | None, typer.Argument(
+        exists=True, dir_okay=False, readable=True,
+        help="The behaviour file (YAML); optional with --resume.")] = None,
+    learner: Annotated[str | None, typer.Option(
+        "--learner", "-l", help="pitt, fuzzy_q or hybrid (default: the file's).")] = None,
+    seed: Annotated[int | None, typer.Option("--seed", "-s", help="Random seed.")] = None,
+    generations: Annotated[int | None, typer.Option(
+        "--generations", "-g", help="Generations to run (with --resume: the new total).")]
+    = None,
+    population: Annotated[int | None, typer.Option(
+        "--population", "-p", help="Individuals per generation.")] = None,
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Run directory (default: runs/<name>-<learner>-seed<S>-<time>).")]
+    = None,
+    resume: Annotated[Path | None, typer.Option(
+        "--resume", help="Continue the run in this directory from its last checkpoint.")]
+    = None,
+    set_: Annotated[list[str] | None, typer.Option(
+        "--set", help="Override a learning hyperparameter, e.g. --set q.temperature=0.2 "
+        "(repeatable; keys as under 'learning:').")] = None,
+    as_json: Annotated[bool, typer.Option(
+        "--json", help="Print a JSON summary instead of text (no progress bar).")] = False,
+) -> None:
+    """Learn the rule consequents of a behaviour (Pitt GA, fuzzy Q-learning or the hybrid).
+
+    Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
+    """
+    with user_errors():
+        overrides = parse_assignments(set_ or [])
+        for key, value in (("learner", learner), ("seed", seed), ("population", population)):
+            if value is not None:
+                overrides[key] = value
+        if resume is not None:
+            if out is not None:
+                raise RunDirError("--resume continues in its own directory; --out is for new "
+                                  "runs", hint="leave out --out")
+            run = open_run(resume)
+            if file is not None or overrides:
+                base = load_behaviour(file) if file is not None else run.behaviour
+                _check_same_run(run, resolve_behaviour(base, overrides))
+            if generations is not None and generations != run.behaviour.learning.generations:
+                run.extend(generations)
+        else:
+            if file is None:
+                raise RunDirError("give a behaviour file to learn, or --resume a run directory",
+                                  hint="flctool learn behaviours/ballchase.yaml")
+            if generations is not None:
+                overrides["generations"] = generations
+            behaviour = resolve_behaviour(load_behaviour(file), overrides,
+                                          f"{file} with command-line options")
+            run = create_run(behaviour, out)
+        summary = _train(run, show_progress=not as_json)
+    if as_json:
+        print(json.dumps(summary.to_dict(), indent=2))
+    else:
+        _report(summary)
+
+
+def _train(run: Run, show_progress: bool) -> RunSummary:
+    config = run.behaviour.learning
+    done = len(run.checkpoint_generations())
+    progress = Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+        TextColumn("best {task.fields[best]}  mean {task.fields[mean]}"), TimeElapsedColumn(),
+        console=err_console, disable=not show_progress, transient=False)
+    task = progress.add_task(f"{config.learner} gen", total=config.generations,
+                             completed=done, best="-", mean="-")
+
+    def advance(metrics: GenerationMetrics) -> None:
+        progress.update(task, completed=metrics.generation + 1, best=f"{metrics.best:.3f}",
+                        mean=f"{metrics.mean:.3f}")
+
+    with progress:
+        return run.train([FunctionCallback(advance)])
+
+
+def _report(summary: RunSummary) -> None:
+    best = summary.best
+    console.print(f"[green]{summary.status}[/] {summary.learner} (seed {summary.seed}): "
+                  f"{summary.generations} generations in {escape(str(summary.path))}")
+    if summary.last is not None:
+        last = summary.last
+        console.print(f"last generation: mean fitness {last.mean:.3f} (std {last.std:.3f}), "
+                      f"best {last.best:.3f}; {last.wall_time:.2f} s of training")
+    if best:
+        console.print(f"best controller: generation {best['generation']}, individual "
+                      f"{best['individual']}, fitness {best['fitness']:.3f} -> "
+                      f"{escape(str(summary.path / 'best.yaml'))}")
+        console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

@@ -1,0 +1,378 @@
+"""Run directories: what ``flctool learn`` writes, and how a run is resumed or read back.
+
+A run directory holds::
+
+    behaviour.yaml          the resolved behaviour: the file, its seed, command-line overrides
+    run.json                learner, seed, status (running / stopped / finished), best so far
+    metrics.csv             one row per generation: generation, mean, std, best, min fitness,
+                            episodes, steps, wall_time (seconds)
+    strengths.csv           learners with rule strengths: the q table after each generation,
+                            one row per (generation, rule, command) -- the paper's Fig. 7
+    checkpoints/gen-NNNNN.json
+                            after every generation: the evaluated population and its fitness,
+                            q table and traces, the state of every random generator, and the
+                            generation's metrics row
+    best.yaml               the best controller of the last generation, deployable
+
+Every file is written atomically (write, then rename), checkpoints first: a run killed at any
+moment loses at most the generation in progress, and ``--resume`` rebuilds metrics.csv and
+strengths.csv from the checkpoints, then continues bit for bit where an uninterrupted run
+would be (only the wall_time column differs).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from flctool import __version__
+from flctool.atomic import write_text_atomic
+from flctool.compile import with_rules
+from flctool.envs.base import BatchEnv
+from flctool.errors import FlcError, RunDirError, SpecError
+from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.spec import (
+    Behaviour,
+    behaviour_from_data,
+    behaviour_to_data,
+    behaviour_to_yaml,
+    load_behaviour,
+)
+from flctool.spec.yaml_source import SourceMap
+
+RUN_FORMAT = 1
+BEHAVIOUR_FILE = "behaviour.yaml"
+RUN_FILE = "run.json"
+METRICS_FILE = "metrics.csv"
+STRENGTHS_FILE = "strengths.csv"
+BEST_FILE = "best.yaml"
+CHECKPOINT_DIR = "checkpoints"
+_CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
+
+
+# -- resolving a behaviour for a run ------------------------------------------------------
+def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
+                      source: str = "command line") -> Behaviour:
+    """The behaviour with ``overrides`` applied and validated like the file itself.
+
+    Keys are dotted paths under ``learning:`` (``seed``, ``q.temperature``), or start with
+    ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``.
+    """
+    data = behaviour_to_data(behaviour)
+    for key, value in overrides.items():
+        path = key.split(".")
+        if path[0] not in ("learning", "environment"):
+            path = ["learning", *path]
+        node = data
+        for depth, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise SpecError([SourceMap(source).problem(
+                    tuple(path[: depth + 1]), f"'{'.'.join(path[: depth + 1])}' is a value, "
+                    f"not a section, so '{key}' cannot be set", "set the value itself")], source)
+            node = child
+        node[path[-1]] = value
+    return behaviour_from_data(data, SourceMap(source))
+
+
+# -- files ---------------------------------------------------------------------------------
+def _metrics_text(rows: Iterable[GenerationMetrics], header: bool = True) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    if header:
+        writer.writerow(GenerationMetrics.columns())
+    for m in rows:
+        writer.writerow([repr(v) if isinstance(v, float) else v for v in m.row().values()])
+    return buffer.getvalue()
+
+
+def _strengths_text(rows: Iterable[tuple[int, Any]], commands: tuple[str, ...],
+                    header: bool = True) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    if header:
+        writer.writerow(["generation", "rule", "command", "q"])
+    for generation, table in rows:
+        for rule, values in enumerate(table):
+            for command, value in zip(commands, values, strict=True):
+                writer.writerow([generation, rule, command, repr(float(value))])
+    return buffer.getvalue()
+
+
+def _append(path: Path, text: str) -> None:
+    with path.open("a", encoding="utf-8") as handle:
+        handle.write(text)
+
+
+def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
+    return (f"Learned by flctool {__version__} with the {provenance['learner']} learner "
+            f"(seed {provenance['seed']}) in run {run_name}:\n"
+            f"generation {provenance['generation']}, individual {provenance['individual']}, "
+            f"fitness {provenance['fitness']!r}.\n"
+            "Deployable: flctool validate / evaluate / export take it as it is.")
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """What a training session ended with."""
+
+    path: Path
+    learner: str
+    seed: int
+    generations: int  # generations completed in the run (all sessions)
+    status: str
+    best: dict[str, Any]
+    last: GenerationMetrics | None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"run": str(self.path), "learner": self.learner, "seed": self.seed,
+                "generations": self.generations, "status": self.status, "best": self.best,
+                "last": self.last.row() if self.last else None,
+                "best_file": str(self.path / BEST_FILE)}
+
+
+class Run:
+    """One run directory. Make one with :func:`create_run`, open one with :func:`open_run`."""
+
+    def __init__(self, path: Path, behaviour: Behaviour) -> None:
+        self.path = path
+        self.behaviour = behaviour
+
+    @property
+    def learner(self) -> str:
+        return self.behaviour.learning.learner
+
+    @property
+    def seed(self) -> int:
+        return self.behaviour.learning.seed
+
+    # -- checkpoints ---------------------------------------------------------------------
+    def checkpoint_generations(self) -> list[int]:
+        """Generations with a checkpoint, in increasing order."""
+        folder = self.path / CHECKPOINT_DIR
+        if not folder.is_dir():
+            return []
+        found = (_CHECKPOINT.match(p.name) for p in folder.iterdir())
+        return sorted(int(m.group(1)) for m in found if m)
+
+    def checkpoint_path(self, generation: int) -> Path:
+        return self.path / CHECKPOINT_DIR / f"gen-{generation:05d}.json"
+
+    def checkpoint(self, generation: int) -> dict[str, Any]:
+        path = self.checkpoint_path(generation)
+        try:
+            data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise RunDirError(f"{self.path}: no checkpoint of generation {generation}",
+                              hint=self._generations_hint()) from None
+        except (OSError, ValueError) as exc:
+            raise RunDirError(f"{path}: cannot read the checkpoint ({exc})",
+                              hint="the file is damaged; resume from an earlier run") from None
+        return data
+
+    def last_checkpoint(self) -> dict[str, Any] | None:
+        generations = self.checkpoint_generations()
+        return self.checkpoint(generations[-1]) if generations else None
+
+    def _generations_hint(self) -> str:
+        done = self.checkpoint_generations()
+        return (f"generations 0..{done[-1]} are recorded" if done
+                else "the run has no finished generation yet")
+
+    def metrics(self) -> list[GenerationMetrics]:
+        """Every recorded generation's metrics, read from the checkpoints."""
+        return [GenerationMetrics.from_row(self.checkpoint(g)["metrics"])
+                for g in self.checkpoint_generations()]
+
+    # -- controllers ---------------------------------------------------------------------
+    def behaviour_for(self, generation: int | None = None,
+                      individual: int | None = None) -> tuple[Behaviour, dict[str, Any]]:
+        """A deployable behaviour of this run, and its provenance.
+
+        By default the run's best controller (what best.yaml holds): the best individual of
+        the last generation. ``generation`` picks another generation (negative counts from
+        the end), ``individual`` an individual other than that generation's best. Provenance:
+        ``{learner, seed, generation, individual, fitness}``.
+        """
+        done = self.checkpoint_generations()
+        if not done:
+            raise RunDirError(f"{self.path}: the run has no finished generation yet",
+                              hint="wait for the first generation, or resume the run")
+        if generation is None:
+            generation = done[-1]
+        elif generation < 0:
+            generation = done[-1] + 1 + generation
+        if generation not in done:
+            raise RunDirError(f"{self.path}: no generation {generation} in this run",
+                              hint=self._generations_hint())
+        state = self.checkpoint(generation)
+        population = np.array(state["population"], dtype=np.intp)
+        fitness = np.array(state["fitness"], dtype=np.float64)
+        if individual is None:
+            individual = int(np.argmax(fitness))
+        elif not 0 <= individual < len(population):
+            raise RunDirError(f"{self.path}: generation {generation} has individuals "
+                              f"0..{len(population) - 1}, not {individual}",
+                              hint="pick an individual in that range")
+        provenance = {"learner": self.learner, "seed": self.seed, "generation": generation,
+                      "individual": individual, "fitness": float(fitness[individual])}
+        return with_rules(self.behaviour, population[individual]), provenance
+
+    # -- training ------------------------------------------------------------------------
+    def train(self, callbacks: Iterable[Callback] = (), env: BatchEnv | None = None,
+              ) -> RunSummary:
+        """Train from the last checkpoint (or from scratch) to ``learning.generations``."""
+        learner = make_learner(self.behaviour, env)
+        last = self.last_checkpoint()
+        if last is not None:
+            learner.load_state_dict(last)
+        recorder = RunRecorder(self)
+        train(learner, [recorder, *callbacks])
+        return self.summary()
+
+    def summary(self) -> RunSummary:
+        info = self.info()
+        metrics = self.metrics()
+        return RunSummary(self.path, self.learner, self.seed, len(metrics),
+                          str(info.get("status", "unknown")), dict(info.get("best") or {}),
+                          metrics[-1] if metrics else None)
+
+    def info(self) -> dict[str, Any]:
+        try:
+            data: dict[str, Any] = json.loads((self.path / RUN_FILE).read_text("utf-8"))
+        except (OSError, ValueError):
+            return {}
+        return data
+
+    def write_info(self, status: str, best: Mapping[str, Any] | None) -> None:
+        info = {"format": RUN_FORMAT, "flctool": __version__, "behaviour": self.behaviour.name,
+                "learner": self.learner, "seed": self.seed,
+                "generations": self.behaviour.learning.generations, "status": status,
+                "best": dict(best) if best else None}
+        write_text_atomic(self.path / RUN_FILE, json.dumps(info, indent=2) + "\n")
+
+    def extend(self, generations: int) -> None:
+        """Raise the run's generation budget (resume then continues to it)."""
+        done = self.checkpoint_generations()
+        if done and generations <= done[-1]:
+            raise RunDirError(f"{self.path} already has {done[-1] + 1} generations; "
+                              f"--generations {generations} would not add any",
+                              hint=f"give more than {done[-1] + 1}")
+        self.behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
+                                           "--generations")
+        write_text_atomic(self.path / BEHAVIOUR_FILE, _behaviour_text(self.behaviour))
+
+
+def _behaviour_text(behaviour: Behaviour) -> str:
+    return behaviour_to_yaml(behaviour, (
+        f"Resolved by flctool learn {__version__}: the behaviour file with its seed and any "
+        "command-line overrides.\nflctool learn --resume continues from it."))
+
+
+class RunRecorder(Callback):
+    """Writes checkpoints, metrics, strengths and best.yaml as training goes."""
+
+    def __init__(self, run: Run) -> None:
+        self.run = run
+        self.best: dict[str, Any] | None = None
+
+    def on_start(self, learner: Learner) -> None:
+        super().on_start(learner)
+        run = self.run
+        done = [g for g in run.checkpoint_generations() if g <= learner.generation]
+        # Rebuild the tables from the checkpoints: a kill may have left rows of a generation
+        # whose checkpoint never made it, or missed rows whose checkpoint did.
+        states = [run.checkpoint(g) for g in done]
+        write_text_atomic(run.path / METRICS_FILE, _metrics_text(
+            GenerationMetrics.from_row(s["metrics"]) for s in states))
+        if learner.uses_strengths:
+            write_text_atomic(run.path / STRENGTHS_FILE, _strengths_text(
+                ((s["generation"], s["q"]) for s in states),
+                learner.controller.command_names))
+        run.write_info("running", run.info().get("best"))
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        learner = self.learner
+        if learner is None:
+            raise FlcError("the run recorder was not started")
+        run = self.run
+        state = learner.state_dict()
+        state["metrics"] = metrics.row()
+        write_text_atomic(run.checkpoint_path(metrics.generation), json.dumps(state) + "\n")
+        _append(run.path / METRICS_FILE, _metrics_text([metrics], header=False))
+        strengths = learner.strengths()
+        if strengths is not None:
+            _append(run.path / STRENGTHS_FILE, _strengths_text(
+                [(metrics.generation, strengths.tolist())], learner.controller.command_names,
+                header=False))
+        individual, consequents, fitness = learner.best()  # as Run.behaviour_for picks it
+        self.best = {"learner": run.learner, "seed": run.seed, "generation": metrics.generation,
+                     "individual": individual, "fitness": fitness}
+        write_text_atomic(run.path / BEST_FILE, behaviour_to_yaml(
+            with_rules(run.behaviour, consequents), _best_header(self.best, run.path.name)))
+        return True
+
+    def on_end(self) -> None:
+        learner = self.learner
+        finished = learner is not None and learner.generation + 1 >= (
+            learner.config.generations)
+        self.run.write_info("finished" if finished else "stopped",
+                            self.best or self.run.info().get("best"))
+
+
+# -- creating and opening runs ------------------------------------------------------------
+def default_run_dir(behaviour: Behaviour, root: Path = Path("runs")) -> Path:
+    """``runs/<name>-<learner>-seed<S>-<YYYYmmdd-HHMMSS>`` (with a suffix if taken)."""
+    stamp = datetime.now().strftime("%Y%m%d-%H%M%S")
+    learning = behaviour.learning
+    base = root / f"{behaviour.name}-{learning.learner}-seed{learning.seed}-{stamp}"
+    path, n = base, 1
+    while path.exists():
+        n += 1
+        path = base.with_name(f"{base.name}-{n}")
+    return path
+
+
+def create_run(behaviour: Behaviour, out: Path | None = None) -> Run:
+    """A new run directory for ``behaviour`` (resolved: seed and overrides applied)."""
+    if behaviour.environment is None:
+        raise RunDirError(f"behaviour '{behaviour.name}' has no 'environment' section, so "
+                          "there is nothing to learn in",
+                          hint="add e.g. 'environment: {adapter: ballchase-sim}'")
+    path = Path(out) if out is not None else default_run_dir(behaviour)
+    if path.exists() and not path.is_dir():
+        raise RunDirError(f"{path} exists and is not a directory",
+                          hint="choose another --out")
+    if path.is_dir() and any(path.iterdir()):
+        raise RunDirError(f"{path} is not empty",
+                          hint=f"resume it with --resume {path}, or choose another --out")
+    try:
+        (path / CHECKPOINT_DIR).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RunDirError(f"cannot create the run directory {path}: {exc.strerror}",
+                          hint="choose another --out") from None
+    run = Run(path, behaviour)
+    write_text_atomic(path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
+    run.write_info("created", None)
+    return run
+
+
+def open_run(path: str | Path) -> Run:
+    """An existing run directory; raises :class:`RunDirError` if it is not one."""
+    path = Path(path)
+    if not path.is_dir():
+        raise RunDirError(f"{path}: no such run directory",
+                          hint="give the directory flctool learn wrote (see its --out)")
+    if not (path / BEHAVIOUR_FILE).is_file():
+        raise RunDirError(f"{path} is not a run directory: it has no {BEHAVIOUR_FILE}",
+                          hint="give the directory flctool learn wrote (see its --out)")
+    return Run(path, load_behaviour(path / BEHAVIOUR_FILE))

@@ -1,0 +1,128 @@
+"""``flctool learn`` as a user runs it, including a run killed with SIGKILL and resumed."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from flctool import load_behaviour
+from flctool.cli import app
+
+from ..conftest import BEHAVIOURS, ROOT
+
+runner = CliRunner()
+BALLCHASE = str(BEHAVIOURS / "ballchase.yaml")
+
+
+def metrics_without_wall_time(run: Path) -> list[dict[str, str]]:
+    with (run / "metrics.csv").open(encoding="utf-8") as handle:
+        return [{k: v for k, v in row.items() if k != "wall_time"}
+                for row in csv.DictReader(handle)]
+
+
+def test_learn_writes_a_run_and_a_json_summary(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["learn", BALLCHASE, "--generations", "3", "--seed", "5",
+                                 "--learner", "pitt", "--population", "4", "--out", str(out),
+                                 "--set", "pitt_crossover=one_point", "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.stdout)
+    assert summary["learner"] == "pitt" and summary["seed"] == 5
+    assert summary["generations"] == 3 and summary["status"] == "finished"
+    assert summary["last"]["episodes"] == 4
+    resolved = load_behaviour(out / "behaviour.yaml")
+    assert resolved.learning.seed == 5 and resolved.learning.pitt_crossover == "one_point"
+    assert load_behaviour(out / "best.yaml").is_deployable
+
+
+def test_learn_reports_progress_and_the_best_controller(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["learn", BALLCHASE, "-g", "2", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "finished hybrid (seed 0): 2 generations" in result.stdout
+    assert "best.yaml" in result.stdout
+
+
+@pytest.mark.parametrize(("options", "field"), [
+    (["--set", "crossover=1.5"], "learning.crossover"),
+    (["--set", "mutation=-0.1"], "learning.mutation"),
+    (["--population", "1"], "learning.population"),
+    (["--set", "q.temperature=0"], "learning.q.temperature"),
+    (["--set", "q.gamma=1.2"], "learning.q.gamma"),
+    (["--set", "q.alpha=0"], "learning.q.alpha"),
+    (["--learner", "hybird"], "learning.learner"),
+    (["--set", "exploration.epsilon=2"], "learning.exploration.epsilon"),
+    (["--set", "q.temprature=0.2"], "learning.q.temprature"),
+    (["--set", "nonsense"], "--set"),
+])
+def test_bad_hyperparameters_name_the_field(tmp_path: Path, options: list[str],
+                                            field: str) -> None:
+    result = runner.invoke(app, ["learn", BALLCHASE, "--out", str(tmp_path / "r"), *options])
+    assert result.exit_code == 1
+    assert field in result.stderr
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "r").exists()
+
+
+def test_learner_error_suggests_the_closest_name(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["learn", BALLCHASE, "--learner", "hybird"])
+    assert "Did you mean 'hybrid'?" in result.stderr
+
+
+def test_resume_refuses_changed_hyperparameters(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    assert runner.invoke(app, ["learn", BALLCHASE, "-g", "2", "-o", str(out)]).exit_code == 0
+    result = runner.invoke(app, ["learn", "--resume", str(out), "--set", "q.alpha=0.3"])
+    assert result.exit_code == 1 and "learning.q.alpha" in result.stderr
+    result = runner.invoke(app, ["learn", "--resume", str(out), "--out", str(tmp_path / "x")])
+    assert result.exit_code == 1 and "--out" in result.stderr
+    result = runner.invoke(app, ["learn", BALLCHASE, "--resume", str(out), "-g", "3",
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["generations"] == 3
+
+
+def test_learn_needs_a_file_or_a_run(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["learn"])
+    assert result.exit_code == 1 and "--resume" in result.stderr
+    result = runner.invoke(app, ["learn", "--resume", str(tmp_path / "nothing")])
+    assert result.exit_code == 1 and "no such run directory" in result.stderr
+
+
+@pytest.mark.slow
+def test_a_run_killed_mid_generation_resumes_bit_for_bit(tmp_path: Path) -> None:
+    generations = "150"
+    options = ["--generations", generations, "--seed", "11", "--json"]
+    killed = tmp_path / "killed" / "run"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "flctool", "learn", BALLCHASE, *options, "--out", str(killed)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    second = killed / "checkpoints" / "gen-00001.json"
+    deadline = time.monotonic() + 60
+    while not second.exists() and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.002)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    done = len(list((killed / "checkpoints").glob("gen-*.json")))
+    assert 2 <= done < int(generations), "the kill must land in the middle of the run"
+
+    result = runner.invoke(app, ["learn", "--resume", str(killed), "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["status"] == "finished"
+
+    whole = tmp_path / "whole" / "run"
+    result = runner.invoke(app, ["learn", BALLCHASE, *options, "--out", str(whole)])
+    assert result.exit_code == 0, result.output
+    assert metrics_without_wall_time(killed) == metrics_without_wall_time(whole)
+    assert (killed / "best.yaml").read_text() == (whole / "best.yaml").read_text()
+    assert (killed / "strengths.csv").read_text() == (whole / "strengths.csv").read_text()

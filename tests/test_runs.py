@@ -1,0 +1,178 @@
+"""Run directories: files, checkpoints, resume bit for bit, reading controllers back."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.errors import RunDirError, SpecError
+from flctool.learners import Callback, GenerationMetrics
+from flctool.runs import (
+    BEST_FILE,
+    METRICS_FILE,
+    STRENGTHS_FILE,
+    create_run,
+    default_run_dir,
+    open_run,
+    resolve_behaviour,
+)
+from flctool.spec import Behaviour
+
+from .conftest import BEHAVIOURS
+
+
+def ballchase(**learning: object) -> Behaviour:
+    return resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                             {"generations": 5, "population": 6, **learning})
+
+
+class StopAfter(Callback):
+    def __init__(self, generation: int) -> None:
+        self.generation = generation
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        return metrics.generation < self.generation
+
+
+def rows(path: Path) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8") as handle:
+        return list(csv.DictReader(handle))
+
+
+def without_wall_time(path: Path) -> list[dict[str, str]]:
+    return [{k: v for k, v in row.items() if k != "wall_time"} for row in rows(path)]
+
+
+def test_a_run_writes_every_record(tmp_path: Path) -> None:
+    behaviour = ballchase(seed=7)
+    run = create_run(behaviour, tmp_path / "run")
+    assert load_behaviour(run.path / "behaviour.yaml") == behaviour
+    summary = run.train()
+    assert summary.status == "finished" and summary.generations == 5
+    metrics = rows(run.path / METRICS_FILE)
+    assert [int(r["generation"]) for r in metrics] == list(range(5))
+    assert list(metrics[0]) == ["generation", "mean", "std", "best", "min", "episodes",
+                                "steps", "wall_time"]
+    assert all(int(r["episodes"]) == 6 for r in metrics)
+    strengths = rows(run.path / STRENGTHS_FILE)
+    assert len(strengths) == 5 * 15 * 5 and strengths[0]["command"] == "turn_right"
+    assert run.checkpoint_generations() == list(range(5))
+    checkpoint = run.checkpoint(4)
+    assert {"population", "fitness", "q", "traces", "rng", "metrics"} <= set(checkpoint)
+    assert set(checkpoint["rng"]) == {"ga", "env", "explore"}
+    q = np.array([float(r["q"]) for r in strengths[-75:]]).reshape(15, 5)
+    np.testing.assert_array_equal(q, np.array(checkpoint["q"]))
+    info = json.loads((run.path / "run.json").read_text())
+    assert info["status"] == "finished" and info["best"] == summary.best
+
+
+def test_best_yaml_is_the_deployable_best_of_the_last_generation(tmp_path: Path) -> None:
+    run = create_run(ballchase(), tmp_path / "run")
+    run.train()
+    best = load_behaviour(run.path / BEST_FILE)
+    assert best.is_deployable
+    assert (run.path / BEST_FILE).read_text().startswith("# Learned by flctool")
+    behaviour, provenance = open_run(run.path).behaviour_for()
+    assert behaviour == best
+    state = run.checkpoint(4)
+    assert provenance == {"learner": "hybrid", "seed": 0, "generation": 4,
+                          "individual": int(np.argmax(state["fitness"])),
+                          "fitness": max(state["fitness"])}
+    consequents = compile_behaviour(best).consequents
+    assert consequents is not None
+    assert consequents.tolist() == state["population"][provenance["individual"]]
+
+
+def test_behaviour_for_picks_any_generation_and_individual(tmp_path: Path) -> None:
+    run = create_run(ballchase(learner="pitt"), tmp_path / "run")
+    run.train()
+    assert not (run.path / STRENGTHS_FILE).exists()
+    behaviour, provenance = run.behaviour_for(generation=1, individual=3)
+    assert provenance["generation"] == 1 and provenance["individual"] == 3
+    assert provenance["fitness"] == run.checkpoint(1)["fitness"][3]
+    assert compile_behaviour(behaviour).consequents.tolist() == (  # type: ignore[union-attr]
+        run.checkpoint(1)["population"][3])
+    assert run.behaviour_for(generation=-1)[1]["generation"] == 4
+    with pytest.raises(RunDirError, match=r"no generation 9.*0\.\.4"):
+        run.behaviour_for(generation=9)
+    with pytest.raises(RunDirError, match=r"individuals 0\.\.5, not 6"):
+        run.behaviour_for(individual=6)
+
+
+@pytest.mark.parametrize("learner", ["pitt", "fuzzy_q", "hybrid"])
+def test_resume_ends_where_an_uninterrupted_run_ends(tmp_path: Path, learner: str) -> None:
+    behaviour = ballchase(learner=learner, seed=3, generations=6)
+    whole = create_run(behaviour, tmp_path / "a" / "run")
+    whole.train()
+    part = create_run(behaviour, tmp_path / "b" / "run")
+    assert part.train([StopAfter(2)]).status == "stopped"
+    # as if killed during generation 3: its checkpoint never appeared, rows half written
+    with (part.path / METRICS_FILE).open("a") as handle:
+        handle.write("3,0.5,0.1,")
+    resumed = open_run(part.path).train()
+    assert resumed.status == "finished" and resumed.generations == 6
+    assert without_wall_time(part.path / METRICS_FILE) == without_wall_time(
+        whole.path / METRICS_FILE)
+    assert (part.path / BEST_FILE).read_text() == (whole.path / BEST_FILE).read_text()
+    if learner != "pitt":
+        assert rows(part.path / STRENGTHS_FILE) == rows(whole.path / STRENGTHS_FILE)
+    a, b = part.checkpoint(5), whole.checkpoint(5)
+    for state in (a, b):
+        state.pop("elapsed"), state["metrics"].pop("wall_time")
+    assert a == b
+
+
+def test_resume_can_extend_a_finished_run(tmp_path: Path) -> None:
+    run = create_run(ballchase(generations=3), tmp_path / "run")
+    run.train()
+    again = open_run(run.path)
+    again.extend(5)
+    assert load_behaviour(run.path / "behaviour.yaml").learning.generations == 5
+    assert again.train().generations == 5
+    with pytest.raises(RunDirError, match="would not add any"):
+        again.extend(4)
+
+
+def test_run_directory_errors(tmp_path: Path) -> None:
+    (tmp_path / "full").mkdir()
+    (tmp_path / "full" / "x").write_text("x")
+    with pytest.raises(RunDirError, match="not empty"):
+        create_run(ballchase(), tmp_path / "full")
+    with pytest.raises(RunDirError, match="no such run directory"):
+        open_run(tmp_path / "missing")
+    with pytest.raises(RunDirError, match="not a run directory"):
+        open_run(tmp_path / "full")
+    run = create_run(ballchase(), tmp_path / "empty")
+    with pytest.raises(RunDirError, match="no finished generation"):
+        run.behaviour_for()
+    handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
+    no_env = handmade.model_copy(update={"environment": None})
+    with pytest.raises(RunDirError, match="no 'environment' section"):
+        create_run(no_env, tmp_path / "noenv")
+
+
+def test_default_run_dir_names_the_run(tmp_path: Path) -> None:
+    path = default_run_dir(ballchase(seed=4, learner="pitt"), tmp_path)
+    assert path.parent == tmp_path and path.name.startswith("ballchase-pitt-seed4-")
+    path.mkdir()
+    assert default_run_dir(ballchase(seed=4, learner="pitt"), tmp_path) != path
+
+
+def test_overrides_are_validated_like_the_file() -> None:
+    behaviour = ballchase()
+    changed = resolve_behaviour(behaviour, {"q.temperature": 0.2,
+                                            "environment.max_steps": 50})
+    assert changed.learning.q.temperature == 0.2
+    assert changed.environment is not None and changed.environment.max_steps == 50
+    assert resolve_behaviour(behaviour, {"q.lambda": 0.3}).learning.q.lambda_ == 0.3
+    with pytest.raises(SpecError, match=r"learning\.q\.gamma"):
+        resolve_behaviour(behaviour, {"q.gamma": 1.5})
+    with pytest.raises(SpecError, match=r"learning\.seed.*not a section"):
+        resolve_behaviour(behaviour, {"seed.x": 1})
+    with pytest.raises(SpecError, match="unknown key 'temprature'"):
+        resolve_behaviour(behaviour, {"q.temprature": 1})
