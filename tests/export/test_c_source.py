@@ -124,7 +124,7 @@ def test_prefix_and_float(tmp_path: Path) -> None:
 def test_an_existing_file_is_kept_without_force(tmp_path: Path) -> None:
     behaviour = load_behaviour(SHIPPED[0])
     (tmp_path / "ctl.c").write_text("mine")
-    with pytest.raises(ExportError, match="ctl.c already exists"):
+    with pytest.raises(ExportError, match=r"ctl\.c already exists"):
         CExporter().to_file(behaviour, tmp_path / "ctl")
     assert (tmp_path / "ctl.c").read_text() == "mine"
     assert not (tmp_path / "ctl.h").exists()  # nothing written when one target is refused

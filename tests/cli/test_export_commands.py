@@ -1,0 +1,95 @@
+"""``flctool export`` and ``flctool import`` as a user runs them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from typer.testing import CliRunner
+
+from flctool import compile_behaviour, load_behaviour, parse_behaviour
+from flctool.cli import app
+
+from ..conftest import BEHAVIOURS
+
+runner = CliRunner()
+HANDMADE = BEHAVIOURS / "ballchase-handmade.yaml"
+
+
+def test_help() -> None:
+    for command in ("export", "import"):
+        result = runner.invoke(app, [command, "--help"])
+        assert result.exit_code == 0 and "Usage" in result.output
+
+
+def test_export_yaml_to_stdout_is_the_same_controller() -> None:
+    result = runner.invoke(app, ["export", str(HANDMADE)])
+    assert result.exit_code == 0, result.output
+    assert result.output.startswith("# ballchase_handmade: exported by flctool")
+    assert parse_behaviour(result.output) == load_behaviour(HANDMADE)
+
+
+def test_every_format_through_a_file_and_back(tmp_path: Path) -> None:
+    want = compile_behaviour(load_behaviour(HANDMADE))
+    states = np.random.default_rng(0).uniform([-0.1, -100], [1.1, 100], (1000, 2))
+    for format in ("fll", "fcl", "fis"):
+        exported = tmp_path / f"ctl.{format}"
+        result = runner.invoke(app, ["export", str(HANDMADE), "-f", format, "-o", str(exported)])
+        assert result.exit_code == 0, result.output
+        assert f"wrote {exported}" in result.output.replace("\n", "")
+        back = tmp_path / f"from-{format}.yaml"
+        result = runner.invoke(app, ["import", str(exported), "-o", str(back)])
+        assert result.exit_code == 0, result.output
+        assert runner.invoke(app, ["validate", str(back)]).exit_code == 0
+        text = back.read_text()
+        assert "flctool: 1" in text and "learning:" not in text
+        assert np.array_equal(compile_behaviour(load_behaviour(back)).output(states),
+                              want.output(states))
+
+
+def test_c_writes_header_and_source(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["export", str(HANDMADE), "-f", "c", "--prefix", "ballchase_",
+                                 "--float", "-o", str(tmp_path / "ballchase")])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ballchase.c", "ballchase.h"]
+    assert "float ballchase_output(" in (tmp_path / "ballchase.h").read_text()
+
+
+def test_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
+    incomplete = runner.invoke(app, ["export", str(BEHAVIOURS / "ballchase.yaml")])
+    assert incomplete.exit_code == 1
+    assert "not deployable: 15 of 15 rules" in incomplete.output
+    assert "IF ball_size IS small AND pan IS far_right" in incomplete.output
+
+    target = tmp_path / "out.yaml"
+    target.write_text("mine")
+    exists = runner.invoke(app, ["export", str(HANDMADE), "-o", str(target)])
+    assert exists.exit_code == 1 and "already exists" in exists.output
+    assert target.read_text() == "mine"
+    assert runner.invoke(app, ["export", str(HANDMADE), "-o", str(target), "--force"]
+                         ).exit_code == 0
+
+    nowhere = runner.invoke(app, ["export", str(HANDMADE), "-o", str(tmp_path / "no" / "x")])
+    assert nowhere.exit_code == 1 and "does not exist" in nowhere.output
+
+    unknown = runner.invoke(app, ["export", str(HANDMADE), "-f", "jsn"])
+    assert unknown.exit_code == 1 and "Did you mean 'json'" in unknown.output
+
+    c_only = runner.invoke(app, ["export", str(HANDMADE), "-f", "fll", "--float"])
+    assert c_only.exit_code == 1 and "apply to --format c only" in c_only.output
+
+    odd = tmp_path / "ctl.txt"
+    odd.write_text("x")
+    suffix = runner.invoke(app, ["import", str(odd)])
+    assert suffix.exit_code == 1 and "cannot tell the format" in suffix.output
+
+
+def test_import_reports_the_construct_and_line(tmp_path: Path) -> None:
+    exported = tmp_path / "ctl.fll"
+    runner.invoke(app, ["export", str(HANDMADE), "-f", "fll", "-o", str(exported)])
+    text = exported.read_text().replace("pan is right then", "pan is very right then")
+    exported.write_text(text)
+    line = next(i for i, s in enumerate(text.splitlines(), start=1) if "very" in s)
+    result = runner.invoke(app, ["import", str(exported)])
+    assert result.exit_code == 1
+    assert f"ctl.fll:{line}: the hedge 'very'" in result.output.replace("\n", "")

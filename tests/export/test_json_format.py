@@ -1,0 +1,27 @@
+"""JSON: the behaviour file's content, valid against schemas/behaviour.schema.json."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+
+from flctool import load_behaviour
+from flctool.export.json_format import JsonExporter
+from flctool.spec import behaviour_from_data
+
+from ..conftest import ROOT
+from .controllers import random_behaviour
+from .roundtrip import SHIPPED
+
+
+def test_json_is_the_behaviour_and_matches_the_schema() -> None:
+    schema = json.loads((ROOT / "schemas" / "behaviour.schema.json").read_text())
+    for behaviour in [load_behaviour(SHIPPED[0]), random_behaviour(4)]:
+        data = json.loads(JsonExporter().to_string(behaviour))
+        assert behaviour_from_data(data) == behaviour
+        if importlib.util.find_spec("jsonschema") is not None:  # not a dependency of flctool
+            import jsonschema
+
+            jsonschema.validate(data, schema)
+        assert set(data) <= set(schema["properties"])
+        assert set(schema["required"]) <= set(data)
