@@ -106,6 +106,15 @@ class EvaluationResult:
                 "mean_return": self.mean_return.to_dict()}
 
 
+def evaluation_seeds(seed: int, episodes: int) -> NDArray[np.int64]:
+    """``episodes`` distinct episode seeds drawn from ``seed`` (what ``flctool evaluate
+    --seed`` uses), so evaluations with different seeds share no episodes."""
+    if episodes < 1:
+        raise EnvError(f"episodes must be at least 1, got {episodes}")
+    rng = np.random.default_rng(seed)
+    return np.asarray(rng.choice(2**31 - 1, size=episodes, replace=False), dtype=np.int64)
+
+
 def _controller(controller: Controller, consequents: NDArray[np.integer] | None) -> Controller:
     if consequents is not None:
         return controller.with_consequents(np.asarray(consequents, dtype=np.intp))

@@ -1,6 +1,7 @@
 """The ``flctool`` command line. Each module registers its commands on the shared app."""
 
 from flctool.cli import (
+    evaluate,  # noqa: F401  (registers evaluate)
     export_commands,  # noqa: F401  (registers export, import)
     learn,  # noqa: F401  (registers learn)
     spec_commands,  # noqa: F401  (registers validate, show, infer, schema)

@@ -1,0 +1,72 @@
+"""``flctool evaluate`` as a user runs it."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+from typer.testing import CliRunner
+
+from flctool.cli import app
+
+from ..conftest import BEHAVIOURS
+
+runner = CliRunner()
+HANDMADE = str(BEHAVIOURS / "ballchase-handmade.yaml")
+
+
+def test_table_of_statistics() -> None:
+    result = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "50"])
+    assert result.exit_code == 0, result.output
+    for label in ("success rate (Wilson)", "steps to success", "mean fitness", "95 % CI"):
+        assert label in result.output
+
+
+def test_json_is_reproducible() -> None:
+    first = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "30", "--seed", "4",
+                                "--json"])
+    second = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "30", "--seed", "4",
+                                 "--json"])
+    assert first.exit_code == 0, first.output
+    data = json.loads(first.stdout)
+    assert data == json.loads(second.stdout)
+    assert data["episodes"] == 30 and data["seed"] == 4
+    assert 0.0 <= data["success_rate"]["low"] <= data["success_rate"]["value"] <= 1.0
+
+
+def test_trace_csv(tmp_path: Path) -> None:
+    trace = tmp_path / "trace.csv"
+    result = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "5", "--trace",
+                                 str(trace)])
+    assert result.exit_code == 0, result.output
+    with trace.open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) >= 2
+    assert {"step", "robot_x", "robot_y", "robot_heading", "ball_x", "ball_y", "ball_size",
+            "pan", "turn", "command"} <= set(rows[0])
+    assert rows[0]["step"] == "0" and rows[-1]["command"] == ""
+
+
+def test_trace_into_a_missing_directory_is_a_clear_error(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace",
+                                 str(tmp_path / "nowhere" / "trace.csv")])
+    assert result.exit_code == 1
+    assert "cannot write the trace" in result.output
+
+
+def test_non_deployable_controller_lists_missing_rules() -> None:
+    result = runner.invoke(app, ["evaluate", str(BEHAVIOURS / "ballchase.yaml")])
+    assert result.exit_code == 1
+    assert "15 of 15 rules are missing" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_bad_environment_exits_cleanly(tmp_path: Path) -> None:
+    text = Path(HANDMADE).read_text().replace(
+        "  adapter: ballchase-sim", "  adapter: ballchase-sim\n  pitch: {length: 900}")
+    path = tmp_path / "small.yaml"
+    path.write_text(text)
+    result = runner.invoke(app, ["evaluate", str(path)])
+    assert result.exit_code == 1
+    assert "environment.pitch" in result.output and "too small" in result.output
