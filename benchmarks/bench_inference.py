@@ -1,0 +1,190 @@
+"""Inference speed of the ballchase controller: flctool against scikit-fuzzy, pyfuzzylite
+and simpful, in one run, with every library's outputs checked equal to flctool's first.
+
+    python benchmarks/bench_inference.py [--batch 1000000] [--json PATH] [--quick]
+
+Prints a table of states per second (a batch of states) and microseconds per state (one
+state per call, as a robot's control loop calls it), with ratios to flctool, and writes it
+as JSON (default: bench_inference.json beside this script). Libraries without array
+inference are timed one state at a time on a subset and their states/s extrapolated; the
+table says which. Needs the bench extra: pip install 'flctool[bench]'.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import common
+
+import flctool
+from flctool.compile import kernels
+
+TOLERANCE = 1e-9
+GOALS = {"batched_states_per_s": 30e6, "single_us": 2.0, "vs_pyfuzzylite": 25.0,
+         "vs_skfuzzy": 3000.0}
+
+# Start-up in a fresh interpreter: the time to import flctool (numba must not be imported
+# by that), and the time of the first inference calls (numba compiling, or loading its cache).
+_STARTUP = """
+import sys, time
+start = time.perf_counter()
+import flctool, flctool.cli
+imported = time.perf_counter()
+assert "numba" not in sys.modules, "numba imported by import flctool"
+controller = flctool.compile_behaviour(flctool.load_behaviour(sys.argv[1]))
+compiled = time.perf_counter()
+controller.output(controller.ranges.T.copy())
+controller.output_one(controller.ranges[:, 0].copy())
+controller.active_rules(controller.ranges[:, 0].copy())
+first = time.perf_counter()
+print(imported - start, first - compiled)
+"""
+
+
+def startup(cache_dir: str | None) -> tuple[float, float]:
+    """(import seconds, first-inference seconds) in a new interpreter; with ``cache_dir`` numba
+    caches there (empty: a cold compile), else in its default place."""
+    env = dict(os.environ)
+    if cache_dir is not None:
+        env["NUMBA_CACHE_DIR"] = cache_dir
+    result = subprocess.run([sys.executable, "-c", _STARTUP, str(common.BALLCHASE)], env=env,
+                            capture_output=True, text=True, check=True)
+    imported, first = result.stdout.split()
+    return float(imported), float(first)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--batch", type=int, default=1_000_000, help="states in the batch")
+    parser.add_argument("--json", type=Path, default=Path(__file__).with_suffix(".json"),
+                        help="where to write the results")
+    parser.add_argument("--quick", action="store_true", help="fewer states and repeats")
+    args = parser.parse_args()
+    repeats = 2 if args.quick else 5
+    subset = {"pyfuzzylite": 2_000 if args.quick else 20_000,
+              "simpful": 300 if args.quick else 2_000,
+              "skfuzzy_batch": 300 if args.quick else 2_000,
+              "skfuzzy_single": 30 if args.quick else 200,
+              "flctool_single": 20_000 if args.quick else 200_000}
+
+    behaviour = flctool.load_behaviour(common.BALLCHASE)
+    controller = flctool.compile_behaviour(behaviour)
+    states = common.uniform_states(controller, args.batch, seed=0)
+    print(f"ballchase: {controller.n_inputs} inputs, {'x'.join(map(str, controller.shape))} "
+          f"sets, {controller.n_rules} rules, {controller.n_commands} singletons; "
+          f"batch of {args.batch:,} states")
+
+    # -- start-up: import cost, numba compile (cold cache) and cache load (warm) -----------
+    with tempfile.TemporaryDirectory() as cache:
+        import_s, cold_s = startup(cache)
+        _, warm_s = startup(cache)
+    print(f"start-up: import flctool {import_s * 1e3:.0f} ms (numba not imported); first "
+          f"inference {cold_s:.2f} s with an empty numba cache, {warm_s * 1e3:.0f} ms cached")
+
+    # -- check every library against flctool before timing --------------------------------
+    check = states[:300]
+    expected = controller.output(check)
+    skfuzzy_batch = common.skfuzzy_simulation(behaviour, controller)
+    skfuzzy_one = common.skfuzzy_one(common.skfuzzy_simulation(behaviour, controller),
+                                     behaviour)
+    fuzzylite_one = common.fuzzylite_one(common.fuzzylite_engine(behaviour, controller))
+    differences = {}
+    with contextlib.redirect_stdout(io.StringIO()):  # simpful announces the model type
+        simpful_one = common.simpful_one(common.simpful_system(behaviour, controller),
+                                         behaviour)
+        differences["flctool output_one"] = common.check_equal(
+            "flctool output_one", [controller.output_one(s) for s in check], expected, 0.0)
+        differences["scikit-fuzzy"] = common.check_equal(
+            "scikit-fuzzy", common.skfuzzy_outputs(skfuzzy_batch, behaviour, check), expected,
+            TOLERANCE)
+        differences["scikit-fuzzy (one state)"] = common.check_equal(
+            "scikit-fuzzy", [skfuzzy_one(s) for s in check[:30]], expected[:30], TOLERANCE)
+        differences["pyfuzzylite"] = common.check_equal(
+            "pyfuzzylite", [fuzzylite_one(s) for s in check], expected, TOLERANCE)
+        differences["simpful"] = common.check_equal(
+            "simpful", [simpful_one(s) for s in check], expected, TOLERANCE)
+    print("outputs equal to flctool's: " + ", ".join(
+        f"{name} (max |diff| {value:.1e})" for name, value in differences.items()))
+
+    # -- timing ----------------------------------------------------------------------------
+    rows: list[dict[str, Any]] = []
+    controller.output(states[:1000])
+    batched = common.best_seconds(lambda: controller.output(states), repeats)
+    single = common.per_call_seconds(controller.output_one,
+                                     list(states[:subset["flctool_single"]]), repeats)
+    rows.append({"library": "flctool", "states_per_s": args.batch / batched,
+                 "us_per_state": single * 1e6, "batched_how": f"batch of {args.batch:,}"})
+
+    n = subset["skfuzzy_batch"]
+    seconds = common.best_seconds(
+        lambda: common.skfuzzy_outputs(skfuzzy_batch, behaviour, states[:n]), 1)
+    single = common.per_call_seconds(skfuzzy_one, list(states[:subset["skfuzzy_single"]]), 1)
+    rows.append({"library": "scikit-fuzzy (control)", "states_per_s": n / seconds,
+                 "us_per_state": single * 1e6,
+                 "batched_how": f"array inputs, {n:,} states, extrapolated"})
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        for name, infer in (("pyfuzzylite 7.1", fuzzylite_one), ("simpful", simpful_one)):
+            key = name.split()[0]
+            single = common.per_call_seconds(infer, list(states[:subset[key]]),
+                                             max(1, repeats // 2))
+            rows.append({"library": name, "states_per_s": 1 / single,
+                         "us_per_state": single * 1e6,
+                         "batched_how": f"no array inference: one state at a time over "
+                                        f"{subset[key]:,} states, extrapolated"})
+
+    ours = rows[0]
+    for row in rows:
+        row["batched_ratio"] = ours["states_per_s"] / row["states_per_s"]
+        row["single_ratio"] = row["us_per_state"] / ours["us_per_state"]
+
+    print()
+    print(f"| {'library':<24} | {'states/s (batched)':>18} | {'µs/state (one)':>14} | "
+          f"{'flctool is x faster':>19} | {'(one)':>8} | batched how")
+    print(f"|{'-' * 26}|{'-' * 20}:|{'-' * 16}:|{'-' * 21}:|{'-' * 10}:|{'-' * 12}")
+    for row in rows:
+        print(f"| {row['library']:<24} | {row['states_per_s']:>18,.0f} | "
+              f"{row['us_per_state']:>14,.2f} | {row['batched_ratio']:>19,.0f} | "
+              f"{row['single_ratio']:>8,.0f} | {row['batched_how']}")
+
+    by_name = {row["library"]: row for row in rows}
+    goals = {
+        "batched_states_per_s": (ours["states_per_s"], ">=", GOALS["batched_states_per_s"]),
+        "single_us": (ours["us_per_state"], "<=", GOALS["single_us"]),
+        "vs_pyfuzzylite": (by_name["pyfuzzylite 7.1"]["batched_ratio"], ">=",
+                           GOALS["vs_pyfuzzylite"]),
+        "vs_skfuzzy": (by_name["scikit-fuzzy (control)"]["batched_ratio"], ">=",
+                       GOALS["vs_skfuzzy"]),
+    }
+    print()
+    met = {}
+    for name, (value, sense, goal) in goals.items():
+        met[name] = value >= goal if sense == ">=" else value <= goal
+        print(f"goal {name}: {value:,.2f} {sense} {goal:,.0f}: {'met' if met[name] else 'MISSED'}")
+
+    common.write_json(args.json, {
+        "benchmark": "bench_inference", "behaviour": "behaviours/ballchase-handmade.yaml",
+        "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": common.machine(),
+        "batch": args.batch, "repeats": repeats, "quick": args.quick,
+        "tolerance": TOLERANCE, "max_differences": differences,
+        "dense_rules_limit": kernels.DENSE_RULES,
+        "startup": {"import_flctool_s": import_s, "first_inference_cold_cache_s": cold_s,
+                    "first_inference_warm_cache_s": warm_s},
+        "rows": rows, "goals": {name: {"value": value, "sense": sense, "goal": goal,
+                                       "met": met[name]}
+                                for name, (value, sense, goal) in goals.items()},
+    })
+    print(f"\nwrote {args.json.name}")
+
+
+if __name__ == "__main__":
+    main()

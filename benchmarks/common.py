@@ -1,0 +1,249 @@
+"""Shared helpers of the benchmark scripts: timing, states, JSON, and the same controller
+built in the libraries users would pick instead (scikit-fuzzy, pyfuzzylite, simpful).
+
+Each builder makes the other library compute eq. 1-3 exactly as flctool does (Mamdani min,
+centre of area over singletons, sum over rules), so outputs can be checked equal before
+anything is timed. Inputs are expected inside their ranges (flctool clips; simpful does not).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from flctool import Behaviour, Controller
+
+ROOT = Path(__file__).resolve().parents[1]
+BALLCHASE = ROOT / "behaviours" / "ballchase-handmade.yaml"
+
+
+# -- timing ---------------------------------------------------------------------------------
+def best_seconds(run: Callable[[], object], repeats: int) -> float:
+    """The fastest of ``repeats`` timed runs (the least disturbed by other processes)."""
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def per_call_seconds(call: Callable[[Any], object], items: Sequence[Any], repeats: int) -> float:
+    """Seconds per call of ``call(item)`` over ``items``: best of ``repeats`` passes."""
+    def one_pass() -> None:
+        for item in items:
+            call(item)
+    return best_seconds(one_pass, repeats) / len(items)
+
+
+def uniform_states(controller: Controller, count: int, seed: int) -> np.ndarray:
+    """``(count, N)`` states drawn uniformly inside the input ranges."""
+    rng = np.random.default_rng(seed)
+    return rng.uniform(controller.ranges[:, 0], controller.ranges[:, 1],
+                       size=(count, controller.n_inputs))
+
+
+def machine() -> dict[str, Any]:
+    """What the figures were measured on."""
+    import numba
+
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {"cpu": cpu, "cores": os.cpu_count(), "python": sys.version.split()[0],
+            "numpy": np.__version__, "numba": numba.__version__,
+            "platform": platform.platform()}
+
+
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=2) + "\n")
+
+
+def check_equal(name: str, got: np.ndarray, expected: np.ndarray, tolerance: float) -> float:
+    """Largest difference; raises if any is above ``tolerance`` (outputs must agree first)."""
+    difference = float(np.max(np.abs(np.asarray(got) - expected)))
+    if not difference <= tolerance:
+        raise SystemExit(f"{name} disagrees with flctool by {difference:.3g} "
+                         f"(> {tolerance:g}); not timing a different computation")
+    return difference
+
+
+def rule_texts(behaviour: Behaviour, controller: Controller) -> list[tuple[dict[str, str], str]]:
+    """Every rule as ({input: set}, command), in rule order."""
+    assert controller.consequents is not None
+    return [(dict(zip(behaviour.input_names, sets, strict=True)),
+             controller.command_names[int(k)])
+            for sets, k in zip(behaviour.antecedents(), controller.consequents, strict=True)]
+
+
+def _check_edges(behaviour: Behaviour) -> None:
+    # Libraries that interpolate a sampled membership (scikit-fuzzy) cannot jump inside a
+    # range; vertical edges at a range's end are fine (clipping never goes past them).
+    for name, variable in behaviour.inputs.items():
+        lo, hi = variable.range
+        for set_name, (pa, pb, pc, pd) in variable.sets.items():
+            if (pa == pb and pa > lo) or (pc == pd and pd < hi):
+                raise SystemExit(f"{name}.{set_name}: a vertical edge inside the range; the "
+                                 "library builders here support them only at the range ends")
+
+
+# -- scikit-fuzzy ---------------------------------------------------------------------------
+def skfuzzy_simulation(behaviour: Behaviour, controller: Controller) -> Any:
+    """A ``skfuzzy.control`` simulation computing eq. 1-3.
+
+    Inputs: each set sampled at every breakpoint (its membership is piecewise linear between
+    them, so interpolation is exact). Output: skfuzzy accumulates rules with max, clips each
+    output set at its cut (memberships <= 1) and defuzzifies the sampled union by centroid.
+    Here ``accumulation_method = np.add`` makes a command's cut the sum of its rules'
+    activations; every rule is weighted by lambda = 2^-k <= 1/M (exact, and eq. 3 does not
+    change when all activations are scaled) so a cut never reaches 1; and each command is a
+    plateau of half-width eps at its value with feet of width delta = 1e-12 eps. Clipped at
+    w, that shape has centroid exactly at the command's value and area 2 w (eps + delta) -
+    delta w^2, proportional to w within 1e-12: the centroid is eq. 3 to ~1e-12.
+    """
+    from skfuzzy import control
+
+    _check_edges(behaviour)
+    antecedents = {}
+    for name, variable in behaviour.inputs.items():
+        points = {*variable.range}
+        for quad in variable.sets.values():
+            points.update(quad)
+        universe = np.array(sorted(points))
+        antecedent = control.Antecedent(universe, name)
+        for set_name, quad in variable.sets.items():
+            antecedent[set_name] = _trapezoid_samples(universe, quad)
+        antecedents[name] = antecedent
+    values = np.unique(controller.singletons)
+    eps = 0.25 * float(np.diff(values).min()) if len(values) > 1 else 0.25
+    delta = 1e-12 * eps
+    corners = np.array([-eps - delta, -eps, eps, eps + delta])
+    universe = np.unique((values[:, None] + corners[None, :]).ravel())
+    consequent = control.Consequent(universe, behaviour.output.name, defuzzify_method="centroid")
+    consequent.accumulation_method = np.add
+    for command, value in behaviour.output.commands.items():
+        consequent[command] = ((universe >= value - eps) & (universe <= value + eps)) * 1.0
+    weight = 2.0 ** -int(np.ceil(np.log2(controller.n_rules + 1)))
+    rules = []
+    for sets, command in rule_texts(behaviour, controller):
+        terms = [antecedents[name][set_name] for name, set_name in sets.items()]
+        condition = terms[0]
+        for term in terms[1:]:
+            condition = condition & term
+        rules.append(control.Rule(condition, consequent[command] % weight))
+    return control.ControlSystemSimulation(control.ControlSystem(rules), cache=False)
+
+
+def _trapezoid_samples(universe: np.ndarray, quad: Sequence[float]) -> np.ndarray:
+    from flctool.compile.membership import trapezoid
+
+    return trapezoid(universe, np.array([quad], dtype=np.float64))[:, 0]
+
+
+def skfuzzy_outputs(simulation: Any, behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
+    """All states at once through skfuzzy's array inputs."""
+    for i, name in enumerate(behaviour.input_names):
+        simulation.input[name] = states[:, i].copy()
+    simulation.compute()
+    return np.asarray(simulation.output[behaviour.output.name], dtype=np.float64)
+
+
+def skfuzzy_one(simulation: Any, behaviour: Behaviour) -> Callable[[np.ndarray], float]:
+    names = behaviour.input_names
+    output = behaviour.output.name
+
+    def infer(state: np.ndarray) -> float:
+        for name, value in zip(names, state, strict=True):
+            simulation.input[name] = float(value)
+        simulation.compute()
+        return float(simulation.output[output])
+    return infer
+
+
+# -- pyfuzzylite ----------------------------------------------------------------------------
+def fuzzylite_engine(behaviour: Behaviour, controller: Controller) -> Any:
+    """A pyfuzzylite engine computing eq. 1-3: Minimum conjunction, constant (singleton)
+    terms, no aggregation (every rule's activation is its own term) and WeightedAverage."""
+    import fuzzylite as fl
+
+    lines = [f"Engine: {behaviour.name}"]
+    for name, variable in behaviour.inputs.items():
+        lo, hi = variable.range
+        lines += [f"InputVariable: {name}", "  enabled: true", f"  range: {lo!r} {hi!r}",
+                  "  lock-range: true"]
+        lines += [f"  term: {set_name} Trapezoid {' '.join(repr(float(p)) for p in quad)}"
+                  for set_name, quad in variable.sets.items()]
+    commands = behaviour.output.commands
+    lines += [f"OutputVariable: {behaviour.output.name}", "  enabled: true",
+              f"  range: {min(commands.values())!r} {max(commands.values())!r}",
+              "  lock-range: false", "  aggregation: none",
+              "  defuzzifier: WeightedAverage TakagiSugeno", "  default: nan",
+              "  lock-previous: false"]
+    lines += [f"  term: {command} Constant {float(value)!r}"
+              for command, value in commands.items()]
+    lines += ["RuleBlock: rules", "  enabled: true", "  conjunction: Minimum",
+              "  disjunction: none", "  implication: none", "  activation: General"]
+    for sets, command in rule_texts(behaviour, controller):
+        condition = " and ".join(f"{name} is {set_name}" for name, set_name in sets.items())
+        lines.append(f"  rule: if {condition} then {behaviour.output.name} is {command}")
+    return fl.FllImporter().from_string("\n".join(lines) + "\n")
+
+
+def fuzzylite_one(engine: Any) -> Callable[[np.ndarray], float]:
+    inputs = list(engine.input_variables)
+    output = engine.output_variables[0]
+
+    def infer(state: np.ndarray) -> float:
+        for variable, value in zip(inputs, state, strict=True):
+            variable.value = float(value)
+        engine.process()
+        return float(output.value)
+    return infer
+
+
+# -- simpful --------------------------------------------------------------------------------
+def simpful_system(behaviour: Behaviour, controller: Controller) -> Any:
+    """A simpful Sugeno system computing eq. 1-3 (AND is min, crisp output values)."""
+    import simpful
+
+    _check_edges(behaviour)
+    system = simpful.FuzzySystem(show_banner=False, verbose=False)
+    for name, variable in behaviour.inputs.items():
+        sets = [simpful.FuzzySet(function=simpful.Trapezoidal_MF(*map(float, quad)),
+                                 term=set_name)
+                for set_name, quad in variable.sets.items()]
+        system.add_linguistic_variable(
+            name, simpful.LinguisticVariable(sets, universe_of_discourse=list(variable.range)))
+    for command, value in behaviour.output.commands.items():
+        system.set_crisp_output_value(command, float(value), verbose=False)
+    rules = []
+    for sets, command in rule_texts(behaviour, controller):
+        condition = " AND ".join(f"({name} IS {set_name})" for name, set_name in sets.items())
+        rules.append(f"IF {condition} THEN ({behaviour.output.name} IS {command})")
+    system.add_rules(rules, verbose=False)
+    return system
+
+
+def simpful_one(system: Any, behaviour: Behaviour) -> Callable[[np.ndarray], float]:
+    names = behaviour.input_names
+    output = behaviour.output.name
+
+    def infer(state: np.ndarray) -> float:
+        for name, value in zip(names, state, strict=True):
+            system.set_variable(name, float(value), verbose=False)
+        return float(system.Sugeno_inference([output])[output])
+    return infer
