@@ -1,0 +1,92 @@
+"""Ballchase simulator throughput: one episode at a time (B = 1) against 1000 in lock-step.
+
+    python benchmarks/bench_sim.py [--episodes 1000]
+
+The policy is a cheap proportional chase (turn towards the pan angle) so that the figures are
+the simulator's own cost; the last lines add the handmade controller's inference through
+``flctool.rollout.evaluate``. A script, never a timed test.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.envs import make_env
+from flctool.rollout import evaluate
+
+HANDMADE = Path(__file__).resolve().parents[1] / "behaviours" / "ballchase-handmade.yaml"
+
+
+def one_at_a_time(episodes: int) -> tuple[int, float, float]:
+    """Steps, seconds stepping, seconds resetting."""
+    env = make_env(load_behaviour(HANDMADE), 1)
+    steps = 0
+    resetting = 0.0
+    start = time.perf_counter()
+    for seed in range(episodes):
+        before = time.perf_counter()
+        obs = env.reset_one(seed)
+        resetting += time.perf_counter() - before
+        while True:
+            obs, _, terminated, truncated = env.step_one(max(-1.0, min(1.0, obs[1] / 60.0)))
+            steps += 1
+            if terminated or truncated:
+                break
+    return steps, time.perf_counter() - start - resetting, resetting
+
+
+def batched(episodes: int) -> tuple[int, float, float]:
+    env = make_env(load_behaviour(HANDMADE), episodes)
+    steps = 0
+    start = time.perf_counter()
+    obs, _ = env.reset(np.arange(episodes, dtype=np.int64))
+    resetting = time.perf_counter() - start
+    start = time.perf_counter()
+    done = np.zeros(episodes, dtype=bool)
+    while not done.all():
+        steps += int((~done).sum())
+        step = env.step(np.clip(obs[:, 1] / 60.0, -1.0, 1.0))
+        obs, done = step.observations, step.terminated | step.truncated
+    return steps, time.perf_counter() - start, resetting
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=1000)
+    episodes = parser.parse_args().episodes
+    one_steps, one_time, one_reset = one_at_a_time(episodes)
+    batch_steps, batch_time, batch_reset = batched(episodes)
+    assert one_steps == batch_steps  # the same episodes, bit for bit
+    print(f"simulator, {episodes} episodes, {one_steps} steps")
+    print(f"  one at a time (B=1, step_one): {one_steps / one_time:12,.0f} steps/s "
+          f"({1e6 * one_time / one_steps:.2f} us/step, {1e6 * one_reset / episodes:.1f} "
+          "us/reset)")
+    print(f"  batched (B={episodes}):{'':10}{batch_steps / batch_time:12,.0f} steps/s "
+          f"({1e6 * batch_time / batch_steps:.2f} us/step, {1e6 * batch_reset / episodes:.1f} "
+          "us/reset)")
+    print(f"  batched / one at a time, steps: {one_time / batch_time:.1f} x; with resets: "
+          f"{(one_time + one_reset) / (batch_time + batch_reset):.1f} x")
+
+    behaviour = load_behaviour(HANDMADE)
+    controller = compile_behaviour(behaviour)
+    seeds = np.arange(episodes, dtype=np.int64)
+    single = make_env(behaviour, 1)
+    start = time.perf_counter()
+    lengths = [int(evaluate(controller, single, [s]).lengths[0]) for s in seeds]
+    loop_time = time.perf_counter() - start
+    start = time.perf_counter()
+    result = evaluate(controller, make_env(behaviour, episodes), seeds)
+    lock_time = time.perf_counter() - start
+    assert lengths == result.lengths.tolist()
+    print(f"rollout.evaluate with the handmade controller, {int(result.lengths.sum())} steps")
+    print(f"  {episodes} x evaluate(B=1): {loop_time:.3f} s;  evaluate(B={episodes}): "
+          f"{lock_time:.3f} s;  ratio {loop_time / lock_time:.1f} x")
+
+
+if __name__ == "__main__":
+    main()
