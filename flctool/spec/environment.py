@@ -158,13 +158,15 @@ class BallchaseSimConfig(Section):
             return pitch
         # The farthest start must fit with the robot and the ball both on the pitch, in
         # any direction: see BallchaseSim's start placement.
-        need = start.distance[1] + robot.neck_offset + robot.radius + ball.diameter / 2
+        need = max(start.distance[1] + robot.neck_offset + robot.radius + ball.diameter / 2,
+                   2 * robot.radius)
         short = min(pitch.length, pitch.width)
         if short < need:
             raise ValueError(
                 f"the pitch ({pitch.length:g} x {pitch.width:g} mm) is too small for the robot: "
                 f"length and width must each be at least start.distance max + "
-                f"robot.neck_offset + robot.radius + ball.diameter/2 = {need:g} mm")
+                f"robot.neck_offset + robot.radius + ball.diameter/2 (and 2 robot.radius) = "
+                f"{need:g} mm")
         return pitch
 
     @field_validator("noise")
