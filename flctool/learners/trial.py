@@ -16,7 +16,6 @@ from typing import Protocol
 import numpy as np
 
 from flctool.compile import Controller
-from flctool.compile.membership import trapezoid_scalar
 from flctool.envs.base import BatchEnv
 
 
@@ -43,8 +42,17 @@ class SparseRules:
         for value, low, high, sets in zip(state, self._lows, self._highs, self._sets,
                                           strict=True):
             s = low if value < low else high if value > high else value  # clip to the range
-            mus = [(j, mu) for j, (pa, pb, pc, pd) in enumerate(sets)
-                   if (mu := trapezoid_scalar(s, pa, pb, pc, pd)) > 0.0]
+            mus = []
+            for j, (pa, pb, pc, pd) in enumerate(sets):
+                # trapezoid_scalar inlined (the same operations, so the same bits)
+                if s > pc:
+                    mu = (pd - s) / (pd - pc) if pd > pc else 0.0
+                elif s < pb:
+                    mu = (s - pa) / (pb - pa) if pb > pa else 0.0
+                else:
+                    mu = 1.0
+                if mu > 0.0:
+                    mus.append((j, mu))
             width = len(sets)
             rules = [r * width + j for r in rules for j, _ in mus]
             alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
