@@ -81,59 +81,47 @@ def _fired_sets(states: FloatArray, b: int, lo: FloatArray, hi: FloatArray,
 
 @_jit
 def _fired_rules(sets: IntArray, mus: FloatArray, counts: IntArray, strides: IntArray,
-                 rules: IntArray, alphas: FloatArray, level_rule: IntArray,
-                 level_alpha: FloatArray, position: IntArray) -> int:
-    """Enumerate the fired rules in increasing rule order into ``rules``/``alphas``
-    (capacity >= prod(counts)); returns how many. Eq. 1 (index) and eq. 2 (Mamdani min).
+                 rules: IntArray, alphas: FloatArray) -> int:
+    """The fired rules in increasing rule order into ``rules``/``alphas`` (capacity >=
+    prod(counts)); returns how many. Eq. 1 (rule index) and eq. 2 (Mamdani min).
 
-    An odometer over the fired sets, last input fastest; ``level_*[i + 1]`` caches the rule
-    index and min over inputs 0..i, so each step redoes only the inputs that changed.
+    The product of the fired sets, built input by input: after input i the buffers hold the
+    combinations of inputs 0..i in rule order, and input i + 1 splits each entry into one per
+    fired set. Expanding from the back lets that happen in place, and the loops have no
+    data-dependent exits, so the branch predictor follows them.
     """
-    n = counts.shape[0]
-    for i in range(n):
-        if counts[i] == 0:
-            return 0
-        position[i] = 0
-    level_rule[0] = 0
-    level_alpha[0] = np.inf
-    changed = 0
-    fired = 0
-    while True:
-        for i in range(changed, n):
-            j = position[i]
-            level_rule[i + 1] = level_rule[i] + sets[i, j] * strides[i]
-            level_alpha[i + 1] = min(level_alpha[i], mus[i, j])
-        rules[fired] = level_rule[n]
-        alphas[fired] = level_alpha[n]
-        fired += 1
-        i = n - 1
-        while i >= 0:
-            position[i] += 1
-            if position[i] < counts[i]:
-                break
-            position[i] = 0
-            i -= 1
-        if i < 0:
-            return fired
-        changed = i
+    size = 1
+    rules[0] = 0
+    alphas[0] = np.inf
+    for i in range(counts.shape[0]):
+        count = counts[i]
+        stride = strides[i]
+        for entry in range(size - 1, -1, -1):
+            rule = rules[entry]
+            alpha = alphas[entry]
+            for slot in range(count - 1, -1, -1):
+                rules[entry * count + slot] = rule + sets[i, slot] * stride
+                alphas[entry * count + slot] = min(alpha, mus[i, slot])
+        size *= count
+    return size
 
 
 @_jit
-def _work(n: int, max_sets: int) -> tuple[IntArray, FloatArray, IntArray, IntArray,
-                                          FloatArray, IntArray]:
-    return (np.empty((n, max_sets), np.intp), np.empty((n, max_sets)), np.empty(n, np.intp),
-            np.empty(n + 1, np.intp), np.empty(n + 1), np.empty(n, np.intp))
+def _work(n: int, max_sets: int) -> tuple[IntArray, FloatArray, IntArray]:
+    return np.empty((n, max_sets), np.intp), np.empty((n, max_sets)), np.empty(n, np.intp)
 
 
 @_jit
 def _capacity(counts: IntArray) -> int:
+    # Room for every stage of _fired_rules' expansion (an input with no fired set, which
+    # covering partitions rule out, would empty it only after the earlier ones grew it).
     total = 1
     for count in counts:
-        total *= count
+        total *= max(count, 1)
     return total
 
 
-_BLOCK = 256  # states whose memberships are computed together (fits in L1 with ~40 sets)
+_BLOCK = 32  # states whose memberships are computed together (fits in L1 with ~40 sets)
 
 
 @_jit
@@ -229,7 +217,7 @@ def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
     """Eq. 2-3 over only the fired rules, state by state, for a block of states."""
     n = strides.shape[0]
     population = table.shape[0]
-    sets, mus, counts, level_rule, level_alpha, position = _work(n, max_sets + 1)
+    sets, mus, counts = _work(n, max_sets + 1)
     rules = np.empty(1 << n, np.intp)
     alphas = np.empty(1 << n)
     for b in range(count):
@@ -238,8 +226,7 @@ def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
         if capacity > rules.shape[0]:
             rules = np.empty(capacity, np.intp)
             alphas = np.empty(capacity)
-        fired = _fired_rules(sets, mus, counts, strides, rules, alphas, level_rule,
-                             level_alpha, position)
+        fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
         numerators[:, 0] = 0.0
         denominator = 0.0
         for a in range(fired):
@@ -300,15 +287,14 @@ def infer_one(floats: FloatArray, ints: IntArray, table: IntArray, state: FloatA
 
     ``floats``/``ints`` are :class:`Layout`'s packed arrays."""
     lo, hi, quads, singletons, max_sets, offsets, strides = _unpack(floats, ints)
-    sets, mus, counts, level_rule, level_alpha, position = _work(state.shape[0], max_sets)
+    sets, mus, counts = _work(state.shape[0], max_sets)
     if _fired_sets(state.reshape((1, state.shape[0])), 0, lo, hi, quads, offsets, sets, mus,
                    counts) >= 0:
         return np.nan
     capacity = _capacity(counts)
     rules = np.empty(capacity, np.intp)
     alphas = np.empty(capacity)
-    fired = _fired_rules(sets, mus, counts, strides, rules, alphas, level_rule, level_alpha,
-                         position)
+    fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
     numerator = 0.0
     denominator = 0.0
     for a in range(fired):
@@ -324,7 +310,7 @@ def active_one(floats: FloatArray, ints: IntArray,
     (eq. 2): ``(rules (A,), alpha (A,), nan_input)``, ``nan_input`` -1 unless an input is NaN.
     """
     lo, hi, quads, _, max_sets, offsets, strides = _unpack(floats, ints)
-    sets, mus, counts, level_rule, level_alpha, position = _work(state.shape[0], max_sets)
+    sets, mus, counts = _work(state.shape[0], max_sets)
     nan_input = _fired_sets(state.reshape((1, state.shape[0])), 0, lo, hi, quads, offsets,
                             sets, mus, counts)
     if nan_input >= 0:
@@ -332,7 +318,7 @@ def active_one(floats: FloatArray, ints: IntArray,
     capacity = _capacity(counts)
     rules = np.empty(capacity, np.intp)
     alphas = np.empty(capacity)
-    _fired_rules(sets, mus, counts, strides, rules, alphas, level_rule, level_alpha, position)
+    _fired_rules(sets, mus, counts, strides, rules, alphas)
     return rules, alphas, -1
 
 
@@ -341,7 +327,7 @@ def activations(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: Float
                 offsets: IntArray, strides: IntArray, max_sets: int, out: FloatArray) -> int:
     """Dense eq. 2 for ``states (B, N)`` into a zeroed ``out (B, M)``; returns -1 or the
     first state with a NaN input."""
-    sets, mus, counts, level_rule, level_alpha, position = _work(states.shape[1], max_sets)
+    sets, mus, counts = _work(states.shape[1], max_sets)
     rules = np.empty(16, np.intp)
     alphas = np.empty(16)
     for b in range(states.shape[0]):
@@ -351,8 +337,7 @@ def activations(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: Float
         if capacity > rules.shape[0]:
             rules = np.empty(capacity, np.intp)
             alphas = np.empty(capacity)
-        fired = _fired_rules(sets, mus, counts, strides, rules, alphas, level_rule,
-                             level_alpha, position)
+        fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
         for a in range(fired):
             out[b, rules[a]] = alphas[a]
     return -1
