@@ -1,0 +1,16 @@
+"""One generation's metrics row."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flctool.learners.metrics import GenerationMetrics
+
+
+def test_statistics_and_row_round_trip() -> None:
+    m = GenerationMetrics.from_fitness(3, np.array([0.5, 1.5, -1.0]), 3, 42, 0.25)
+    assert (m.mean, m.best, m.min) == (pytest.approx(1 / 3), 1.5, -1.0)
+    assert m.std == pytest.approx(np.std([0.5, 1.5, -1.0]))
+    assert tuple(m.row()) == GenerationMetrics.columns()
+    assert GenerationMetrics.from_row({k: str(v) for k, v in m.row().items()}) == m
