@@ -125,6 +125,7 @@ def main() -> None:
                  "us_per_state": single * 1e6, "batched_how": f"batch of {args.batch:,}"})
 
     n = subset["skfuzzy_batch"]
+    skfuzzy_batch = common.skfuzzy_simulation(behaviour, controller)  # new array shape
     seconds = common.best_seconds(
         lambda: common.skfuzzy_outputs(skfuzzy_batch, behaviour, states[:n]), 1)
     single = common.per_call_seconds(skfuzzy_one, list(states[:subset["skfuzzy_single"]]), 1)
