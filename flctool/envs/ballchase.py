@@ -41,10 +41,10 @@ from numpy.typing import NDArray
 
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.errors import EnvError, Problem, SpecError
-from flctool.spec.environment import BallchaseSimConfig
+from flctool.spec.environment import BALLCHASE_OBSERVATIONS, BallchaseSimConfig
 from flctool.spec.models import Behaviour
 
-OBSERVATIONS = ("ball_size", "pan")
+OBSERVATIONS = BALLCHASE_OBSERVATIONS
 _RAD = math.pi / 180.0
 _DEG = 180.0 / math.pi
 # Standard normals drawn per step: motion forward, sideways, rotation; sensor size, pan.
@@ -385,20 +385,8 @@ class BallchaseSim(BatchEnv):
 def _check_fit(config: BallchaseSimConfig, commands: dict[str, float],
                observation_names: tuple[str, ...]) -> None:
     """The behaviour's inputs and commands must be ones the simulator knows."""
-    problems: list[Problem] = []
-    for name in observation_names:
-        if name not in OBSERVATIONS:
-            problems.append(Problem(
-                ("inputs", name), f"the ballchase simulator has no observation '{name}'",
-                f"name the inputs after its observations: {', '.join(OBSERVATIONS)}"))
+    problems = config.fit_problems(observation_names, tuple(commands))
     if len(set(observation_names)) != len(observation_names):
         problems.append(Problem(("inputs",), "an observation is read by two inputs"))
-    for name in commands:
-        if name not in config.motion:
-            problems.append(Problem(
-                ("environment", "motion"), f"output command '{name}' has no motion",
-                f"add '{name}: {{forward: mm, sideways: mm, rotation: deg}}' to "
-                "environment.motion and its standard deviations to environment.noise "
-                f"(the table has: {', '.join(config.motion)})"))
     if problems:
         raise SpecError(problems)

@@ -210,11 +210,4 @@ def imported_yaml(behaviour: Behaviour, header: str) -> str:
     The file format only knows the controller, so the learning defaults that the model fills
     in are left out rather than presented as if the file had chosen them.
     """
-    kept: list[str] = []
-    skipping = False
-    for line in behaviour_to_yaml(behaviour, header).splitlines(keepends=True):
-        if line[:1] not in (" ", "#", "\n", ""):
-            skipping = line.startswith(("learning:", "environment:"))
-        if not skipping:
-            kept.append(line)
-    return "".join(kept)
+    return behaviour_to_yaml(behaviour, header, defaults=False)

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
-from flctool.errors import ExportError, RunDirError
+from flctool.errors import ExportError
+from flctool.runs import open_run
 from flctool.spec import Behaviour, load_behaviour
 
 
@@ -31,17 +31,6 @@ def load_source(path: str | Path, generation: int | None = None,
 
 def _from_run(path: Path, generation: int | None,
               individual: int | None) -> tuple[Behaviour, dict[str, object]]:
-    try:
-        # Imported here: reading run directories is the learners' module, not export's.
-        runs = importlib.import_module("flctool.runs")
-    except ModuleNotFoundError as exc:
-        if exc.name != "flctool.runs":
-            raise
-        raise RunDirError(f"{path} is a directory, but this flctool cannot read run "
-                          "directories (flctool.runs is missing)",
-                          hint="export a behaviour file instead") from None
-    run = runs.open_run(path)
-    behaviour, provenance = run.behaviour_for(generation=generation, individual=individual)
-    if not isinstance(behaviour, Behaviour):
-        raise RunDirError(f"{path}: the run directory gave no behaviour to export")
-    return behaviour, {"source": str(path), **dict(provenance)}
+    behaviour, provenance = open_run(path).behaviour_for(generation=generation,
+                                                         individual=individual)
+    return behaviour, {"source": str(path), **provenance}

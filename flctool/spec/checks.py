@@ -22,6 +22,10 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
         problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
                                 ", like an input", "give the output a name of its own"))
     problems += _check_rules(behaviour)
+    environment = behaviour.environment
+    if environment is not None and hasattr(environment, "fit_problems"):
+        problems += environment.fit_problems(behaviour.input_names,
+                                             tuple(behaviour.output.commands))
     return problems
 
 

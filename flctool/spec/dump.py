@@ -13,9 +13,14 @@ import yaml
 from flctool.spec.models import Behaviour
 
 
-def behaviour_to_data(behaviour: Behaviour) -> dict[str, Any]:
-    """The behaviour as JSON-compatible data with the file's keys, in the file's order."""
-    data: dict[str, Any] = behaviour.model_dump(mode="json", by_alias=True, exclude_none=True)
+def behaviour_to_data(behaviour: Behaviour, *, defaults: bool = True) -> dict[str, Any]:
+    """The behaviour as JSON-compatible data with the file's keys, in the file's order.
+
+    ``defaults=False`` leaves out every value nobody set (e.g. the learning defaults of a
+    controller imported from FLL), so the file does not present them as choices.
+    """
+    data: dict[str, Any] = behaviour.model_dump(mode="json", by_alias=True, exclude_none=True,
+                                                exclude_unset=not defaults)
     if not data.get("description"):
         data.pop("description", None)
     return data
@@ -51,9 +56,9 @@ def _styled(value: Any, key: str = "") -> Any:
     return value
 
 
-def behaviour_to_yaml(behaviour: Behaviour, header: str = "") -> str:
+def behaviour_to_yaml(behaviour: Behaviour, header: str = "", *, defaults: bool = True) -> str:
     """A complete behaviour file; ``header`` lines become ``#`` comments at the top."""
-    body = yaml.dump(_styled(behaviour_to_data(behaviour)), Dumper=_Dumper, sort_keys=False,
-                     allow_unicode=True, width=100)
+    data = _styled(behaviour_to_data(behaviour, defaults=defaults))
+    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
     comment = "".join(f"# {line}".rstrip() + "\n" for line in header.splitlines())
     return comment + body

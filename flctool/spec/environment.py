@@ -10,7 +10,11 @@ from typing import Annotated, Literal
 
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator
 
+from flctool.errors import Problem
 from flctool.spec.base import Name, Section
+
+#: What the ballchase simulator observes; a behaviour's inputs are named after these.
+BALLCHASE_OBSERVATIONS = ("ball_size", "pan")
 
 
 class Pitch(Section):
@@ -183,6 +187,24 @@ class BallchaseSimConfig(Section):
                 f"{', '.join(missing)}; add e.g. '{missing[0]}: {{forward: 0, sideways: 0, "
                 "rotation: 0}' for a noiseless command")
         return noise
+
+    def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
+        """What keeps this simulator from running a behaviour with these inputs and commands.
+
+        Checked when a file is validated, so `flctool validate` catches it before a run.
+        """
+        problems = [
+            Problem(("inputs", name), f"the ballchase simulator has no observation '{name}'",
+                    "name the inputs after its observations: "
+                    + ", ".join(BALLCHASE_OBSERVATIONS))
+            for name in inputs if name not in BALLCHASE_OBSERVATIONS]
+        problems += [
+            Problem(("environment", "motion"), f"output command '{name}' has no motion",
+                    f"add '{name}: {{forward: mm, sideways: mm, rotation: deg}}' to "
+                    "environment.motion and its standard deviations to environment.noise "
+                    f"(the table has: {', '.join(self.motion)})")
+            for name in commands if name not in self.motion]
+        return problems
 
 
 class GymnasiumConfig(Section):

@@ -171,16 +171,16 @@ def test_bad_environment_is_a_located_error(env_yaml: str, path: str, message: s
 
 
 def test_command_without_motion_names_the_field() -> None:
+    # caught when the file is validated, not only when a run starts
     text = _with_environment("environment: {adapter: ballchase-sim}\n", rules=False)
-    behaviour = parse_behaviour(text.replace("    turn_left: 1.0\n",
-                                             "    turn_left: 1.0\n    kick: 2.0\n"))
-    with pytest.raises(SpecError, match=r"environment\.motion: output command 'kick'"):
-        make_env(behaviour)
+    with pytest.raises(SpecError, match=r"b.yaml:\d+:1: environment\.motion: output command "
+                                        r"'kick' has no motion"):
+        parse_behaviour(text.replace("    turn_left: 1.0\n", "    turn_left: 1.0\n    kick: 2.0\n"),
+                        "b.yaml")
 
 
 def test_unknown_observation_names_the_input() -> None:
     text = _with_environment("environment: {adapter: ballchase-sim}\n", rules=False)
-    behaviour = parse_behaviour(text.replace("  pan:\n", "  tilt:\n"))
-    with pytest.raises(SpecError, match=r"inputs\.tilt: the ballchase simulator has no "
-                                        r"observation 'tilt'"):
-        make_env(behaviour)
+    with pytest.raises(SpecError, match=r"b.yaml:\d+:3: inputs\.tilt: the ballchase simulator "
+                                        r"has no observation 'tilt'"):
+        parse_behaviour(text.replace("  pan:\n", "  tilt:\n"), "b.yaml")

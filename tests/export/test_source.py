@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -13,8 +12,6 @@ from flctool.errors import ExportError, RunDirError
 from flctool.export import load_source
 
 from .roundtrip import SHIPPED
-
-HAS_RUNS = importlib.util.find_spec("flctool.runs") is not None
 
 
 def test_a_behaviour_file_is_its_own_source() -> None:
@@ -33,13 +30,6 @@ def test_a_missing_source_is_named(tmp_path: Path) -> None:
         load_source(tmp_path / "nope.yaml")
 
 
-@pytest.mark.skipif(HAS_RUNS, reason="flctool.runs exists: run directories are read for real")
-def test_a_directory_without_run_support_is_a_run_dir_error(tmp_path: Path) -> None:
-    with pytest.raises(RunDirError, match="cannot read run directories"):
-        load_source(tmp_path)
-
-
-@pytest.mark.skipif(not HAS_RUNS, reason="flctool.runs (run directories) is not installed")
 def test_a_run_directory_gives_its_best_or_a_chosen_controller(tmp_path: Path) -> None:
     from typer.testing import CliRunner
 

@@ -31,3 +31,11 @@ def test_rules_are_written_one_per_line(minimal_text: str) -> None:
     text = behaviour_to_yaml(parse_behaviour(minimal_text))
     assert "- {if: {x: low}, then: up}" in text
     assert "low: [0.0, 0.0, 2.0, 6.0]" in text
+
+
+def test_defaults_can_be_left_out(minimal_text: str) -> None:
+    behaviour = parse_behaviour(minimal_text)
+    assert "learning:" in behaviour_to_yaml(behaviour)
+    lean = behaviour_to_yaml(behaviour, defaults=False)
+    assert "learning:" not in lean and "description" not in lean
+    assert parse_behaviour(lean) == behaviour
