@@ -229,9 +229,14 @@ class Run:
 
     # -- training ------------------------------------------------------------------------
     def train(self, callbacks: Iterable[Callback] = (), env: BatchEnv | None = None,
-              ) -> RunSummary:
-        """Train from the last checkpoint (or from scratch) to ``learning.generations``."""
-        learner = make_learner(self.behaviour, env)
+              learner: Learner | None = None) -> RunSummary:
+        """Train from the last checkpoint (or from scratch) to ``learning.generations``.
+
+        ``learner`` (made by :func:`~flctool.learners.make_learner` for this run's behaviour)
+        or ``env`` replace the ones built from the behaviour.
+        """
+        if learner is None:
+            learner = make_learner(self.behaviour, env)
         last = self.last_checkpoint()
         if last is not None:
             learner.load_state_dict(last)

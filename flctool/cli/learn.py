@@ -13,7 +13,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from flctool.cli.app import app, console, err_console, user_errors
 from flctool.errors import Problem, RunDirError, SpecError
-from flctool.learners import FunctionCallback, GenerationMetrics
+from flctool.learners import FunctionCallback, GenerationMetrics, Learner, make_learner
 from flctool.runs import Run, RunSummary, create_run, open_run, resolve_behaviour
 from flctool.spec import Behaviour, behaviour_to_data, load_behaviour
 
@@ -87,6 +87,7 @@ def learn(
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
     with user_errors():
+        learner_: Learner | None = None
         overrides = parse_assignments(set_ or [])
         for key, value in (("learner", learner), ("seed", seed), ("population", population)):
             if value is not None:
@@ -109,15 +110,16 @@ def learn(
                 overrides["generations"] = generations
             behaviour = resolve_behaviour(load_behaviour(file), overrides,
                                           f"{file} with command-line options")
+            learner_ = make_learner(behaviour)  # environment errors before any directory
             run = create_run(behaviour, out)
-        summary = _train(run, show_progress=not as_json)
+        summary = _train(run, learner_, show_progress=not as_json)
     if as_json:
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
 
 
-def _train(run: Run, show_progress: bool) -> RunSummary:
+def _train(run: Run, learner: Learner | None, show_progress: bool) -> RunSummary:
     config = run.behaviour.learning
     done = len(run.checkpoint_generations())
     progress = Progress(
@@ -132,7 +134,7 @@ def _train(run: Run, show_progress: bool) -> RunSummary:
                         mean=f"{metrics.mean:.3f}")
 
     with progress:
-        return run.train([FunctionCallback(advance)])
+        return run.train([FunctionCallback(advance)], learner=learner)
 
 
 def _report(summary: RunSummary) -> None:

@@ -126,3 +126,14 @@ def test_a_run_killed_mid_generation_resumes_bit_for_bit(tmp_path: Path) -> None
     assert metrics_without_wall_time(killed) == metrics_without_wall_time(whole)
     assert (killed / "best.yaml").read_text() == (whole / "best.yaml").read_text()
     assert (killed / "strengths.csv").read_text() == (whole / "strengths.csv").read_text()
+
+
+def test_a_behaviour_without_environment_leaves_no_run_directory(tmp_path: Path) -> None:
+    text = Path(BALLCHASE).read_text(encoding="utf-8")
+    stripped = text.replace("environment:\n  adapter: ballchase-sim\n", "")
+    assert stripped != text
+    file = tmp_path / "noenv.yaml"
+    file.write_text(stripped, encoding="utf-8")
+    result = runner.invoke(app, ["learn", str(file), "--out", str(tmp_path / "r")])
+    assert result.exit_code == 1 and "no 'environment' section" in result.stderr
+    assert not (tmp_path / "r").exists()
