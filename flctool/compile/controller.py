@@ -138,8 +138,9 @@ class Controller:
 
         table = self._consequents(consequents)
         array = self._as_states(states)
-        tables = table.reshape(-1, self.n_rules)
-        if not tables.flags.writeable:  # one compiled signature: writable C arrays
+        # One compiled signature: writable C-contiguous arrays.
+        tables = np.ascontiguousarray(table.reshape(-1, self.n_rules), dtype=np.intp)
+        if not tables.flags.writeable:
             tables = tables.copy()
         out = np.empty((tables.shape[0], array.shape[0]))
         layout = self._layout

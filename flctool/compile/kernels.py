@@ -218,8 +218,8 @@ def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
     n = strides.shape[0]
     population = table.shape[0]
     sets, mus, counts = _work(n, max_sets + 1)
-    rules = np.empty(1 << n, np.intp)
-    alphas = np.empty(1 << n)
+    rules = np.empty(64, np.intp)  # grown below when more rules fire
+    alphas = np.empty(64)
     for b in range(count):
         _compact(mu, b, offsets, sets, mus, counts)
         capacity = _capacity(counts)
