@@ -2,10 +2,13 @@
 
 All three learners spend nearly all their time here, so the loop works on plain Python floats
 and lists: with overlapping trapezoids only 2-4 of the M rules fire per state, and numpy's
-per-call overhead on arrays that small costs more than the arithmetic (``Controller.
-active_rules`` takes ~30 us a call, :meth:`SparseRules.fire` ~3 us). Everything the loop needs
-is passed in explicitly, so it can be replaced by a compiled version without touching the
-learners.
+per-call overhead (and array conversions) on lists that small costs more than the arithmetic.
+Everything the loop needs is passed in explicitly, so it can be replaced by a compiled version
+without touching the learners.
+
+The crisp output is computed with exactly the operations of :meth:`Controller.output` (both
+sums accumulated left to right in rule order, then one division), so the controller acts
+during learning bit for bit as the deployed one does.
 """
 
 from __future__ import annotations
@@ -35,8 +38,9 @@ class SparseRules:
         self._sets = [[tuple(float(v) for v in quad) for quad in quads]
                       for quads in controller.quadruples]
 
-    def fire(self, state: list[float]) -> tuple[list[int], list[float]]:
-        """Active rules of one state (N,) in increasing order, and their phi_m (eq. 2, 7)."""
+    def fire(self, state: list[float]) -> tuple[list[int], list[float], list[float]]:
+        """Active rules of one state (N,) in increasing order, their activations alpha_m
+        (eq. 2), and phi_m = alpha_m / sum(alpha) (eq. 7)."""
         rules = [0]
         alphas = [1.0]
         for value, low, high, sets in zip(state, self._lows, self._highs, self._sets,
@@ -56,13 +60,25 @@ class SparseRules:
             width = len(sets)
             rules = [r * width + j for r in rules for j, _ in mus]
             alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
-        total = sum(alphas)
-        return rules, [a / total for a in alphas]
+        total = _accumulate(alphas)
+        return rules, alphas, [a / total for a in alphas]
 
-    def output(self, phi: list[float], commands: list[int]) -> float:
-        """Crisp output of eq. 3 from the firing rules' phi and their command indices."""
+    def output(self, alphas: list[float], commands: list[int]) -> float:
+        """Crisp output of eq. 3 from the firing rules' activations and command indices."""
         singletons = self.singletons
-        return sum(p * singletons[k] for p, k in zip(phi, commands, strict=True))
+        numerator = 0.0
+        for a, k in zip(alphas, commands, strict=True):
+            numerator += a * singletons[k]
+        return numerator / _accumulate(alphas)
+
+
+def _accumulate(values: list[float]) -> float:
+    # Plain left-to-right addition, as the compiled kernels do (Python >= 3.12's sum() of
+    # floats is compensated, which would round differently).
+    total = 0.0
+    for value in values:
+        total += value
+    return total
 
 
 class Chooser(Protocol):
@@ -101,8 +117,7 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
     if td is not None:
         td.reset_traces()
     observations, _ = env.reset(np.array([seed], dtype=np.int64))
-    active, phi = rules.fire(observations[0].tolist())
-    singletons = rules.singletons
+    active, alphas, phi = rules.fire(observations[0].tolist())
     total = 0.0
     steps = 0
     action = np.empty(1, dtype=np.float64)
@@ -113,7 +128,7 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
             commands = [consequents[m] for m in active]
         else:
             raise ValueError("run_trial needs consequents or a chooser")
-        action[0] = sum(p * singletons[k] for p, k in zip(phi, commands, strict=True))  # eq. 3
+        action[0] = rules.output(alphas, commands)  # eq. 3
         out = env.step(action)
         reward = float(out.rewards[0])
         terminal = bool(out.terminated[0])
@@ -122,11 +137,12 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
         steps += 1
         if terminal:
             next_active: list[int] = []
+            next_alphas: list[float] = []
             next_phi: list[float] = []
         else:
-            next_active, next_phi = rules.fire(out.observations[0].tolist())
+            next_active, next_alphas, next_phi = rules.fire(out.observations[0].tolist())
         if td is not None:
             td.learn(active, phi, commands, reward, next_active, next_phi, terminal)
         if done:
             return Trial(total, steps, bool(env.success()[0]))
-        active, phi = next_active, next_phi
+        active, alphas, phi = next_active, next_alphas, next_phi

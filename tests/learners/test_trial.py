@@ -20,14 +20,16 @@ SPARSE = SparseRules(BALLCHASE)
 @settings(max_examples=200, deadline=None)
 @given(st.floats(-0.2, 1.2), st.floats(-120.0, 120.0))
 def test_fire_equals_controller_active_rules(size: float, pan: float) -> None:
-    rules, phi = SPARSE.fire([size, pan])
+    rules, alphas, phi = SPARSE.fire([size, pan])
     expected_rules, alpha = BALLCHASE.active_rules(np.array([size, pan]))
     assert rules == expected_rules.tolist()
+    assert alphas == alpha.tolist()
     assert phi == (alpha / alpha.sum()).tolist()
     assert BALLCHASE.consequents is not None
     commands = [int(BALLCHASE.consequents[m]) for m in rules]
-    crisp = BALLCHASE.output(np.array([[size, pan]]))[0]
-    assert SPARSE.output(phi, commands) == pytest.approx(crisp, abs=1e-12)
+    # the controller acts during learning exactly as the deployed one: same bits
+    assert SPARSE.output(alphas, commands) == BALLCHASE.output_one(np.array([size, pan]))
+    assert SPARSE.output(alphas, commands) == BALLCHASE.output(np.array([[size, pan]]))[0]
 
 
 def test_a_trial_runs_to_the_end_of_the_episode() -> None:
