@@ -56,3 +56,21 @@ def test_a_trial_needs_consequents_or_a_chooser() -> None:
     rules = SparseRules(compile_behaviour(line_behaviour()))
     with pytest.raises(ValueError, match="consequents or a chooser"):
         run_trial(LineEnv(), rules, 0, None)
+
+
+def test_a_learned_controller_acts_as_it_will_when_deployed() -> None:
+    # What learning measured for a controller (run_trial, one episode at a time) is what
+    # flctool evaluate measures for it once deployed (batched rollout): the same episodes.
+    from flctool.envs import make_env
+    from flctool.rollout import evaluate
+
+    behaviour = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
+    assert BALLCHASE.consequents is not None
+    consequents = BALLCHASE.consequents.tolist()
+    seeds = list(range(40))
+    deployed = evaluate(BALLCHASE, make_env(behaviour, len(seeds)), seeds)
+    env = make_env(behaviour)
+    learned = [run_trial(env, SPARSE, seed, consequents) for seed in seeds]
+    assert [t.length for t in learned] == deployed.lengths.tolist()
+    assert [t.ret for t in learned] == deployed.returns.tolist()
+    assert [t.success for t in learned] == deployed.success.tolist()
