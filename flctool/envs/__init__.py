@@ -27,6 +27,7 @@ class EnvFactory(Protocol):
 ENVIRONMENTS: Registry[EnvFactory] = Registry("environment adapter")
 ENVIRONMENTS.register("ballchase-sim", "flctool.envs.ballchase:BallchaseSim")
 ENVIRONMENTS.register("gymnasium", "flctool.envs.gym_adapter:GymnasiumEnv")
+ENVIRONMENTS.register("robot-link", "flctool.envs.robot_link:RobotLinkEnv")
 
 
 def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:

@@ -236,8 +236,34 @@ class GymnasiumConfig(Section):
         return mapping
 
 
+class RobotLinkConfig(Section):
+    """A real robot, or its bridge, over TCP (protocol: docs/robot-link.md).
+
+    The robot side owns the episode: its observations, commands and ``max_steps`` are checked
+    against the behaviour in the handshake, when the link connects.
+    """
+
+    adapter: Literal["robot-link"]
+    host: str = Field("127.0.0.1", min_length=1, description=(
+        "host name or IP address of the robot or its bridge"))
+    port: int = Field(ge=1, le=65535, description=(
+        "TCP port the robot's bridge listens on (flctool serve prints its port)"))
+    connect_timeout: float = Field(5.0, gt=0, description=(
+        "s to open the connection and receive the handshake reply"))
+    reset_timeout: float = Field(60.0, gt=0, description=(
+        "s to wait for the reply to reset: a real robot may need a person to place it and "
+        "the ball"))
+    step_timeout: float = Field(2.0, gt=0, description=(
+        "s to wait for the reply to each step (and to stop); longer means a fault: the "
+        "robot is sent stop and the run ends"))
+    retries: int = Field(2, ge=0, le=100, description=(
+        "further connection attempts after a refused or timed-out connect; steps are never "
+        "retried (a step moves the robot)"))
+    retry_delay: float = Field(1.0, ge=0, description="s between connection attempts")
+
+
 EnvironmentConfig = Annotated[
-    BallchaseSimConfig | GymnasiumConfig,
+    BallchaseSimConfig | GymnasiumConfig | RobotLinkConfig,
     Field(discriminator="adapter"),
 ]
-ADAPTER_NAMES = ("ballchase-sim", "gymnasium")
+ADAPTER_NAMES = ("ballchase-sim", "gymnasium", "robot-link")

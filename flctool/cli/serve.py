@@ -1,0 +1,48 @@
+"""``flctool serve``: the reference robot side of the robot link (a simulator behind a socket).
+
+It prints ``listening on HOST:PORT`` on stdout once it accepts connections (with ``--port 0``
+the system picks a free port), and logs connections and safe stops on stderr.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flctool.cli.app import app, user_errors
+from flctool.envs.robot_server import RobotServer, print_log
+from flctool.spec import load_behaviour
+
+
+@app.command()
+def serve(
+    file: Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True,
+                                         help="A behaviour file whose environment is a "
+                                         "simulator (e.g. adapter: ballchase-sim).")],
+    host: Annotated[str, typer.Option(help="Address to listen on; 0.0.0.0 for every "
+                                      "interface.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(min=0, max=65535, help="Port to listen on; 0 picks a "
+                                      "free one.")] = 0,
+    once: Annotated[bool, typer.Option("--once", help="Exit after the first client "
+                                       "disconnects.")] = False,
+    idle_timeout: Annotated[float, typer.Option(min=0.001, help="Seconds without a message "
+                                                "before the robot is stopped and the client "
+                                                "dropped.")] = 60.0,
+    max_batch: Annotated[int | None, typer.Option(min=1, help="Most episodes per reset, as a "
+                                                  "real robot (1) would have; default any.")]
+    = None,
+) -> None:
+    """Serve a behaviour's simulator over the robot-link protocol (docs/robot-link.md), for
+    trying the link without a robot and as an example for bridge writers."""
+    with user_errors():
+        behaviour = load_behaviour(file)
+        server = RobotServer.from_behaviour(
+            behaviour, host=host, port=port, idle_timeout=idle_timeout, max_batch=max_batch,
+            robot=f"flctool serve {behaviour.name}", log=print_log)
+        typer.echo(f"listening on {server.host}:{server.port}")
+        try:
+            server.serve(once=once)
+        finally:
+            server.close()
