@@ -20,7 +20,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +32,9 @@ from flctool.learners.callbacks import Callback, CallbackList
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.trial import SparseRules
 from flctool.spec.models import Behaviour
+
+if TYPE_CHECKING:  # fuzzy_q.py builds on this module
+    from flctool.learners.fuzzy_q import FuzzyQ
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -60,6 +63,8 @@ class Learner(ABC):
     name: ClassVar[str]
     #: Whether the learner keeps rule strengths (a q table) -- then :meth:`strengths` is set.
     uses_strengths: ClassVar[bool] = False
+    #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
+    fuzzy_q: FuzzyQ | None = None
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         self.behaviour = behaviour
@@ -87,15 +92,16 @@ class Learner(ABC):
 
     def strengths(self) -> FloatArray | None:
         """The q table (M, K), for learners that keep one."""
-        return None
+        return None if self.fuzzy_q is None else self.fuzzy_q.table()
 
     def extra_state(self) -> dict[str, Any]:
-        """Learner-specific checkpoint data (JSON-compatible)."""
-        return {}
+        """Learner-specific checkpoint data (JSON-compatible): the q table and traces."""
+        return {} if self.fuzzy_q is None else self.fuzzy_q.state_dict()
 
     def load_extra_state(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`extra_state` saved."""
-        del state
+        if self.fuzzy_q is not None:
+            self.fuzzy_q.load_state_dict(state)
 
     # -- shared helpers ------------------------------------------------------------------
     def best(self) -> tuple[int, IntArray, float]:

@@ -206,6 +206,7 @@ class FuzzyQLearner(Learner):
 
     name: ClassVar[str] = "fuzzy_q"
     uses_strengths: ClassVar[bool] = True
+    fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
@@ -246,12 +247,3 @@ class FuzzyQLearner(Learner):
 
     def advance(self) -> None:
         """Nothing to breed; the exploration schedule follows the generation number."""
-
-    def strengths(self) -> FloatArray:
-        return self.fuzzy_q.table()
-
-    def extra_state(self) -> dict[str, Any]:
-        return self.fuzzy_q.state_dict()
-
-    def load_extra_state(self, state: dict[str, Any]) -> None:
-        self.fuzzy_q.load_state_dict(state)

@@ -12,13 +12,13 @@ consequents; q only guides breeding.
 from __future__ import annotations
 
 from functools import partial
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from flctool.envs.base import BatchEnv
-from flctool.learners.base import FloatArray, GenerationResult, Learner
-from flctool.learners.fuzzy_q import new_fuzzy_q
+from flctool.learners.base import GenerationResult, Learner
+from flctool.learners.fuzzy_q import FuzzyQ, new_fuzzy_q
 from flctool.learners.ga import (
     GeneticAlgorithm,
     boltzmann_mutation,
@@ -34,6 +34,7 @@ class HybridLearner(Learner):
 
     name: ClassVar[str] = "hybrid"
     uses_strengths: ClassVar[bool] = True
+    fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
@@ -59,12 +60,3 @@ class HybridLearner(Learner):
             partial(strength_crossover, strengths=strengths),
             partial(boltzmann_mutation, rate=self.config.mutation, strengths=strengths,
                     temperature=self.config.q.temperature))
-
-    def strengths(self) -> FloatArray:
-        return self.fuzzy_q.table()
-
-    def extra_state(self) -> dict[str, Any]:
-        return self.fuzzy_q.state_dict()
-
-    def load_extra_state(self, state: dict[str, Any]) -> None:
-        self.fuzzy_q.load_state_dict(state)
