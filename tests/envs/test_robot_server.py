@@ -1,0 +1,244 @@
+"""The reference robot-side server, spoken to line by line over a real socket on 127.0.0.1."""
+
+from __future__ import annotations
+
+import json
+import socket
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+
+from flctool import load_behaviour
+from flctool.envs import make_env
+from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
+from flctool.envs.robot_link import PROTOCOL, VERSION
+from flctool.envs.robot_server import RobotServer
+from flctool.errors import EnvError
+from flctool.spec import behaviour_from_data, behaviour_to_data
+
+from ..conftest import BEHAVIOURS
+
+HANDMADE = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
+HELLO = {"type": "hello", "protocol": PROTOCOL, "version": VERSION, "behaviour": "test",
+         "observations": ["ball_size", "pan"], "commands": {}}
+
+
+class Client:
+    """A raw protocol client: one JSON line out, one JSON line back."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.lines = self.sock.makefile("rb")
+
+    def send(self, message: dict[str, Any] | bytes) -> None:
+        data = message if isinstance(message, bytes) else (json.dumps(message) + "\n").encode()
+        self.sock.sendall(data)
+
+    def receive(self) -> dict[str, Any] | None:
+        line = self.lines.readline()
+        return json.loads(line) if line else None
+
+    def ask(self, message: dict[str, Any] | bytes) -> dict[str, Any] | None:
+        self.send(message)
+        return self.receive()
+
+    def close(self) -> None:
+        self.lines.close()
+        self.sock.close()
+
+
+def start(env: BatchEnv | None = None, **options: Any) -> Iterator[RobotServer]:
+    server = (RobotServer(env, dict(HANDMADE.output.commands), **options) if env is not None
+              else RobotServer.from_behaviour(HANDMADE, **options))
+    thread = server.serve_in_background()
+    yield server
+    server.close()
+    thread.join(timeout=5)
+    assert not thread.is_alive()
+
+
+@pytest.fixture
+def server() -> Iterator[RobotServer]:
+    yield from start(idle_timeout=5.0)
+
+
+@pytest.fixture
+def client(server: RobotServer) -> Iterator[Client]:
+    talk = Client(server.port)
+    yield talk
+    talk.close()
+
+
+def test_the_welcome_describes_the_robot(server: RobotServer, client: Client) -> None:
+    welcome = client.ask(HELLO)
+    assert welcome == {"type": "welcome", "protocol": PROTOCOL, "version": VERSION,
+                       "robot": "flctool reference server", "observations": ["ball_size", "pan"],
+                       "commands": dict(HANDMADE.output.commands), "max_steps": 200,
+                       "max_batch": None, "features": ["fitness", "state"]}
+
+
+def test_reset_and_step_are_the_simulator_s(client: Client) -> None:
+    client.ask(HELLO)
+    sim = make_env(HANDMADE)
+    observations, _ = sim.reset(np.array([3, 4, 5]))
+    reply = client.ask({"type": "reset", "seeds": [3, 4, 5]})
+    assert reply == {"type": "reset", "observations": observations.tolist(),
+                     "success": [False] * 3}
+    out = sim.step(np.array([0.25, -1.0, 0.5]))
+    reply = client.ask({"type": "step", "actions": [0.25, -1, 0.5]})
+    assert reply == {"type": "step", "observations": out.observations.tolist(),
+                     "rewards": out.rewards.tolist(), "terminated": out.terminated.tolist(),
+                     "truncated": out.truncated.tolist(), "success": sim.success().tolist()}
+    state = client.ask({"type": "state"})
+    assert state is not None and state["state"]["robot_x"] == sim.trace_state()["robot_x"].tolist()
+    fitness = client.ask({"type": "fitness", "returns": [1, -1], "lengths": [20, 100],
+                          "success": [True, False]})
+    expected = sim.episode_fitness(np.array([1.0, -1.0]), np.array([20, 100]),
+                                   np.array([True, False]))
+    assert fitness == {"type": "fitness", "fitness": expected.tolist()}
+
+
+def test_stop_halts_the_robot_and_keeps_the_connection(server: RobotServer,
+                                                       client: Client) -> None:
+    client.ask(HELLO)
+    client.ask({"type": "reset", "seeds": [1]})
+    assert client.ask({"type": "stop", "reason": "done"}) == {"type": "stop"}
+    assert server.stops == ["the client sent stop (done)"]
+    reply = client.ask({"type": "step", "actions": [0.0]})
+    assert reply is not None and reply["code"] == "unexpected"
+    assert "step with no episode running" in reply["message"]
+    assert client.receive() is None  # every error ends the connection
+
+
+@pytest.mark.parametrize(("messages", "code", "text"), [
+    ([{"type": "reset", "seeds": [1]}], "unexpected", "expected 'hello' first"),
+    ([{**HELLO, "version": 2}], "version", "the client 'flctool-robot-link' version 2"),
+    ([HELLO, b"{not json\n"], "malformed", "not a JSON line"),
+    ([HELLO, {"type": "jump"}], "unexpected", "unknown message type 'jump'"),
+    ([HELLO, {"type": "reset", "seeds": []}], "malformed", "'seeds' must be a non-empty list"),
+    ([HELLO, {"type": "reset", "seeds": [1]}, {"type": "step", "actions": [0.0, 1.0]}],
+     "malformed", "'actions' must be numbers of shape [1]"),
+    ([HELLO, {"type": "reset", "seeds": [1]}, {"type": "step", "actions": ["left"]}],
+     "malformed", "'actions' must be numbers"),
+    ([HELLO, {"type": "fitness", "returns": [1], "lengths": [1, 2], "success": [True]}],
+     "malformed", "'lengths' must be numbers of shape [1]"),
+])
+def test_a_bad_message_is_answered_with_an_error_and_a_stop(
+        server: RobotServer, client: Client, messages: list[dict[str, Any] | bytes], code: str,
+        text: str) -> None:
+    for message in messages[:-1]:
+        client.ask(message)
+    reply = client.ask(messages[-1])
+    assert reply is not None and reply["type"] == "error" and reply["code"] == code
+    assert text in reply["message"]
+    assert client.receive() is None
+    assert server.stops and server.stops[-1].startswith(code)
+
+
+def test_a_client_that_disconnects_mid_episode_stops_the_robot(server: RobotServer) -> None:
+    halted: list[str] = []
+    server.on_stop = halted.append
+    client = Client(server.port)
+    client.ask(HELLO)
+    client.ask({"type": "reset", "seeds": [7]})
+    client.close()
+    follow = Client(server.port)  # served once the first client is gone
+    assert follow.ask(HELLO) is not None
+    follow.close()
+    assert halted == ["the client disconnected"] == server.stops
+
+
+def test_a_silent_client_is_timed_out_and_the_robot_stopped() -> None:
+    for server in start(idle_timeout=0.2):
+        client = Client(server.port)
+        client.ask(HELLO)
+        client.ask({"type": "reset", "seeds": [7]})
+        reply = client.receive()  # send nothing: the server's watchdog fires
+        assert reply is not None and reply["code"] == "timeout"
+        assert reply["message"] == "no message for 0.2 s"
+        assert server.stops == ["timeout: no message for 0.2 s"]
+        client.close()
+
+
+def test_a_robot_that_runs_one_episode_at_a_time_refuses_more() -> None:
+    for server in start(max_batch=1, idle_timeout=5.0):
+        client = Client(server.port)
+        welcome = client.ask(HELLO)
+        assert welcome is not None and welcome["max_batch"] == 1
+        reply = client.ask({"type": "reset", "seeds": [1, 2]})
+        assert reply is not None and reply["code"] == "batch"
+        client.close()
+
+
+class _Faulty(BatchEnv):
+    """An environment whose step fails, as a robot's driver might."""
+
+    observation_names = ("ball_size", "pan")
+    max_steps = 5
+    action_bounds = (-1.0, 1.0)
+
+    def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:
+        return np.zeros((seeds.shape[0], 2)), {}
+
+    def step(self, actions: FloatArray) -> Step:
+        raise EnvError("motor 3 overheated", hint="let it cool")
+
+    def success(self) -> BoolArray:
+        return np.zeros(1, dtype=bool)
+
+
+def test_an_environment_fault_is_reported_and_stops_the_robot() -> None:
+    for server in start(_Faulty(), idle_timeout=5.0):
+        client = Client(server.port)
+        client.ask(HELLO)
+        client.ask({"type": "reset", "seeds": [1]})
+        reply = client.ask({"type": "step", "actions": [0.0]})
+        assert reply == {"type": "error", "code": "robot",
+                         "message": "EnvError: motor 3 overheated (fix: let it cool)",
+                         "hint": "let it cool"}
+        assert server.stops == ["server error: motor 3 overheated (fix: let it cool)"]
+        client.close()
+
+
+def test_close_ends_a_connection_in_progress() -> None:
+    server = RobotServer.from_behaviour(HANDMADE, idle_timeout=30.0)
+    thread = server.serve_in_background()
+    client = Client(server.port)
+    client.ask(HELLO)
+    server.close()
+    reply = client.receive()
+    assert reply is not None and reply["code"] == "shutdown"
+    thread.join(timeout=5)
+    assert not thread.is_alive()
+    client.close()
+
+
+def test_the_server_refuses_to_serve_a_robot_link() -> None:
+    data = behaviour_to_data(HANDMADE)
+    data["environment"] = {"adapter": "robot-link", "port": 9}
+    with pytest.raises(EnvError, match="needs a simulator to serve"):
+        RobotServer.from_behaviour(behaviour_from_data(data))
+
+
+def test_a_taken_port_is_an_error(server: RobotServer) -> None:
+    with pytest.raises(EnvError, match=f"cannot listen on 127.0.0.1:{server.port}.*--port"):
+        RobotServer.from_behaviour(HANDMADE, port=server.port)
+
+
+def test_any_simulator_adapter_can_be_served() -> None:
+    cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
+    server = RobotServer.from_behaviour(cartpole, idle_timeout=5.0)
+    thread = server.serve_in_background(once=True)
+    client = Client(server.port)
+    welcome = client.ask({**HELLO, "observations": list(cartpole.input_names)})
+    assert welcome is not None and welcome["observations"] == list(cartpole.input_names)
+    sim = make_env(cartpole)
+    observations, _ = sim.reset(np.array([2]))
+    reply = client.ask({"type": "reset", "seeds": [2]})
+    assert reply is not None and reply["observations"] == observations.tolist()
+    client.close()
+    thread.join(timeout=5)  # --once: the server ends with its first client
+    assert not thread.is_alive()
