@@ -250,6 +250,7 @@ def test_an_error_from_the_robot_side_is_reported_with_its_hint() -> None:
     bridge.close()
 
 
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs POSIX signals")
 def test_an_interrupt_stops_the_robot_and_propagates() -> None:
     main = threading.main_thread().ident
     assert main is not None and threading.current_thread().ident == main
