@@ -93,6 +93,16 @@ class BallchaseSim(BatchEnv):
         self._values_list: list[float] = self._values.tolist()
         self._mean_list: list[list[float]] = self._mean.tolist()
         self._std_list: list[list[float]] = self._std.tolist()
+        # Constants of the scalar path, looked up once rather than through the config every step
+        # (the same values, so the same arithmetic).
+        self._nearest = config.action == "nearest" or len(order) == 1
+        self._offset = config.robot.neck_offset
+        self._size_noise = config.sensor_noise.ball_size
+        self._pan_noise = config.sensor_noise.pan
+        self._neck = config.robot.neck_range
+        self._neck_rad = config.robot.neck_range * _RAD
+        self._goal_distance = config.goal.distance
+        self._goal_bearing_rad = config.goal.bearing * _RAD
         robot = config.robot
         self._touch = config.ball.diameter / (2.0 * math.tan(robot.camera_fov * _RAD / 2.0))
         self._half = (config.pitch.length / 2.0, config.pitch.width / 2.0)
@@ -288,16 +298,15 @@ class BallchaseSim(BatchEnv):
     def _sense_one(self, x: float, y: float, cos_h: float, sin_h: float, z_size: float,
                    z_pan: float) -> tuple[float, float, float, float]:
         """:meth:`_sense` for one episode on floats."""
-        cfg = self.config
-        offset = cfg.robot.neck_offset
+        offset = self._offset
         dx = self._sbx - (x + offset * cos_h)
         dy = self._sby - (y + offset * sin_h)
         pan = math.atan2(dy * cos_h - dx * sin_h, dx * cos_h + dy * sin_h)
         distance = math.sqrt(dx * dx + dy * dy)
         size = min(1.0, self._touch / max(distance, 1e-9))
-        size = min(max(size * (1.0 + cfg.sensor_noise.ball_size * z_size), 0.0), 1.0)
-        neck = cfg.robot.neck_range
-        seen = min(max(pan * _DEG + cfg.sensor_noise.pan * z_pan, -neck), neck)
+        size = min(max(size * (1.0 + self._size_noise * z_size), 0.0), 1.0)
+        neck = self._neck
+        seen = min(max(pan * _DEG + self._pan_noise * z_pan, -neck), neck)
         return size, seen, distance, pan
 
     def _store_scalar(self, terminated: bool, truncated: bool, reached: bool) -> None:
@@ -313,11 +322,10 @@ class BallchaseSim(BatchEnv):
             return self.obs[0].copy(), 0.0, bool(self.terminated[0]), bool(self.truncated[0])
         if action != action:
             raise EnvError("the action is NaN", hint="check the controller's output")
-        cfg = self.config
         values = self._values_list
         count = len(values)
         a = min(max(action, values[0]), values[-1])
-        if cfg.action == "nearest" or count == 1:
+        if self._nearest:
             k = min(range(count), key=lambda i: abs(a - values[i]))
             mean, std = self._mean_list[k], self._std_list[k]
             mf, ms, mr = mean
@@ -343,9 +351,8 @@ class BallchaseSim(BatchEnv):
         y = self._sy + forward * sin_h + sideways * cos_h
         self._sx, self._sy, self._sh = x, y, heading
         size, seen, distance, pan = self._sense_one(x, y, cos_h, sin_h, zsize, zpan)
-        neck = cfg.robot.neck_range
-        reached = distance <= cfg.goal.distance and abs(pan) <= cfg.goal.bearing * _RAD
-        lost = not reached and (abs(pan) > neck * _RAD or abs(x) > self._half[0]
+        reached = distance <= self._goal_distance and abs(pan) <= self._goal_bearing_rad
+        lost = not reached and (abs(pan) > self._neck_rad or abs(x) > self._half[0]
                                 or abs(y) > self._half[1])
         self._st += 1
         truncated = not (reached or lost) and self._st >= self.max_steps

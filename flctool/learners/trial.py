@@ -16,8 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Protocol
 
-import numpy as np
-
 from flctool.compile import Controller
 from flctool.envs.base import BatchEnv
 
@@ -116,11 +114,11 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
     """
     if td is not None:
         td.reset_traces()
-    observations, _ = env.reset(np.array([seed], dtype=np.int64))
-    active, alphas, phi = rules.fire(observations[0].tolist())
+    # The B = 1 fast path of the adapter protocol: the same results as reset/step on arrays
+    # of one, without building them every step.
+    active, alphas, phi = rules.fire(env.reset_one(seed).tolist())
     total = 0.0
     steps = 0
-    action = np.empty(1, dtype=np.float64)
     while True:
         if chooser is not None:
             commands = chooser.choose(active)
@@ -128,11 +126,9 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
             commands = [consequents[m] for m in active]
         else:
             raise ValueError("run_trial needs consequents or a chooser")
-        action[0] = rules.output(alphas, commands)  # eq. 3
-        out = env.step(action)
-        reward = float(out.rewards[0])
-        terminal = bool(out.terminated[0])
-        done = terminal or bool(out.truncated[0])
+        observation, reward, terminal, truncated = env.step_one(
+            rules.output(alphas, commands))  # eq. 3
+        done = terminal or truncated
         total += reward
         steps += 1
         if terminal:
@@ -140,7 +136,7 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
             next_alphas: list[float] = []
             next_phi: list[float] = []
         else:
-            next_active, next_alphas, next_phi = rules.fire(out.observations[0].tolist())
+            next_active, next_alphas, next_phi = rules.fire(observation.tolist())
         if td is not None:
             td.learn(active, phi, commands, reward, next_active, next_phi, terminal)
         if done:
