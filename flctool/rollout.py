@@ -127,12 +127,27 @@ def _controller(controller: Controller, consequents: NDArray[np.integer] | None)
 def evaluate(controller: Controller, env: BatchEnv, seeds: NDArray[np.int64] | list[int],
              consequents: NDArray[np.integer] | None = None) -> EvaluationResult:
     """Run one episode per seed, all in lock-step, with the controller's rules (or the given
-    ``consequents (M,)``), and collect their outcomes."""
+    ``consequents (M,)``), and collect their outcomes.
+
+    An adapter that runs at most ``env.max_batch`` episodes at once (a real robot) gets the
+    seeds in chunks of that size, one chunk after another.
+    """
     flc = _controller(controller, consequents)
     seeds = np.asarray(seeds, dtype=np.int64).reshape(-1)
-    count = seeds.shape[0]
-    if count == 0:
+    if seeds.shape[0] == 0:
         raise EnvError("evaluate needs at least one seed")
+    chunk = env.max_batch or seeds.shape[0]
+    parts = [_run_lockstep(flc, env, seeds[i : i + chunk])
+             for i in range(0, seeds.shape[0], chunk)]
+    returns, lengths, success = (np.concatenate(column) for column in zip(*parts, strict=True))
+    return EvaluationResult(seeds, returns, lengths, success,
+                            env.episode_fitness(returns, lengths, success))
+
+
+def _run_lockstep(flc: Controller, env: BatchEnv, seeds: NDArray[np.int64],
+                  ) -> tuple[FloatArray, NDArray[np.int64], BoolArray]:
+    """Returns, lengths and success of one episode per seed, stepped together."""
+    count = seeds.shape[0]
     obs, _ = env.reset(seeds)
     returns = np.zeros(count)
     lengths = np.zeros(count, dtype=np.int64)
@@ -152,9 +167,7 @@ def evaluate(controller: Controller, env: BatchEnv, seeds: NDArray[np.int64] | l
     else:
         raise EnvError(f"episodes still running after max_steps = {env.max_steps} steps",
                        hint="the adapter must truncate episodes at max_steps")
-    success = env.success()
-    return EvaluationResult(seeds, returns, lengths, success,
-                            env.episode_fitness(returns, lengths, success))
+    return returns, lengths, env.success().copy()
 
 
 def trace_episode(controller: Controller, env: BatchEnv, seed: int,

@@ -233,15 +233,18 @@ class Run:
         """Train from the last checkpoint (or from scratch) to ``learning.generations``.
 
         ``learner`` (made by :func:`~flctool.learners.make_learner` for this run's behaviour)
-        or ``env`` replace the ones built from the behaviour.
+        or ``env`` replace the ones built from the behaviour. The environment is closed when
+        training ends, however it ends (a robot over a link is sent ``stop``).
         """
         if learner is None:
             learner = make_learner(self.behaviour, env)
-        last = self.last_checkpoint()
-        if last is not None:
-            learner.load_state_dict(last)
-        recorder = RunRecorder(self)
-        train(learner, [recorder, *callbacks])
+        try:
+            last = self.last_checkpoint()
+            if last is not None:
+                learner.load_state_dict(last)
+            train(learner, [RunRecorder(self), *callbacks])
+        finally:
+            learner.env.close()
         return self.summary()
 
     def summary(self) -> RunSummary:

@@ -31,3 +31,6 @@ def test_ballchase_pair_share_their_partitions() -> None:
     assert learned.inputs == handmade.inputs
     assert learned.output == handmade.output
     assert not learned.rules and handmade.is_deployable
+    robot = load_behaviour(BEHAVIOURS / "ballchase-robot.yaml")
+    assert robot.inputs == learned.inputs and robot.output == learned.output
+    assert robot.learning.generations == 20  # the paper's real-robot protocol

@@ -45,6 +45,9 @@ class BatchEnv(ABC):
     observation_names: tuple[str, ...]
     #: Steps after which an episode is truncated.
     max_steps: int
+    #: The most episodes the adapter runs at once (a real robot: 1); None for any number.
+    #: Callers with more seeds run them in chunks of this size.
+    max_batch: int | None = None
     #: [low, high] of the crisp output ``a`` the adapter expects (the commands' singletons).
     action_bounds: tuple[float, float]
 

@@ -7,14 +7,17 @@ import pytest
 
 from flctool import load_behaviour, parse_behaviour
 from flctool.envs import ENVIRONMENTS, BatchEnv, SingleEnv, check_env, make_env
+from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError
 from flctool.registry import UnknownNameError
+from flctool.spec import behaviour_from_data, behaviour_to_data
 from flctool.spec.environment import ADAPTER_NAMES
 
 from ..conftest import BEHAVIOURS, MINIMAL
 
 # One shipped behaviour per registered adapter.
-EXAMPLES = {"ballchase-sim": "ballchase.yaml", "gymnasium": "cartpole.yaml"}
+EXAMPLES = {"ballchase-sim": "ballchase.yaml", "gymnasium": "cartpole.yaml",
+            "robot-link": "ballchase-robot.yaml"}
 
 
 def test_every_adapter_has_a_config_and_an_example() -> None:
@@ -26,7 +29,21 @@ def test_every_registered_adapter_passes_the_checker(adapter: str) -> None:
     behaviour = load_behaviour(BEHAVIOURS / EXAMPLES[adapter])
     assert behaviour.environment is not None
     assert behaviour.environment.adapter == adapter
-    check_env(lambda: make_env(behaviour, 3), batch_size=3)
+    if adapter != "robot-link":
+        check_env(lambda: make_env(behaviour, 3), batch_size=3)
+        return
+    # The link needs a robot: the reference server, on a free port of this machine.
+    robot = RobotServer.from_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"), port=0,
+                                       idle_timeout=5.0)
+    thread = robot.serve_in_background()
+    try:
+        data = behaviour_to_data(behaviour)
+        data["environment"]["port"] = robot.port
+        linked = behaviour_from_data(data)
+        check_env(lambda: make_env(linked, 3), batch_size=3)
+    finally:
+        robot.close()
+        thread.join(timeout=5)
 
 
 def test_single_env_wraps_a_batch_of_one() -> None:

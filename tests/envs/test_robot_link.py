@@ -128,6 +128,24 @@ def test_evaluate_over_the_link_equals_the_simulator_bit_for_bit(server: RobotSe
     assert "robot_x" in remote_trace[0]
 
 
+def test_a_one_episode_robot_is_evaluated_episode_after_episode() -> None:
+    # A real robot runs one episode at a time: evaluate then takes the seeds one by one.
+    robot = RobotServer.from_behaviour(HANDMADE, port=0, idle_timeout=5.0, max_batch=1)
+    thread = robot.serve_in_background()
+    try:
+        controller = compile_behaviour(HANDMADE)
+        seeds = evaluation_seeds(4, 6)
+        with RobotLinkEnv.from_behaviour(link_behaviour(HANDMADE, robot.port)) as link:
+            assert link.max_batch == 1
+            remote = evaluate(controller, link, seeds)
+        local = evaluate(controller, make_env(HANDMADE), seeds)
+        for field in ("returns", "lengths", "success", "fitness"):
+            assert np.array_equal(getattr(remote, field), getattr(local, field)), field
+    finally:
+        robot.close()
+        thread.join(timeout=5)
+
+
 def test_the_one_episode_path_equals_the_simulator(server: RobotServer) -> None:
     link = make_env(link_behaviour(HANDMADE, server.port))
     sim = make_env(HANDMADE)
