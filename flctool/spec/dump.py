@@ -34,7 +34,12 @@ class _FlowMap(dict[str, Any]):
     """A mapping written on one line: ``{if: {...}, then: forward}``."""
 
 
-class _Dumper(yaml.SafeDumper):
+# libyaml's emitter writes the same text about 4x faster than the pure-Python one, which
+# matters for run directories (best.yaml after every generation).
+_SafeDumper: type[yaml.SafeDumper] = getattr(yaml, "CSafeDumper", yaml.SafeDumper)
+
+
+class _Dumper(_SafeDumper):  # type: ignore[valid-type,misc]
     pass
 
 
