@@ -128,4 +128,6 @@ def test_pitt_crossovers_mix_the_parents() -> None:
     assert set(child.tolist()) <= {0, 4}
     cut = one_point_crossover(rng, a, b)
     first_b = int(np.argmax(cut == 4))
-    assert 1 <= first_b <= 14 and (cut[:first_b] == 0).all() and (cut[first_b:] == 4).all()
+    # one cut strictly inside: a's genes before it, b's after
+    assert first_b in range(1, 15)
+    assert (cut[:first_b] == 0).all() and (cut[first_b:] == 4).all()
