@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -43,6 +44,11 @@ def read_states(
                 values[r, c] = float(row[i])
             except ValueError:
                 problems.append(Problem((columns[c],), f"'{row[i]}' is not a number",
+                                        file=file, line=line, column=i + 1))
+                continue
+            if math.isnan(values[r, c]):
+                problems.append(Problem((columns[c],), "NaN is a missing reading, not a value",
+                                        "filter or replace missing readings",
                                         file=file, line=line, column=i + 1))
     if problems:
         raise SpecError(problems, file)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -12,6 +13,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from flctool import __version__
+from flctool.atomic import write_text_atomic
 from flctool.errors import FlcError, SpecError
 
 app = typer.Typer(
@@ -54,6 +56,27 @@ def print_error(error: FlcError) -> None:
             err_console.print(f"  {escape(str(problem))}", highlight=False)
         return
     err_console.print(f"[bold red]error:[/] {escape(str(error))}", highlight=False)
+
+
+def read_user_file(path: Path, what: str) -> str:
+    """The text of a file the user named; an unreadable one is a clear error, not a traceback."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as error:
+        raise FlcError(f"{path}: the {what} is not UTF-8 text (byte {error.start})",
+                       hint="save it as UTF-8 text") from None
+    except OSError as error:
+        raise FlcError(f"cannot read the {what} {path}: {error.strerror}",
+                       hint="check the path") from None
+
+
+def write_user_file(path: Path, text: str, what: str) -> None:
+    """Write ``text`` atomically where the user asked; failures are clear errors."""
+    try:
+        write_text_atomic(path, text)
+    except OSError as error:
+        raise FlcError(f"cannot write the {what} {path}: {error.strerror}",
+                       hint="check that the folder exists and is writable") from None
 
 
 @contextmanager

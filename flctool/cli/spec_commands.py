@@ -6,13 +6,18 @@ import sys
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.markup import escape
 from rich.table import Table
 
-from flctool.atomic import write_text_atomic
-from flctool.cli.app import app, console, err_console, print_error, user_errors
+from flctool.cli.app import (
+    app,
+    console,
+    print_error,
+    read_user_file,
+    user_errors,
+    write_user_file,
+)
 from flctool.compile import compile_behaviour
 from flctool.errors import FlcError
 from flctool.spec import Behaviour, load_behaviour
@@ -105,19 +110,15 @@ def infer(
         if input == "-":
             text, source = sys.stdin.read(), "<stdin>"
         else:
-            path = Path(input)
-            if not path.is_file():
-                err_console.print(f"[bold red]error:[/] no such file: {escape(input)}")
-                raise typer.Exit(2)
-            text, source = path.read_text(encoding="utf-8"), input
+            text, source = read_user_file(Path(input), "states CSV"), input
         header, rows, states = read_states(text, controller.input_names, source)
-        values = controller.output(states) if len(states) else np.empty(0)
+        values = controller.output(states)
         result = write_table([*header, controller.output_name],
                              [[*row, repr(float(v))] for row, v in zip(rows, values, strict=True)])
         if output is None:
             sys.stdout.write(result)
         else:
-            write_text_atomic(output, result)
+            write_user_file(output, result, "output CSV")
 
 
 @app.command()
@@ -128,15 +129,17 @@ def schema(
 ) -> None:
     """Write the behaviour JSON Schema generated from the models (or check it is current)."""
     text = behaviour_schema_text()
-    if check:
-        current = path.read_text(encoding="utf-8") if path.is_file() else None
-        if current != text:
-            err_console.print(f"[bold red]error:[/] {escape(str(path))} is "
-                              f"{'missing' if current is None else 'stale'}; "
-                              "run 'flctool schema' and commit the result")
-            raise typer.Exit(1)
-        console.print(f"[green]ok[/] {escape(str(path))} is up to date")
-        return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(path, text)
+    with user_errors():
+        if check:
+            current = read_user_file(path, "schema") if path.is_file() else None
+            if current != text:
+                raise FlcError(f"{path} is {'missing' if current is None else 'stale'}",
+                               hint="run 'flctool schema' and commit the result")
+            console.print(f"[green]ok[/] {escape(str(path))} is up to date")
+            return
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise FlcError(f"cannot create the folder {path.parent}: {error.strerror}") from None
+        write_user_file(path, text, "schema")
     console.print(f"wrote {escape(str(path))}")

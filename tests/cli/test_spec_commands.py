@@ -125,20 +125,45 @@ def test_infer_missing_column_and_nan(tmp_path: Path) -> None:
     assert "lacks the column(s) pan" in result.output
     result = runner.invoke(app, ["infer", path], input="ball_size,pan\n0.2,nan\n")
     assert result.exit_code == 1
-    assert "input 'pan' is NaN in state 0" in result.output
+    assert "<stdin>:2:2: pan: NaN is a missing reading, not a value" in result.output
 
 
 def test_infer_on_a_behaviour_still_to_learn() -> None:
-    result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase.yaml")],
-                           input="ball_size,pan\n0.2,1\n")
-    assert result.exit_code == 1
-    assert "not deployable" in result.output
+    for states in ("ball_size,pan\n0.2,1\n", "ball_size,pan\n"):
+        result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase.yaml")],
+                               input=states)
+        assert result.exit_code == 1
+        assert "not deployable" in result.output
+
+
+def test_infer_file_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
+    path = str(BEHAVIOURS / "ballchase-handmade.yaml")
+    binary = tmp_path / "states.csv"
+    binary.write_bytes(b"ball_size,pan\n\xff,1\n")
+    cases = [
+        (["-i", str(binary)], "the states CSV is not UTF-8 text"),
+        (["-i", str(tmp_path / "none.csv")], "cannot read the states CSV"),
+        (["-i", str(tmp_path)], "cannot read the states CSV"),
+        (["-o", str(tmp_path / "missing" / "out.csv")], "cannot write the output CSV"),
+        (["-o", str(tmp_path)], "cannot write the output CSV"),
+    ]
+    for options, message in cases:
+        result = runner.invoke(app, ["infer", path, *options], input="ball_size,pan\n0.1,2\n")
+        assert result.exit_code == 1, options
+        assert message in result.output, (options, result.output)
+        assert result.exc_info is None or result.exc_info[0] is SystemExit
 
 
 def test_schema_check_passes_on_the_committed_file() -> None:
     result = runner.invoke(app, ["schema", "--check", "--path",
                                  str(ROOT / "schemas" / "behaviour.schema.json")])
     assert result.exit_code == 0, result.output
+
+
+def test_schema_to_an_unwritable_place(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["schema", "--path", str(tmp_path)])
+    assert result.exit_code == 1
+    assert "cannot write the schema" in result.output
 
 
 def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
