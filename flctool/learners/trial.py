@@ -18,6 +18,7 @@ from typing import Protocol
 
 from flctool.compile import Controller
 from flctool.envs.base import BatchEnv
+from flctool.errors import InferenceError
 
 
 class SparseRules:
@@ -31,6 +32,7 @@ class SparseRules:
         self.n_rules = controller.n_rules
         self.n_commands = controller.n_commands
         self.singletons: list[float] = [float(v) for v in controller.singletons]
+        self._names = controller.input_names
         self._lows = [float(v) for v in controller.ranges[:, 0]]
         self._highs = [float(v) for v in controller.ranges[:, 1]]
         self._sets = [[tuple(float(v) for v in quad) for quad in quads]
@@ -41,8 +43,12 @@ class SparseRules:
         (eq. 2), and phi_m = alpha_m / sum(alpha) (eq. 7)."""
         rules = [0]
         alphas = [1.0]
-        for value, low, high, sets in zip(state, self._lows, self._highs, self._sets,
-                                          strict=True):
+        for i, (value, low, high, sets) in enumerate(zip(state, self._lows, self._highs,
+                                                         self._sets, strict=True)):
+            if value != value:  # NaN: every comparison below would be false
+                raise InferenceError(f"the environment observed NaN for input "
+                                     f"'{self._names[i]}'",
+                                     hint="NaN has no membership; fix the adapter's sensor")
             s = low if value < low else high if value > high else value  # clip to the range
             mus = []
             for j, (pa, pb, pc, pd) in enumerate(sets):

@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.errors import InferenceError
 from flctool.learners.fuzzy_q import FuzzyQ
 from flctool.learners.trial import SparseRules, run_trial
 from tests.conftest import BEHAVIOURS
@@ -74,3 +75,8 @@ def test_a_learned_controller_acts_as_it_will_when_deployed() -> None:
     assert [t.length for t in learned] == deployed.lengths.tolist()
     assert [t.ret for t in learned] == deployed.returns.tolist()
     assert [t.success for t in learned] == deployed.success.tolist()
+
+
+def test_a_nan_observation_is_an_error_as_in_the_controller() -> None:
+    with pytest.raises(InferenceError, match="observed NaN for input 'ball_size'"):
+        SPARSE.fire([float("nan"), 10.0])
