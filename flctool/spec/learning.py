@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationInfo, field_validator
 
 from flctool.registry import did_you_mean
 from flctool.spec.base import Section
@@ -51,6 +51,16 @@ class LearningConfig(Section):
         "every individual of a generation gets the same start states"))
     q: QConfig = QConfig()
     exploration: ExplorationConfig = ExplorationConfig()
+
+    @field_validator("elites")
+    @classmethod
+    def _room_to_evolve(cls, elites: int, info: ValidationInfo) -> int:
+        population = info.data.get("population")
+        if population is not None and elites >= population:
+            raise ValueError(f"{elites} elites in a population of {population} copy every "
+                             "individual unchanged, so nothing evolves; keep elites below "
+                             "the population (the paper copies 1)")
+        return elites
 
     @field_validator("learner")
     @classmethod

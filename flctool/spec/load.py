@@ -84,11 +84,26 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     # A discriminated union puts the chosen tag into the path; the file does not have it.
     if len(loc) >= 2 and loc[0] == "environment" and loc[1] in ADAPTER_NAMES:
         del loc[1]
+    raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
         message = (f"'{loc[-1]}' is not a valid name: use letters, digits and _ only, "
                    "starting with a letter or _")
         hint = "rename it, e.g. far_left instead of far-left"
+    elif raw is not None and kind in ("string_type", "float_type", "int_type"):
+        if raw:
+            reads = "null" if raw in ("~", "null", "Null", "NULL") else "a boolean"
+            message = f"'{raw}' reads as {reads} in YAML"
+            hint = f"write it in quotes, '{raw}', if it is a name"
+        else:
+            message, hint = "no value is given", "write the value after the colon"
+    elif kind in ("missing", "too_short", "too_long") and _is_tuple_item(loc, kind):
+        if kind != "too_long":
+            loc = loc[:-1]
+        what = "a range needs 2 numbers [low, high]" if loc[-1] == "range" else (
+            "a set needs 4 numbers [pa, pb, pc, pd]")
+        message = f"{what}; this one has {'more' if kind == 'too_long' else 'fewer'}"
+        hint = "write all of them, in order"
     elif kind == "missing":
         message = f"required field '{loc[-1]}' is missing"
         hint = f"add '{loc[-1]}:' here"
@@ -115,6 +130,13 @@ def _translate(error: Any, source: SourceMap) -> Problem:
         if not isinstance(got, (dict, list)):
             message = f"{message[0].lower()}{message[1:]}, got {got!r}"
     return source.problem(tuple(loc), message, hint)
+
+
+def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:
+    """Whether the error is about the length of a range pair or a set quadruple."""
+    if kind == "missing":
+        return len(loc) >= 2 and isinstance(loc[-1], int)
+    return len(loc) >= 2 and (loc[-1] == "range" or loc[-2] == "sets")
 
 
 def _allowed_keys(path: list[PathPart], error: Any) -> list[str]:

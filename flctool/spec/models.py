@@ -70,7 +70,8 @@ class Rule(Section):
 class Behaviour(Section):
     """A whole behaviour file. Build it with :func:`flctool.load_behaviour`."""
 
-    flctool: int = Field(description=f"file format version; this flctool writes {FORMAT_VERSION}")
+    flctool: int = Field(strict=True, description=(
+        f"file format version; this flctool writes {FORMAT_VERSION}"))
     name: Name
     description: str = ""
     inputs: dict[Name, InputVariable] = Field(min_length=1, description=(

@@ -36,6 +36,9 @@ class SourceMap:
 
     file: str
     marks: dict[Path, tuple[int, int]] = field(default_factory=dict)
+    #: The text of plain scalars that YAML read as booleans or null (``off``, ``yes``, ``~``),
+    #: so a message can say what the user wrote.
+    raw: dict[Path, str] = field(default_factory=dict)
 
     def locate(self, path: Path) -> tuple[int | None, int | None]:
         """The position of ``path``, or of its nearest ancestor that the file has."""
@@ -71,12 +74,14 @@ class _Builder:
         if isinstance(node, yaml.MappingNode):
             result: dict[Any, Any] = {}
             for key_node, value_node in node.value:
-                key = self.build(key_node, (*path, "<key>"))
-                if not isinstance(key, (str, int, float, bool)) or key is None:
+                # Every key of a behaviour file is a name or a field, so a key is the text
+                # written: `off:` is the name "off", not YAML 1.1's boolean false.
+                if not isinstance(key_node, yaml.ScalarNode) or key_node.tag not in _PLAIN_TAGS:
                     self.problems.append(self.source.problem(
-                        path, f"a key must be a plain value, not {type(key).__name__}"))
+                        path, "a key must be a plain name", "write the key as plain text"))
                     continue
-                key_path = (*path, key if isinstance(key, str) else str(key))
+                key = str(key_node.value)
+                key_path = (*path, key)
                 if key in result:
                     first_line = self.source.marks[key_path][0]
                     self.problems.append(Problem(
@@ -91,7 +96,10 @@ class _Builder:
             return result
         if isinstance(node, yaml.SequenceNode):
             return [self.build(item, (*path, i)) for i, item in enumerate(node.value)]
-        return self.scalars.construct_object(node, deep=True)
+        value = self.scalars.construct_object(node, deep=True)
+        if (value is None or isinstance(value, bool)) and isinstance(node, yaml.ScalarNode):
+            self.source.raw[path] = str(node.value)
+        return value
 
 
 def read_yaml(text: str, file: str) -> tuple[Any, SourceMap]:

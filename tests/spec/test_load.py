@@ -121,6 +121,20 @@ BAD = [
     ("not a mapping", "- just\n- a list\n", 1, "", "a behaviour file must be a mapping"),
     ("output named like an input", GOOD.replace("name: turn", "name: pan"), 16,
      "output.name", "the output is named 'pan', like an input"),
+    ("three numbers for a set", GOOD.replace("[0.4, 0.8, 1, 1]", "[0.4, 0.8, 1]"), 8,
+     "inputs.size.sets.large", "a set needs 4 numbers [pa, pb, pc, pd]; this one has fewer"),
+    ("five numbers for a set", GOOD.replace("[0.4, 0.8, 1, 1]", "[0.4, 0.8, 1, 1, 1]"), 8,
+     "inputs.size.sets.large", "a set needs 4 numbers [pa, pb, pc, pd]; this one has more"),
+    ("one number for a range", GOOD.replace("range: [0, 1]", "range: [0]"), 5,
+     "inputs.size.range", "a range needs 2 numbers [low, high]; this one has fewer"),
+    ("a YAML boolean as a name", GOOD.replace("then: left}", "then: off}"), 20,
+     "rules.1.then", "'off' reads as a boolean in YAML"),
+    ("an empty value", GOOD.replace("name: chase", "name:"), 2,
+     "name", "no value is given"),
+    ("a version that is not a number", GOOD.replace("flctool: 1", "flctool: '1'"), 1,
+     "flctool", "input should be a valid integer"),
+    ("elites fill the population", GOOD + "learning: {population: 4, elites: 4}\n", 23,
+     "learning.elites", "4 elites in a population of 4 copy every individual unchanged"),
 ]
 
 
@@ -171,6 +185,14 @@ def test_empty_file(tmp_path: Path) -> None:
     path.write_text("")
     with pytest.raises(SpecError, match="must be a mapping, but this is empty"):
         load_behaviour(path)
+
+
+def test_keys_are_the_text_written() -> None:
+    # YAML 1.1 reads a bare `off` as false; as a key in a behaviour file it is a name.
+    text = (GOOD.replace("commands: {right: -1, ahead: 0, left: 1}",
+                         "commands: {right: -1, off: 0, left: 1}")
+            .replace("then: ahead}", "then: 'off'}"))
+    assert list(parse_behaviour(text).output.commands) == ["right", "off", "left"]
 
 
 def test_anchors_of_plain_data_are_fine() -> None:
