@@ -108,7 +108,9 @@ class EvaluationResult:
 
 def evaluation_seeds(seed: int, episodes: int) -> NDArray[np.int64]:
     """``episodes`` distinct episode seeds drawn from ``seed`` (what ``flctool evaluate
-    --seed`` uses), so evaluations with different seeds share no episodes."""
+    --seed`` uses). Evaluations with different seeds almost surely share no episode (two
+    draws of 1,000 from 2^31 - 1 overlap with probability ~5e-4), and never share one with
+    training, whose seeds are >= 2^32."""
     if episodes < 1:
         raise EnvError(f"episodes must be at least 1, got {episodes}")
     rng = np.random.default_rng(seed)

@@ -383,7 +383,7 @@ class BallchaseSim(BatchEnv):
         return np.where(np.asarray(success, dtype=bool), 2.0 - fraction, failure)
 
     def trace_state(self) -> dict[str, FloatArray]:
-        """Robot pose (mm, deg in (-180, 180]) and ball position, each (B,)."""
+        """Robot pose (mm, deg in [-180, 180)) and ball position, each (B,)."""
         heading = np.remainder(self.heading * _DEG + 180.0, 360.0) - 180.0
         return {"robot_x": self.x.copy(), "robot_y": self.y.copy(), "robot_heading": heading,
                 "ball_x": self.ball_x.copy(), "ball_y": self.ball_y.copy()}
