@@ -1,0 +1,34 @@
+"""Coverage of an input's range by its sets: where membership is 0 everywhere."""
+
+from __future__ import annotations
+
+import pytest
+
+from flctool.spec.checks import uncovered_gap
+from flctool.spec.models import InputVariable
+
+
+def _gap(sets: dict[str, list[float]], lo: float = 0.0, hi: float = 1.0) -> object:
+    return uncovered_gap(InputVariable.model_validate({"range": [lo, hi], "sets": sets}))
+
+
+@pytest.mark.parametrize(("sets", "gap"), [
+    # overlapping shoulders and a triangle: covered
+    ({"a": [0, 0, 0.2, 0.5], "b": [0.3, 0.5, 0.5, 0.7], "c": [0.5, 0.8, 1, 1]}, None),
+    # a foot touching the next set's shoulder: that point is in the shoulder, covered
+    ({"a": [0, 0, 0.2, 0.5], "b": [0.2, 0.5, 1, 1]}, None),
+    # two feet meeting at 0.5: membership 0 at exactly that point
+    ({"a": [0, 0, 0.2, 0.5], "b": [0.5, 0.7, 1, 1]}, (0.5, 0.5)),
+    # a stretch nobody covers
+    ({"a": [0, 0, 0.2, 0.3], "b": [0.4, 0.7, 1, 1]}, (0.3, 0.4)),
+    # the range's ends need a vertical edge (shoulder) to have membership > 0
+    ({"a": [0, 0.1, 0.5, 1]}, (0.0, 0.0)),
+    ({"a": [0, 0, 0.5, 1]}, (1.0, 1.0)),
+    ({"a": [0, 0, 1, 1]}, None),
+    # a vertical edge inside the range covers its own point
+    ({"a": [0, 0, 0.5, 0.5], "b": [0.5, 1, 1, 1]}, None),
+    # order in the file does not matter
+    ({"c": [0.5, 0.8, 1, 1], "a": [0, 0, 0.2, 0.6]}, None),
+])
+def test_uncovered_gap(sets: dict[str, list[float]], gap: object) -> None:
+    assert _gap(sets) == gap
