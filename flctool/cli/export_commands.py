@@ -10,11 +10,10 @@ import typer
 from rich.markup import escape
 
 from flctool import __version__
-from flctool.atomic import write_text_atomic
 from flctool.cli.app import app, console, user_errors
 from flctool.errors import ExportError
 from flctool.export import EXPORTERS, IMPORTERS, ExportOptions, load_source
-from flctool.export.base import check_writable
+from flctool.export.base import comment_safe, write_files
 from flctool.export.imported import imported_yaml
 
 Force = Annotated[bool, typer.Option("--force", help="Overwrite an existing output file.")]
@@ -75,14 +74,9 @@ def import_controller(
                               hint="name it .fll, .fcl or .fis, or pass --format")
         behaviour = IMPORTERS.get(name)().from_file(file)
         text = imported_yaml(behaviour, f"{behaviour.name}: imported by flctool {__version__} "
-                             f"from {file}")
+                             f"from {comment_safe(file)}")
         if output is None:
             sys.stdout.write(text)
             return
-        check_writable(output, force=force)
-        try:
-            write_text_atomic(output, text)
-        except OSError as exc:
-            raise ExportError(f"cannot write {output}: {exc.strerror or exc}",
-                              hint="choose another path with -o") from None
+        write_files({output: text}, force=force)
     console.print(f"wrote {escape(str(output))}")

@@ -9,6 +9,9 @@ format name in :mod:`flctool.export`.
 from __future__ import annotations
 
 import os
+import re
+import secrets
+import stat
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -16,7 +19,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from flctool import __version__
-from flctool.atomic import write_text_atomic
+from flctool.atomic import regular_target, write_text_atomic
 from flctool.errors import ExportError
 from flctool.spec import Behaviour
 
@@ -44,8 +47,6 @@ class Exporter(ABC):
 
     #: The format's name in the registry and on the command line.
     format: ClassVar[str]
-    #: The file name suffix of the format, with its dot.
-    suffix: ClassVar[str]
 
     def __init__(self, options: ExportOptions | None = None) -> None:
         self.options = options or ExportOptions()
@@ -65,23 +66,13 @@ class Exporter(ABC):
         Everything is checked before anything is written: the controller must be exportable,
         no target may exist unless ``force``, and the folder must exist and be writable.
         """
-        texts = self.texts(behaviour, Path(path))
-        for target in texts:
-            check_writable(target, force=force)
-        for target, text in texts.items():
-            try:
-                write_text_atomic(target, text)
-            except OSError as exc:
-                raise ExportError(f"cannot write {target}: {exc.strerror or exc}",
-                                  hint="choose another path with -o") from None
-        return list(texts)
+        return write_files(self.texts(behaviour, Path(path)), force=force)
 
 
 class Importer(ABC):
     """Reads the subset of one format that flctool can express."""
 
     format: ClassVar[str]
-    suffix: ClassVar[str]
 
     @abstractmethod
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
@@ -98,10 +89,65 @@ class Importer(ABC):
         return self.from_string(text, str(path))
 
 
+def write_files(texts: Mapping[Path, str], *, force: bool) -> list[Path]:
+    """Write every file or none: check all targets, then write them (see :func:`replace_all`).
+
+    Returns the files written; an OSError becomes an ExportError naming the file.
+    """
+    for target in texts:
+        check_writable(target, force=force)
+    try:
+        if len(texts) == 1:
+            [(target, text)] = texts.items()
+            write_text_atomic(target, text)
+        else:
+            replace_all({target: text.encode("utf-8") for target, text in texts.items()})
+    except OSError as exc:
+        where = exc.filename or ", ".join(map(str, texts))
+        raise ExportError(f"cannot write {where}: {exc.strerror or exc}",
+                          hint="choose another path with -o") from None
+    return list(texts)
+
+
+def replace_all(contents: Mapping[Path, bytes]) -> None:
+    """Write several files as nearly at once as the file system allows.
+
+    Each file is written in full to a temporary file beside its target first, with the
+    permissions :mod:`flctool.atomic` gives (the replaced file's mode, else 0o666 less the
+    umask); only when every one is on disk are they renamed over their targets, one
+    ``os.replace`` each. Any error before the renames removes the temporary files and leaves
+    every target as it was.
+    """
+    staged: list[tuple[Path, Path]] = []
+    try:
+        for path, data in contents.items():
+            target = regular_target(path)
+            tmp = target.with_name(f".{target.name}.{secrets.token_hex(4)}.tmp")
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+            staged.append((tmp, target))
+            with os.fdopen(fd, "wb") as handle:
+                handle.write(data)
+                handle.flush()
+                if target.exists():
+                    os.fchmod(handle.fileno(), stat.S_IMODE(target.stat().st_mode))
+                os.fsync(handle.fileno())
+    except BaseException:
+        for tmp, _ in staged:
+            tmp.unlink(missing_ok=True)
+        raise
+    for tmp, target in staged:
+        os.replace(tmp, target)
+
+
 def check_writable(path: Path, *, force: bool) -> None:
     """Refuse to overwrite without ``force``, and say early when a path cannot be written."""
     if path.is_dir():
         raise ExportError(f"{path} is a folder", hint="give a file name with -o")
+    try:
+        regular_target(path)
+    except OSError as exc:
+        raise ExportError(f"cannot write {path}: {exc.strerror or exc}",
+                          hint="choose another path with -o") from None
     if path.exists() and not force:
         raise ExportError(f"{path} already exists", hint="pass --force to overwrite it")
     folder = path.parent
@@ -131,12 +177,28 @@ def require_deployable(behaviour: Behaviour) -> None:
         hint="learn them (flctool learn) and export the run directory, or add the rules")
 
 
+#: Line breaks and other control characters (including Unicode's line and paragraph
+#: separators), which would end a comment line early.
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def comment_safe(value: object) -> str:
+    """``value`` as text that stays inside a one-line comment of every format: control
+    characters become escapes (``\\n``), and the comment ends and starts of C (``*/``, ``/*``)
+    and FCL (``*)``, ``(*``) get a space between their two characters."""
+    text = _CONTROL.sub(lambda m: m.group().encode("unicode_escape").decode("ascii"),
+                        str(value))
+    text = re.sub(r"\*(?=[/)])", "* ", text)
+    return re.sub(r"(?<=[/(])\*", " *", text)
+
+
 def header_lines(behaviour: Behaviour, provenance: Mapping[str, object]) -> list[str]:
-    """Where an export came from, as comment lines (without comment markers)."""
-    lines = [f"{behaviour.name}: exported by flctool {__version__}"]
+    """Where an export came from, as comment lines (without comment markers); the values
+    are made :func:`comment_safe`, since a path may hold anything."""
+    lines = [f"{comment_safe(behaviour.name)}: exported by flctool {__version__}"]
     if "source" in provenance:
-        lines.append(f"source: {provenance['source']}")
-    facts = [f"{key}: {provenance[key]}"
+        lines.append(f"source: {comment_safe(provenance['source'])}")
+    facts = [f"{key}: {comment_safe(provenance[key])}"
              for key in ("learner", "seed", "generation", "individual", "fitness")
              if provenance.get(key) is not None]
     if facts:

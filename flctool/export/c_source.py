@@ -18,6 +18,7 @@ import numpy as np
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, header_lines, number, require_deployable
 from flctool.spec import Behaviour
+from flctool.spec.checks import uncovered_gap
 
 _PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 FLOAT_MAX = float(np.finfo(np.float32).max)
@@ -25,7 +26,6 @@ FLOAT_MAX = float(np.finfo(np.float32).max)
 
 class CExporter(Exporter):
     format = "c"
-    suffix = ".c"
 
     def to_string(self, behaviour: Behaviour) -> str:
         """One translation unit: the header followed by the source."""
@@ -46,11 +46,25 @@ class CExporter(Exporter):
     def literal(self, value: float) -> str:
         if not self.options.single:
             return number(value)
-        if abs(value) > FLOAT_MAX:
-            raise ExportError(f"{value!r} does not fit in a float",
-                              hint="export without --float")
         # The shortest text of the float nearest to the value; the f suffix keeps it a float.
-        return f"{np.float32(value)!s}f"
+        return f"{np.float32(_single(value))!s}f"
+
+    def check_float_coverage(self, behaviour: Behaviour) -> None:
+        """Sets that cover a range in double may leave a gap once rounded to float (a ramp's
+        end and the next ramp's start rounding to the same float): refuse that export."""
+        for name, variable in behaviour.inputs.items():
+            rounded = variable.model_copy(update={
+                "range": tuple(_single(v) for v in variable.range),
+                "sets": {s: tuple(_single(v) for v in q) for s, q in variable.sets.items()}})
+            gap = uncovered_gap(rounded)
+            if gap is not None:
+                a, b = gap
+                where = f"at {a!r}" if a == b else f"between {a!r} and {b!r}"
+                raise ExportError(
+                    f"input '{name}': rounded to float, its sets leave a gap {where} where "
+                    "no set fires, so the float controller would have no output there",
+                    hint="export without --float, or widen the sets so that neighbours "
+                    "overlap by more than float rounding")
 
     def names(self) -> tuple[str, str]:
         prefix = self.options.prefix
@@ -74,7 +88,9 @@ class CExporter(Exporter):
                  f"{behaviour.rule_count} rules, {len(behaviour.output.commands)} commands.",
                  " * C99, no heap, no libm. The state holds the inputs in this order; a value "
                  "outside",
-                 " * its range is clipped to it, and a NaN input gives a NaN output:"]
+                 " * its range is clipped to it. A NaN input gives a NaN output, and so does an "
+                 "input",
+                 " * at which no set fires (which flctool's checks rule out):"]
         for i, (name, variable) in enumerate(behaviour.inputs.items()):
             unit = f" {variable.unit}" if variable.unit else ""
             lines.append(f" *   state[{i}] {name} in [{number(variable.range[0])}, "
@@ -92,6 +108,8 @@ class CExporter(Exporter):
         return "\n".join(lines) + "\n"
 
     def source(self, behaviour: Behaviour, include: str | None) -> str:
+        if self.options.single:
+            self.check_float_coverage(behaviour)
         prefix, macro = self.names()
         real = self.real
         lit = self.literal
@@ -129,6 +147,13 @@ class CExporter(Exporter):
             *_functions(prefix, macro, real),
         ]
         return "\n".join(lines) + "\n"
+
+
+def _single(value: float) -> float:
+    """``value`` rounded to the nearest float, or an ExportError if it does not fit."""
+    if abs(value) > FLOAT_MAX:
+        raise ExportError(f"{value!r} does not fit in a float", hint="export without --float")
+    return float(np.float32(value))
 
 
 def _wrapped(items: list[str], width: int = 96) -> list[str]:
@@ -182,7 +207,9 @@ static {real} {prefix}membership({real} s, const {real} q[4])
             mu[j] = {prefix}membership(s, {prefix}sets[j]);
             if (mu[j] > {zero}) active[{prefix}first_set[i] + count[i]++] = j;
         }}
-        /* flctool validated that the sets cover the range, so count[i] >= 1. */
+        /* flctool checked that the sets cover the range, so some set fires; should
+           rounding leave none, say so with NaN rather than read unset memory. */
+        if (count[i] == 0) return {zero} / {zero};
     }}
 
     /* Only the rules whose sets are all active fire. An odometer over each input's active

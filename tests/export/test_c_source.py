@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flctool import compile_behaviour, load_behaviour
+from flctool import compile_behaviour, load_behaviour, with_rules
 from flctool.errors import ExportError
 from flctool.export import ExportOptions
 from flctool.export.c_source import CExporter
-from flctool.spec import Behaviour
+from flctool.spec import Behaviour, behaviour_from_data
 
 from .controllers import random_behaviour, random_states
 from .roundtrip import SHIPPED
@@ -22,9 +22,14 @@ from .roundtrip import SHIPPED
 CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc, gcc or clang) on PATH")
 FLAGS = ["-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O2"]
+# AddressSanitizer and UBSan stop the program at a bad access; uninitialised locals are filled
+# with a pattern (GCC 12+, Clang 8+) so that reading one gives a wild index they catch.
+SANITIZE = ["-fsanitize=address,undefined", "-fno-sanitize-recover=all", "-g",
+            "-ftrivial-auto-var-init=pattern"]
 
 
-def build(tmp_path: Path, controllers: list[tuple[Behaviour, ExportOptions]]) -> Path:
+def build(tmp_path: Path, controllers: list[tuple[Behaviour, ExportOptions]],
+          extra: tuple[str, ...] | list[str] = ()) -> Path:
     """One program running controller ``argv[1]`` on the states of stdin (count, then rows).
 
     Each controller is written as NAME.h + NAME.c and compiled separately; no -lm."""
@@ -55,7 +60,7 @@ int main(int argc, char **argv)
 """ + "\n".join(cases) + "\n    return 3;\n}\n")
     program = tmp_path / "driver"
     assert CC is not None
-    subprocess.run([CC, *FLAGS, "-o", str(program), str(driver), *sources],
+    subprocess.run([CC, *FLAGS, *extra, "-o", str(program), str(driver), *sources],
                    check=True, capture_output=True, text=True)
     return program
 
@@ -128,3 +133,44 @@ def test_an_existing_file_is_kept_without_force(tmp_path: Path) -> None:
         CExporter().to_file(behaviour, tmp_path / "ctl")
     assert (tmp_path / "ctl.c").read_text() == "mine"
     assert not (tmp_path / "ctl.h").exists()  # nothing written when one target is refused
+
+
+def two_set_controller(low: list[float], high: list[float], upper: float = 1.0) -> Behaviour:
+    behaviour = behaviour_from_data({
+        "flctool": 1, "name": "two", "inputs": {"s": {"range": [0.0, upper],
+                                                      "sets": {"low": low, "high": high}}},
+        "output": {"name": "u", "commands": {"up": 1.0, "down": -1.0}}})
+    return with_rules(behaviour, np.array([0, 1]))
+
+
+def test_float_export_refuses_sets_that_rounding_leaves_apart() -> None:
+    # In double, low's ramp ends just after high's starts; in float both ends are 0.3f, where
+    # neither set fires.
+    behaviour = two_set_controller([0.0, 0.0, 0.2, 0.30000000000000004], [0.3, 0.5, 1.0, 1.0])
+    CExporter().to_string(behaviour)  # double keeps the overlap
+    with pytest.raises(ExportError, match=r"input 's': rounded to float, its sets leave a gap "
+                       r"at 0\.3000000119"):
+        CExporter(ExportOptions(single=True)).to_string(behaviour)
+
+
+@needs_cc
+def test_c_returns_nan_where_no_set_fires(tmp_path: Path) -> None:
+    """A state where float arithmetic leaves every membership 0 (high's ramp (s - 0) / 10
+    underflows at the smallest float) gives NaN, and the sanitizers see no unset memory read."""
+    tiny = float(np.nextafter(np.float32(0), np.float32(1)))  # 2**-149
+    behaviour = two_set_controller([0.0, 0.0, 0.0, tiny], [0.0, 10.0, 10.0, 10.0], 10.0)
+    options = ExportOptions(single=True)
+    assert compile_behaviour(behaviour).output(np.array([[tiny]]))[0] == -1.0  # fine in double
+    program = build(tmp_path, [(behaviour, options)],
+                    SANITIZE)
+    got = run(program, 0, np.array([[tiny], [5.0]]))
+    assert np.isnan(got[0]) and got[1] == -1.0
+
+
+@needs_cc
+def test_a_source_path_cannot_end_the_comment(tmp_path: Path) -> None:
+    options = ExportOptions(provenance={"source": "runs/r*/run\n#error broken"})
+    files = CExporter(options).to_file(load_behaviour(SHIPPED[0]), tmp_path / "ctl")
+    assert CC is not None
+    subprocess.run([CC, *FLAGS, "-fsyntax-only", str(files[1])], check=True,
+                   capture_output=True, text=True)

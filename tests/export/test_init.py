@@ -33,7 +33,6 @@ def test_registries_name_every_format() -> None:
     for name in EXPORTERS:
         exporter = EXPORTERS.get(name)
         assert issubclass(exporter, Exporter) and exporter.format == name
-        assert exporter.suffix == f".{name}"
     for name in IMPORTERS:
         importer = IMPORTERS.get(name)
         assert issubclass(importer, Importer) and importer.format == name
