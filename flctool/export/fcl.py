@@ -24,21 +24,24 @@ from flctool.export.imported import (
     ImportedInput,
     ImportedRule,
     ImportedSet,
+    Method,
     build_behaviour,
-    check_rules_share_no_term,
+    check_unique,
     parse_number,
     quad_from_points,
+    span,
     unsupported,
 )
 from flctool.spec import Behaviour
 
-#: FCL keywords (case does not matter): they cannot name a variable or a term.
+#: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
+#: name a variable or a term.
 KEYWORDS = frozenset({
-    "ACCU", "ACT", "AND", "BDIF", "BSUM", "COA", "COG", "COGS", "DEFAULT", "DEFUZZIFY",
-    "END_DEFUZZIFY", "END_FUNCTION_BLOCK", "END_FUZZIFY", "END_RULEBLOCK", "END_VAR",
-    "FUNCTION_BLOCK", "FUZZIFY", "IF", "IS", "LM", "MAX", "METHOD", "MIN", "NC", "NOT", "NSUM",
-    "OR", "PROD", "RANGE", "REAL", "RM", "RULE", "RULEBLOCK", "TERM", "THEN", "VAR_INPUT",
-    "VAR_OUTPUT", "WITH",
+    "ACCU", "ACT", "AND", "ASUM", "BDIF", "BSUM", "COA", "COG", "COGS", "DEFAULT", "DEFUZZIFY",
+    "END_DEFUZZIFY", "END_FUNCTION_BLOCK", "END_FUZZIFY", "END_OPTIONS", "END_RULEBLOCK",
+    "END_VAR", "FUNCTION_BLOCK", "FUZZIFY", "IF", "IS", "LM", "MAX", "METHOD", "MIN", "NC",
+    "NOT", "NSUM", "OPTIONS", "OR", "PROD", "RANGE", "REAL", "RM", "RULE", "RULEBLOCK", "TERM",
+    "THEN", "VAR_INPUT", "VAR_OUTPUT", "WITH",
 })
 INDENT = "    "
 
@@ -70,7 +73,6 @@ def set_points(quad: tuple[float, float, float, float],
 
 class FclExporter(Exporter):
     format = "fcl"
-    suffix = ".fcl"
 
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)
@@ -117,7 +119,7 @@ def _check_names(behaviour: Behaviour) -> None:
 # -- reading ---------------------------------------------------------------------------------
 _TOKEN = re.compile(r"""
     (?P<space>\s+) | (?P<comment>\(\*.*?\*\)|//[^\n]*|/\*.*?\*/)
-  | (?P<number>[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?)
+  | (?P<number>[+-]?(\d(_?\d)*(\.(?!\.)(\d(_?\d)*)?)?|\.\d(_?\d)*)([eE][+-]?\d(_?\d)*)?)
   | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
   | (?P<symbol>:=|\.\.|[:;(),])
 """, re.VERBOSE | re.DOTALL)
@@ -154,7 +156,6 @@ class FclImporter(Importer):
     """Reads the IEC 61131-7 subset that the FclExporter writes (singleton outputs, COGS)."""
 
     format = "fcl"
-    suffix = ".fcl"
 
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
         return build_behaviour(_FclParser(tokenize(text, file), file).parse())
@@ -167,8 +168,7 @@ class _FclParser:
         self.at = 0
         self.result = ImportedController(file)
         self.input_names: list[tuple[str, int]] = []
-        self.accu: tuple[str, int] | None = None
-        self.conjunction: tuple[str, int] = ("MIN", 1)
+        self.accu_seen = False
         self.method: tuple[str, int] | None = None
 
     # -- token helpers ---------------------------------------------------------------------
@@ -205,7 +205,7 @@ class _FclParser:
         return parse_number(token.text, self.file, token.line, "number")
 
     def fail(self, token: Token, construct: str, hint: str = "") -> ExportError:
-        return unsupported(self.file, token.line, construct, hint)
+        return self.result.error(token.line, construct, hint)
 
     # -- grammar ---------------------------------------------------------------------------
     def parse(self) -> ImportedController:
@@ -228,6 +228,11 @@ class _FclParser:
                 self.defuzzify()
             elif token.word == "RULEBLOCK":
                 self.ruleblock(token)
+            elif token.word == "OPTIONS":
+                if self.take().word != "END_OPTIONS":
+                    raise self.fail(token, "an OPTIONS block: its manufacturer-specific "
+                                    "options may change the computation",
+                                    "remove the options, or the whole block")
             else:
                 raise self.fail(token, f"'{token.text}' where a block (VAR_INPUT, FUZZIFY, "
                                 "DEFUZZIFY, RULEBLOCK) should start")
@@ -236,22 +241,16 @@ class _FclParser:
         return self.result
 
     def finish(self, fuzzified: set[str]) -> None:
+        check_unique(self.file, self.input_names, "input")
         for name, line in self.input_names:
             if name not in fuzzified:
                 raise unsupported(self.file, line, f"input '{name}' has no FUZZIFY block")
         if self.method is None:
             raise unsupported(self.file, self.result.output_line,
                               "the output has no 'METHOD : COGS'")
-        if self.accu is None:
-            check_rules_share_no_term(self.result, self.result.output_line,
-                                      "the default accumulation (ACCU : MAX)")
-        elif self.accu[0] not in ("NSUM", "SUM"):
-            check_rules_share_no_term(self.result, self.accu[1], f"ACCU : {self.accu[0]}")
-        if self.conjunction[0] != "MIN" and any(len(r.antecedent) > 1
-                                                for r in self.result.rules):
-            raise unsupported(self.file, self.conjunction[1],
-                              f"AND : {self.conjunction[0]}: flctool's rules combine their "
-                              "memberships by MIN (eq. 2)", "use AND : MIN")
+        if not self.accu_seen:
+            self.result.accumulation = Method("the default accumulation (ACCU : MAX)",
+                                              self.result.output_line, "write ACCU : NSUM;")
 
     def variables(self, into: list[tuple[str, int]]) -> None:
         while self.peek().word != "END_VAR":
@@ -266,13 +265,8 @@ class _FclParser:
         self.take()
 
     def outputs(self, outputs: list[tuple[str, int]]) -> None:
-        if self.result.output_name:
-            outputs.insert(0, (self.result.output_name, self.result.output_line))
-        if len(outputs) > 1:
-            raise unsupported(self.file, outputs[1][1], f"a second output '{outputs[1][0]}'",
-                              "flctool controllers have one output")
-        if outputs:
-            self.result.output_name, self.result.output_line = outputs[0]
+        for name, line in outputs:
+            self.result.declare_output(name, line)
 
     def fuzzify(self) -> str:
         token = self.name()
@@ -293,9 +287,10 @@ class _FclParser:
             else:
                 raise self.fail(key, f"'{key.text}' in FUZZIFY {token.text}")
         self.take()
-        span = variable.range or _span(terms)
+        # Without RANGE, the sets' points span the input (shoulders reach its ends).
+        extent = variable.range or span(x for _, points in terms for x, _ in points)
         for term, points in terms:
-            quad = quad_from_points(points, span, (self.file, term.line), term.text)
+            quad = quad_from_points(points, extent, (self.file, term.line), term.text)
             variable.sets.append(ImportedSet(term.text, quad, term.line))
         return token.text
 
@@ -364,7 +359,10 @@ class _FclParser:
     def accumulation(self) -> None:
         self.expect(":")
         method = self.take()
-        self.accu = (method.word, method.line)
+        self.accu_seen = True
+        # NSUM (and jFuzzyLogic's SUM) keep every rule in COGS; MAX, BSUM and ASUM merge rules
+        self.result.accumulation = (None if method.word in ("NSUM", "SUM") else Method(
+            f"ACCU : {method.text}", method.line, "use ACCU : NSUM"))
         self.expect(";")
 
     def ruleblock(self, start: Token) -> None:
@@ -377,7 +375,8 @@ class _FclParser:
             if key.word == "AND":
                 self.expect(":")
                 method = self.take()
-                self.conjunction = (method.word, method.line)
+                self.result.conjunction = (None if method.word == "MIN" else Method(
+                    f"AND : {method.text}", method.line, "use AND : MIN"))
                 self.expect(";")
             elif key.word in ("OR", "ACT"):
                 # OR rules are refused one by one; activation does not change a singleton.
@@ -443,7 +442,3 @@ class _FclParser:
                             "flctool's rules use plain terms")
         return first, term.text
 
-
-def _span(terms: list[tuple[Token, list[tuple[float, float]]]]) -> tuple[float, float]:
-    xs = [x for _, points in terms for x, _ in points]
-    return (min(xs), max(xs)) if xs else (0.0, 1.0)

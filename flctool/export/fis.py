@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import re
 
-from flctool.errors import ExportError
 from flctool.export.base import Exporter, Importer, number, require_deployable
 from flctool.export.imported import (
     ImportedCommand,
@@ -18,10 +17,9 @@ from flctool.export.imported import (
     ImportedInput,
     ImportedRule,
     ImportedSet,
+    Method,
     build_behaviour,
-    check_rules_share_no_term,
     parse_number,
-    unsupported,
 )
 from flctool.spec import Behaviour
 
@@ -32,7 +30,6 @@ def _vector(values: list[float]) -> str:
 
 class FisExporter(Exporter):
     format = "fis"
-    suffix = ".fis"
 
     def to_string(self, behaviour: Behaviour) -> str:
         # FIS has no comment syntax that every reader skips, so no provenance header.
@@ -78,7 +75,6 @@ class FisImporter(Importer):
     """Reads a Sugeno FIS with constant outputs, trapmf / trimf inputs and AND rules."""
 
     format = "fis"
-    suffix = ".fis"
 
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
         return build_behaviour(_FisReader(file).read(text))
@@ -88,13 +84,13 @@ class _FisReader:
     def __init__(self, file: str) -> None:
         self.file = file
         self.result = ImportedController(file)
+        self.fail = self.result.error
         self.system: dict[str, tuple[str, int]] = {}
-        self.outputs = 0
         self.section = ("", 0)
         self.rule_lines: list[tuple[str, int]] = []
-
-    def fail(self, line: int, construct: str, hint: str = "") -> ExportError:
-        return unsupported(self.file, line, construct, hint)
+        # NumMFs as declared (count, line) for each input, then the output
+        self.declared_mfs: list[tuple[int, int] | None] = []
+        self.output_mfs: tuple[int, int] | None = None
 
     def read(self, text: str) -> ImportedController:
         for line_number, raw in enumerate(text.splitlines(), start=1):
@@ -112,19 +108,24 @@ class _FisReader:
                     raise self.fail(line_number, f"'{line}' is not a 'Key=value' line")
                 self.entry(key.group(1), key.group(2).strip(), line_number)
         self.check_system()
+        self.check_counts()
         for line, line_number in self.rule_lines:
             self.result.rules.append(self.rule(line, line_number))
-        self.check_methods()
+        self.methods()
         return self.result
 
     def begin(self, name: str, index: str, line: int) -> None:
         if name == "Input" and index:
+            expected = len(self.result.inputs) + 1
+            if int(index) != expected:
+                raise self.fail(line, f"[Input{index}] where [Input{expected}] should come",
+                                "number the input sections 1, 2, ... in order")
             self.result.inputs.append(ImportedInput("", line))
+            self.declared_mfs.append(None)
         elif name == "Output" and index:
-            self.outputs += 1
-            if self.outputs > 1:
-                raise self.fail(line, "a second output", "flctool controllers have one output")
-            self.result.output_line = line
+            self.result.declare_output("", line)
+            if index != "1":
+                raise self.fail(line, f"[Output{index}] where [Output1] should come")
         elif (name, index) not in (("System", ""), ("Rules", "")):
             raise self.fail(line, f"an unknown section [{name}{index}]")
         self.section = (name, line)
@@ -142,6 +143,17 @@ class _FisReader:
         else:
             raise self.fail(line, f"'{key}' outside a section")
 
+    def mf_key(self, key: str, count: int, line: int) -> None:
+        """MFk must be the k-th MF of its section: the rules refer to MFs by that index."""
+        if key != f"MF{count + 1}":
+            raise self.fail(line, f"{key} where MF{count + 1} should come",
+                            "number the MFs of a section 1, 2, ... in order")
+
+    def count(self, value: str, line: int, key: str) -> int:
+        if not value.isdigit():
+            raise self.fail(line, f"{key}={value} is not a whole number")
+        return int(value)
+
     def input_entry(self, variable: ImportedInput, key: str, value: str, line: int) -> None:
         if key == "Name":
             variable.name, variable.line = value.strip("'"), line
@@ -150,7 +162,8 @@ class _FisReader:
             if len(values) != 2:
                 raise self.fail(line, f"Range {value} is not [low high]")
             variable.range = (values[0], values[1])
-        elif key.startswith("MF"):
+        elif key.startswith("MF") and key != "NumMFs":
+            self.mf_key(key, len(variable.sets), line)
             name, kind, params = self.mf(value, line)
             arity = {"trapmf": 4, "trimf": 3}
             if kind not in arity:
@@ -161,20 +174,25 @@ class _FisReader:
             quad = ((params[0], params[1], params[1], params[2]) if kind == "trimf"
                     else (params[0], params[1], params[2], params[3]))
             variable.sets.append(ImportedSet(name, quad, line))
-        elif key != "NumMFs":
+        elif key == "NumMFs":
+            self.declared_mfs[-1] = (self.count(value, line, key), line)
+        else:
             raise self.fail(line, f"'{key}' in an input section")
 
     def output_entry(self, key: str, value: str, line: int) -> None:
         if key == "Name":
             self.result.output_name, self.result.output_line = value.strip("'"), line
         elif key.startswith("MF"):
+            self.mf_key(key, len(self.result.commands), line)
             name, kind, params = self.mf(value, line)
             if kind != "constant" or len(params) != 1:
                 raise self.fail(line, f"output membership function '{name}' is a {kind}: "
                                 "flctool's commands are constants (singletons); a linear "
                                 "output or a Mamdani output set cannot be expressed")
             self.result.commands.append(ImportedCommand(name, params[0], line))
-        elif key not in ("Range", "NumMFs"):
+        elif key == "NumMFs":
+            self.output_mfs = (self.count(value, line, key), line)
+        elif key != "Range":
             raise self.fail(line, f"'{key}' in the output section")
 
     def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
@@ -204,14 +222,33 @@ class _FisReader:
             raise self.fail(line, f"DefuzzMethod='{method}': flctool's output is the weighted "
                             "average (eq. 3)", "use DefuzzMethod='wtaver'")
 
-    def check_methods(self) -> None:
+    def check_counts(self) -> None:
+        """NumInputs, NumMFs and NumRules must count what the file holds."""
+        declared = [("NumInputs", len(self.result.inputs), "input sections"),
+                    ("NumRules", len(self.rule_lines), "rules")]
+        for key, present, what in declared:
+            if key in self.system:
+                value, line = self.system[key]
+                if self.count(value, line, key) != present:
+                    raise self.fail(line, f"{key}={value}, but the file has {present} {what}",
+                                    f"set {key}={present}")
+        sections = [(f"[Input{k}]", len(v.sets), mfs) for k, (v, mfs) in
+                    enumerate(zip(self.result.inputs, self.declared_mfs, strict=True), start=1)]
+        sections.append(("[Output1]", len(self.result.commands), self.output_mfs))
+        for section, present, mfs in sections:
+            if mfs is not None and mfs[0] != present:
+                raise self.fail(mfs[1], f"NumMFs={mfs[0]}, but {section} has {present} MFs",
+                                f"set NumMFs={present}")
+
+    def methods(self) -> None:
         method, line = self.system.get("AndMethod", ("min", 1))
-        if method != "min" and any(len(r.antecedent) > 1 for r in self.result.rules):
-            raise self.fail(line, f"AndMethod='{method}': flctool's rules combine their "
-                            "memberships by min (eq. 2)", "use AndMethod='min'")
+        if method != "min":
+            self.result.conjunction = Method(f"AndMethod='{method}'", line,
+                                             "use AndMethod='min'")
         method, line = self.system.get("AggMethod", ("sum", 1))
         if method != "sum":
-            check_rules_share_no_term(self.result, line, f"AggMethod='{method}'")
+            self.result.accumulation = Method(f"AggMethod='{method}'", line,
+                                              "use AggMethod='sum'")
 
     def rule(self, text: str, line: int) -> ImportedRule:
         match = _RULE.match(text)

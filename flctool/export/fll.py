@@ -10,6 +10,7 @@ Numbers are written with repr (full precision), never fuzzylite's default 3 deci
 
 from __future__ import annotations
 
+import math
 import re
 
 from flctool.errors import ExportError
@@ -20,10 +21,9 @@ from flctool.export.imported import (
     ImportedInput,
     ImportedRule,
     ImportedSet,
+    Method,
     build_behaviour,
-    check_rules_share_no_term,
     parse_number,
-    unsupported,
 )
 from flctool.spec import Behaviour
 
@@ -36,7 +36,6 @@ INDENT = "  "
 
 class FllExporter(Exporter):
     format = "fll"
-    suffix = ".fll"
 
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)
@@ -94,7 +93,6 @@ class FllImporter(Importer):
     """Reads a Takagi-Sugeno FLL engine with constant terms (the FllExporter's subset)."""
 
     format = "fll"
-    suffix = ".fll"
 
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
         return build_behaviour(_FllReader(file).read(text))
@@ -104,15 +102,12 @@ class _FllReader:
     def __init__(self, file: str) -> None:
         self.file = file
         self.result = ImportedController(file)
+        self.fail = self.result.error
         self.section = ""
-        self.outputs = 0
         self.blocks = 0
-        self.aggregation: tuple[str, int] = ("none", 0)
-        self.conjunction: tuple[str, int] = ("none", 0)
+        # fuzzylite's default conjunction is none, which cannot combine two memberships
+        self.result.conjunction = Method("conjunction none", 1, "use conjunction: Minimum")
         self.current: ImportedInput | None = None
-
-    def fail(self, line: int, construct: str, hint: str = "") -> ExportError:
-        return unsupported(self.file, line, construct, hint)
 
     def read(self, text: str) -> ImportedController:
         for number_, raw in enumerate(text.splitlines(), start=1):
@@ -123,19 +118,11 @@ class _FllReader:
             if match is None:
                 raise self.fail(number_, f"'{line.strip()}' is not a 'key: value' line")
             self.entry(match.group(1), match.group(2), number_)
-        result = self.result
-        if self.outputs == 0:
+        if not self.result.output_declared:
             raise self.fail(1, "the engine has no OutputVariable")
         if self.blocks == 0:
             raise self.fail(1, "the engine has no RuleBlock")
-        if self.aggregation[0].lower() != "none":
-            check_rules_share_no_term(result, self.aggregation[1],
-                                      f"aggregation {self.aggregation[0]}")
-        if self.conjunction[0] != "Minimum" and any(len(r.antecedent) > 1 for r in result.rules):
-            raise self.fail(self.conjunction[1] or 1,
-                            f"conjunction {self.conjunction[0]}: flctool's rules combine "
-                            "their memberships by Minimum (eq. 2)", "use conjunction: Minimum")
-        return result
+        return self.result
 
     def entry(self, key: str, value: str, line: int) -> None:
         if key in ("Engine", "InputVariable", "OutputVariable", "RuleBlock"):
@@ -159,11 +146,7 @@ class _FllReader:
             self.current = ImportedInput(value, line)
             self.result.inputs.append(self.current)
         elif key == "OutputVariable":
-            self.outputs += 1
-            if self.outputs > 1:
-                raise self.fail(line, f"a second output variable '{value}'",
-                                "flctool controllers have one output")
-            self.result.output_name, self.result.output_line = value, line
+            self.result.declare_output(value, line)
         else:
             self.blocks += 1
             if self.blocks > 1:
@@ -201,7 +184,9 @@ class _FllReader:
                                                           "lock-previous"):
             return  # the output's range and default never matter: every state fires a rule
         if key == "aggregation":
-            self.aggregation = (value, line)
+            self.result.accumulation = (None if value.lower() == "none" else
+                                        Method(f"aggregation {value}", line,
+                                               "use aggregation: none"))
         elif key == "defuzzifier":
             words = value.split()
             if not words or words[0] != "WeightedAverage" or any(
@@ -224,7 +209,8 @@ class _FllReader:
         if self.common_entry(key, value, line) or key in ("disjunction", "implication"):
             return  # OR rules are refused one by one; implication is unused by Takagi-Sugeno
         if key == "conjunction":
-            self.conjunction = (value, line)
+            self.result.conjunction = (None if value == "Minimum" else Method(
+                f"conjunction {value}", line, "use conjunction: Minimum"))
         elif key == "activation":
             if value != "General":
                 raise self.fail(line, f"activation {value}: flctool fires every rule",
@@ -255,14 +241,33 @@ class _FllReader:
         n = arity[kind]
         if len(params) not in (n, n + 1):
             raise self.fail(line, f"a {kind} takes {n} numbers (and an optional height)")
-        values = [parse_number(p, self.file, line, kind) for p in params]
-        if len(values) > n and values[n] != 1.0:
+        if len(params) > n and parse_number(params[n], self.file, line, "height") != 1.0:
             raise self.fail(line, f"a term of height {params[n]}: flctool's sets reach 1")
+        values = [self.point(p, line, kind) for p in params[:n]]
         if kind == "Triangle":
-            return values[0], values[1], values[1], values[2]
-        if kind == "Rectangle":  # membership 1 on [a, b], 0 elsewhere
-            return values[0], values[0], values[1], values[1]
-        return values[0], values[1], values[2], values[3]
+            pa, pb, pc, pd = values[0], values[1], values[1], values[2]
+        elif kind == "Rectangle":  # membership 1 on [a, b], 0 elsewhere
+            pa, pb, pc, pd = values[0], values[0], values[1], values[1]
+        else:
+            pa, pb, pc, pd = values
+        # fuzzylite gives membership 1 up to an infinite foot: a shoulder whatever the
+        # neighbouring point, which build_behaviour brings to the range's end.
+        if pa == -math.inf:
+            pa = pb = -math.inf
+        if pd == math.inf:
+            pc = pd = math.inf
+        left = pa == pb == -math.inf or (math.isfinite(pa) and math.isfinite(pb))
+        right = pc == pd == math.inf or (math.isfinite(pc) and math.isfinite(pd))
+        if not (left and right):
+            raise self.fail(line, f"a {kind} with an infinite point that is not a shoulder's "
+                            "foot", "only the outer feet may be -inf (first) or inf (last)")
+        return pa, pb, pc, pd
+
+    def point(self, text: str, line: int, kind: str) -> float:
+        """A term's point: a number, or -inf / inf for a shoulder's foot."""
+        if text.lower() in ("inf", "+inf", "-inf"):
+            return float(text)
+        return parse_number(text, self.file, line, kind)
 
     def rule(self, text: str, line: int) -> ImportedRule:
         words = text.split()

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,8 +26,17 @@ def unsupported(file: str, line: int, construct: str, hint: str = "") -> ExportE
     return ExportError(f"{file}:{line}: {construct}", hint=hint)
 
 
+def span(xs: Iterable[float]) -> tuple[float, float]:
+    """The smallest range holding every finite x (0 to 1 when there is none)."""
+    finite = [x for x in xs if math.isfinite(x)]
+    return (min(finite), max(finite)) if finite else (0.0, 1.0)
+
+
 @dataclass
 class ImportedSet:
+    """A set as read; an infinite shoulder (pa = pb = -inf, pc = pd = inf) reaches the end of
+    the input's range, where :func:`build_behaviour` puts it."""
+
     name: str
     quad: Quad
     line: int
@@ -43,8 +53,16 @@ class ImportedInput:
         """The declared range, or the span of the sets when the format declares none."""
         if self.range is not None:
             return self.range
-        feet = [v for s in self.sets for v in (s.quad[0], s.quad[3])]
-        return (min(feet), max(feet)) if feet else (0.0, 1.0)
+        return span(v for s in self.sets for v in (s.quad[0], s.quad[3]))
+
+    def resolved_quads(self) -> dict[str, Quad]:
+        """Every set's quadruple, infinite shoulder points moved to the range's ends: inputs
+        are clipped to the range, so the membership inside it is unchanged."""
+        lo, hi = self.resolved_range()
+        return {s.name: (lo if s.quad[0] == -math.inf else s.quad[0],
+                         lo if s.quad[1] == -math.inf else s.quad[1],
+                         hi if s.quad[2] == math.inf else s.quad[2],
+                         hi if s.quad[3] == math.inf else s.quad[3]) for s in self.sets}
 
 
 @dataclass
@@ -63,8 +81,25 @@ class ImportedRule:
     line: int
 
 
+@dataclass(frozen=True)
+class Method:
+    """A way of combining that differs from flctool's, as the file writes it at ``line``."""
+
+    text: str  # the setting as the format spells it, e.g. "AND : PROD"
+    line: int
+    hint: str = ""
+
+
 @dataclass
 class ImportedController:
+    """A controller as read, with the line of every part.
+
+    ``conjunction`` is set when the file combines a rule's memberships by something other than
+    the minimum (eq. 2); ``accumulation`` when it accumulates the rules by something that
+    merges the rules sharing an output term (a maximum) instead of summing them (eq. 3).
+    :func:`build_behaviour` refuses either where it would change the output.
+    """
+
     file: str
     name: str = ""
     name_line: int = 1
@@ -72,11 +107,24 @@ class ImportedController:
     inputs: list[ImportedInput] = field(default_factory=list)
     output_name: str = ""
     output_line: int = 1
+    output_declared: bool = False
     commands: list[ImportedCommand] = field(default_factory=list)
     rules: list[ImportedRule] = field(default_factory=list)
+    conjunction: Method | None = None
+    accumulation: Method | None = None
 
-    def input(self, name: str) -> ImportedInput | None:
-        return next((i for i in self.inputs if i.name == name), None)
+    def error(self, line: int, construct: str, hint: str = "") -> ExportError:
+        """An import error at ``line`` of this file (see :func:`unsupported`)."""
+        return unsupported(self.file, line, construct, hint)
+
+    def declare_output(self, name: str, line: int) -> None:
+        """The output variable starts at ``line``; a second one is refused."""
+        if self.output_declared:
+            named = f" '{name}'" if name else ""
+            raise self.error(line, f"a second output{named}",
+                             "flctool controllers have one output")
+        self.output_declared = True
+        self.output_name, self.output_line = name, line
 
 
 def quad_from_points(points: list[tuple[float, float]], span: tuple[float, float],
@@ -86,13 +134,17 @@ def quad_from_points(points: list[tuple[float, float]], span: tuple[float, float
     The point list is read as IEC 61131-7 does: before the first point and after the last the
     membership stays at that point's value. So a list that starts at 1 is a left shoulder
     reaching the range's low end, one that ends at 1 a right shoulder reaching its high end.
+    A shoulder's points at membership 1 beyond the range's end move to that end: inputs are
+    clipped to the range, so the membership inside it does not change.
     """
     file, line = where
     xs = [x for x, _ in points]
     if not points or any(b < a for a, b in itertools.pairwise(xs)):
         raise unsupported(file, line, f"term '{term}': the points must be in increasing x")
-    low, high = min(span[0], xs[0]), max(span[1], xs[-1])
     written = [y for _, y in points]
+    points = _clamp_shoulders(points, span)
+    xs = [x for x, _ in points]
+    low, high = min(span[0], xs[0]), max(span[1], xs[-1])
     if points[0][1] == 1:  # a left shoulder: a vertical edge at the range's low end
         points = [(low, 0.0), (low, 1.0), *points]
     if points[-1][1] == 1:
@@ -115,14 +167,47 @@ def quad_from_points(points: list[tuple[float, float]], span: tuple[float, float
     return quad
 
 
+def _clamp_shoulders(points: list[tuple[float, float]], span: tuple[float, float]
+                     ) -> list[tuple[float, float]]:
+    """Move the points at membership 1 beyond the range to its end where the membership stays
+    1 up to the end (the next point inward is at 1 too, or there is none)."""
+    lo, hi = span
+    moved = list(points)
+    for i, (x, y) in enumerate(moved):
+        if y == 1 and x < lo and (i + 1 == len(moved) or moved[i + 1][1] == 1):
+            moved[i] = (lo, y)
+    for i in range(len(moved) - 1, -1, -1):
+        x, y = moved[i]
+        if y == 1 and x > hi and (i == 0 or moved[i - 1][1] == 1):
+            moved[i] = (hi, y)
+    return moved
+
+
+def check_unique(file: str, items: Iterable[tuple[str, int]], kind: str, of: str = "") -> None:
+    """Refuse a name given twice (``items`` are (name, line)), naming both lines."""
+    first: dict[str, int] = {}
+    for name, line in items:
+        if name in first:
+            raise unsupported(file, line, f"the {kind} '{name}'{of} is defined twice, at "
+                              f"lines {first[name]} and {line}", "rename or remove one of them")
+        first[name] = line
+
+
 def build_behaviour(imported: ImportedController) -> Behaviour:
-    """Check the rules and validate the controller; errors point at lines of the file."""
+    """Check the names, rules and methods and validate the controller; errors point at lines
+    of the file."""
     file = imported.file
     if not imported.inputs:
         raise unsupported(file, 1, "the controller has no input variable")
     if not imported.output_name:
         raise unsupported(file, 1, "the controller has no output variable")
+    check_unique(file, ((i.name, i.line) for i in imported.inputs), "input")
+    for variable in imported.inputs:
+        check_unique(file, ((s.name, s.line) for s in variable.sets), "set",
+                     f" of input '{variable.name}'")
+    check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
     _check_rules(imported)
+    _check_methods(imported)
     marks: dict[tuple[PathPart, ...], tuple[int, int]] = {
         (): (1, 1), ("name",): (imported.name_line, 1), ("output",): (imported.output_line, 1)}
     data: dict[str, Any] = {"flctool": FORMAT_VERSION, "name": imported.name or "imported"}
@@ -131,10 +216,9 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     data["inputs"] = {}
     for variable in imported.inputs:
         marks[("inputs", variable.name)] = (variable.line, 1)
-        sets = {}
         for item in variable.sets:
             marks[("inputs", variable.name, "sets", item.name)] = (item.line, 1)
-            sets[item.name] = list(item.quad)
+        sets = {name: list(quad) for name, quad in variable.resolved_quads().items()}
         data["inputs"][variable.name] = {"range": list(variable.resolved_range()), "sets": sets}
     for command in imported.commands:
         marks[("output", "commands", command.name)] = (command.line, 1)
@@ -174,6 +258,16 @@ def _check_rules(imported: ImportedController) -> None:
                 f"{seen[key]}; flctool has one rule per combination of sets",
                 "merge the two rules into one")
         seen[key] = rule.line
+
+
+def _check_methods(imported: ImportedController) -> None:
+    conjunction = imported.conjunction
+    if conjunction is not None and any(len(r.antecedent) > 1 for r in imported.rules):
+        raise imported.error(conjunction.line, f"{conjunction.text}: flctool's rules combine "
+                             "their memberships by the minimum (eq. 2)", conjunction.hint)
+    if imported.accumulation is not None:
+        check_rules_share_no_term(imported, imported.accumulation.line,
+                                  imported.accumulation.text)
 
 
 def check_rules_share_no_term(imported: ImportedController, line: int, setting: str) -> None:

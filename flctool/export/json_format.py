@@ -12,7 +12,6 @@ class JsonExporter(Exporter):
     """The same keys and order as the YAML file; JSON has no comments, so no provenance."""
 
     format = "json"
-    suffix = ".json"
 
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)

@@ -10,7 +10,6 @@ class YamlExporter(Exporter):
     """A deployable behaviour file; floats are written with repr, so it loads back exactly."""
 
     format = "yaml"
-    suffix = ".yaml"
 
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from flctool import load_behaviour
-from flctool.errors import ExportError
+from flctool import compile_behaviour, load_behaviour
+from flctool.errors import ExportError, SpecError
 from flctool.export.fcl import FclExporter, FclImporter, fcl_number, set_points
 
 from .roundtrip import SHIPPED
@@ -127,3 +128,69 @@ def test_keywords_cannot_be_names() -> None:
     renamed = behaviour.model_copy(update={"name": "rule"})
     with pytest.raises(ExportError, match="'rule' is an FCL keyword"):
         FclExporter().to_string(renamed)
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("END_FUNCTION_BLOCK", "FUZZIFY x\n    TERM all := (0, 1) (1, 1);\nEND_FUZZIFY\n"
+     "END_FUNCTION_BLOCK", r"tiny.fcl:25: the input 'x' is defined twice, at lines 8 and 25"),
+    ("    x : REAL;\n", "    x : REAL;\n    x : REAL;\n",
+     r"tiny.fcl:4: the input 'x' is defined twice, at lines 3 and 4"),
+    ("    TERM high := (0.2, 0) (1, 1);\n", "    TERM high := (0.2, 0) (1, 1);\n"
+     "    TERM low := (0, 1) (1, 0);\n",
+     r"tiny.fcl:11: the set 'low' of input 'x' is defined twice, at lines 9 and 11"),
+    ("    TERM up := 1;\n", "    TERM up := 1;\n    TERM down := 2;\n",
+     r"tiny.fcl:16: the output term 'down' is defined twice, at lines 14 and 16"),
+])
+def test_duplicate_names_are_refused_with_both_lines(old: str, new: str, message: str) -> None:
+    text = BLOCK.replace(old, new)
+    assert text != BLOCK
+    with pytest.raises(ExportError, match=message):
+        FclImporter().from_string(text, "tiny.fcl")
+
+
+@pytest.mark.parametrize(("written", "value"), [
+    ("(0..1)", (0.0, 1.0)), ("(0.0..1.0)", (0.0, 1.0)), ("(-1..+1)", (-1.0, 1.0)),
+    ("(-.5 .. 1.)", (-0.5, 1.0)), ("(-1.5e-1..2E1)", (-0.15, 20.0)), ("(0..1_000.0)", (0.0, 1e3)),
+])
+def test_iec_number_forms_are_read(written: str, value: tuple[float, float]) -> None:
+    lo, hi = value
+    text = BLOCK.replace("RANGE := (0 .. 1);", f"RANGE := {written};").replace(
+        "TERM high := (0.2, 0) (1, 1);", f"TERM high := (0.2, 0) ({hi!r}, 1);").replace(
+        "TERM low := (0, 1)", f"TERM low := ({lo!r}, 1)")
+    assert FclImporter().from_string(text, "tiny.fcl").inputs["x"].range == value
+
+
+def test_shoulder_points_beyond_the_range_move_to_its_ends() -> None:
+    text = BLOCK.replace("TERM low := (0, 1) (0.2, 1) (0.8, 0);",
+                         "TERM low := (-0.5, 1) (0.2, 1) (0.8, 0);").replace(
+        "TERM high := (0.2, 0) (1, 1);", "TERM high := (0.2, 0) (1, 1) (3, 1);")
+    behaviour = FclImporter().from_string(text, "tiny.fcl")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    # The same membership inside the range as the point lists read by IEC (constant outside
+    # the points), so the same controller for clipped inputs.
+    s = np.linspace(0.0, 1.0, 201)
+    low = np.interp(s, [-0.5, 0.2, 0.8], [1.0, 1.0, 0.0])
+    high = np.interp(s, [0.2, 1.0, 3.0], [0.0, 1.0, 1.0])
+    want = (low * 1.0 + high * -1.0) / (low + high)
+    assert np.allclose(compile_behaviour(behaviour).output(s[:, None]), want, rtol=0,
+                       atol=1e-15)
+
+
+def test_a_ramp_crossing_the_range_end_is_still_refused() -> None:
+    text = BLOCK.replace("TERM low := (0, 1) (0.2, 1) (0.8, 0);",
+                         "TERM low := (-0.5, 1) (0.8, 0);")
+    with pytest.raises(SpecError, match=r"tiny.fcl:9:1: .*reaches outside the input's range"):
+        FclImporter().from_string(text, "tiny.fcl")
+
+
+def test_options_is_a_keyword_and_an_empty_block_is_read() -> None:
+    for word in ("options", "ASUM", "End_Options"):
+        renamed = load_behaviour(SHIPPED[0]).model_copy(update={"name": word})
+        with pytest.raises(ExportError, match="is an FCL keyword"):
+            FclExporter().to_string(renamed)
+    FclImporter().from_string(BLOCK.replace("END_FUNCTION_BLOCK", "OPTIONS\nEND_OPTIONS\n"
+                                            "END_FUNCTION_BLOCK"), "tiny.fcl")
+    with pytest.raises(ExportError, match=r"tiny.fcl:25: an OPTIONS block"):
+        FclImporter().from_string(BLOCK.replace("END_FUNCTION_BLOCK", "OPTIONS\nfast;\n"
+                                                "END_OPTIONS\nEND_FUNCTION_BLOCK"), "tiny.fcl")

@@ -99,3 +99,34 @@ def test_invalid_names_are_located() -> None:
 
     with pytest.raises(SpecError, match=r"tiny.fis:10:1: inputs.*'x y' is not a valid name"):
         FisImporter().from_string(SYSTEM.replace("Name='x'", "Name='x y'"), "tiny.fis")
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("MF2='high':'trimf',[0.2 1 1]", "MF2='low':'trimf',[0.2 1 1]",
+     r"tiny.fis:14: the set 'low' of input 'x' is defined twice, at lines 13 and 14"),
+    ("MF2='up':'constant',[1]", "MF2='down':'constant',[1]",
+     r"tiny.fis:21: the output term 'down' is defined twice, at lines 20 and 21"),
+    ("NumInputs=1", "NumInputs=2", r"tiny.fis:4: NumInputs=2, but the file has 1 input sections"),
+    ("NumMFs=2\nMF1='low'", "NumMFs=3\nMF1='low'", r"tiny.fis:12: NumMFs=3, but \[Input1\] "
+     r"has 2 MFs"),
+    ("NumMFs=2\nMF1='down'", "NumMFs=1\nMF1='down'", r"tiny.fis:19: NumMFs=1, but \[Output1\] "
+     r"has 2 MFs"),
+    ("MF2='high'", "MF3='high'", r"tiny.fis:14: MF3 where MF2 should come"),
+    ("MF1='down'", "MF2='down'", r"tiny.fis:20: MF2 where MF1 should come"),
+    ("[Input1]", "[Input2]", r"tiny.fis:9: \[Input2\] where \[Input1\] should come"),
+    ("NumOutputs=1", "NumOutputs=1\nNumRules=3", r"tiny.fis:6: NumRules=3, but the file has 2"),
+    ("NumInputs=1", "NumInputs=one", r"tiny.fis:4: NumInputs=one is not a whole number"),
+])
+def test_counts_indices_and_names_must_match_the_file(old: str, new: str, message: str) -> None:
+    text = SYSTEM.replace(old, new)
+    assert text != SYSTEM
+    with pytest.raises(ExportError, match=message):
+        FisImporter().from_string(text, "tiny.fis")
+
+
+def test_a_second_input_with_the_same_name_is_refused() -> None:
+    text = FisExporter().to_string(load_behaviour(SHIPPED[0])).replace("Name='pan'",
+                                                                       "Name='ball_size'")
+    with pytest.raises(ExportError, match=r"the input 'ball_size' is defined twice, at lines "
+                       r"\d+ and \d+"):
+        FisImporter().from_string(text, "x.fis")

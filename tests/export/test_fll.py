@@ -154,3 +154,45 @@ def test_aggregation_merging_shared_terms_is_refused() -> None:
         FllImporter().from_string(text, "tiny.fll")
     # with no shared term, a maximum changes nothing
     FllImporter().from_string(ENGINE.replace("aggregation: none", "aggregation: Maximum"))
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("  term: up Constant 1.0", "  term: up Constant 1.0\n  term: down Constant 2.0",
+     r"tiny.fll:15: the output term 'down' is defined twice, at lines 13 and 15"),
+    ("OutputVariable: u", "InputVariable: x\n  range: 0.0 1.0\n  term: all Trapezoid 0 0 1 1\n"
+     "OutputVariable: u", r"tiny.fll:8: the input 'x' is defined twice, at lines 2 and 8"),
+    ("  term: high Triangle 0.2 1.0 1.0", "  term: high Triangle 0.2 1.0 1.0\n"
+     "  term: low Triangle 0.0 0.5 1.0",
+     r"tiny.fll:8: the set 'low' of input 'x' is defined twice, at lines 6 and 8"),
+])
+def test_duplicate_names_are_refused_with_both_lines(old: str, new: str, message: str) -> None:
+    with pytest.raises(ExportError, match=message):
+        FllImporter().from_string(ENGINE.replace(old, new), "tiny.fll")
+
+
+@pytest.mark.usefixtures("exact_fuzzylite")
+def test_infinite_shoulders_reach_the_range_ends_exactly() -> None:
+    text = ENGINE.replace("Trapezoid 0.0 0.0 0.2 0.8", "Trapezoid -inf -inf 0.2 0.8").replace(
+        "Triangle 0.2 1.0 1.0", "Triangle 0.2 1.0 inf")
+    behaviour = FllImporter().from_string(text, "tiny.fll")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    # the same outputs as fuzzylite running the file itself (lock-range clips its inputs)
+    engine = fl.FllImporter().from_string(text)
+    states = np.linspace(-0.5, 1.5, 401)
+    want = np.empty(len(states))
+    for row, value in enumerate(states):
+        engine.input_variables[0].value = float(value)
+        engine.process()
+        want[row] = engine.output_variables[0].value
+    assert np.array_equal(compile_behaviour(behaviour).output(states[:, None]), want)
+
+
+def test_an_infinite_point_inside_a_term_is_refused() -> None:
+    # an infinite foot makes the membership 1 up to the next top, whatever b is
+    behaviour = FllImporter().from_string(
+        ENGINE.replace("Trapezoid 0.0 0.0 0.2 0.8", "Trapezoid -inf 0.1 0.2 0.8"))
+    assert behaviour.inputs["x"].sets["low"] == (0.0, 0.0, 0.2, 0.8)
+    text = ENGINE.replace("Trapezoid 0.0 0.0 0.2 0.8", "Trapezoid 0.0 inf inf 0.8")
+    with pytest.raises(ExportError, match=r"tiny.fll:6: a Trapezoid with an infinite point"):
+        FllImporter().from_string(text, "tiny.fll")
