@@ -176,31 +176,16 @@ def skfuzzy_one(simulation: Any, behaviour: Behaviour) -> Callable[[np.ndarray],
 
 # -- pyfuzzylite ----------------------------------------------------------------------------
 def fuzzylite_engine(behaviour: Behaviour, controller: Controller) -> Any:
-    """A pyfuzzylite engine computing eq. 1-3: Minimum conjunction, constant (singleton)
-    terms, no aggregation (every rule's activation is its own term) and WeightedAverage."""
+    """A pyfuzzylite engine computing eq. 1-3, read from flctool's own FLL export of the
+    controller (Minimum conjunction, constant terms, no aggregation, WeightedAverage)."""
     import fuzzylite as fl
 
-    lines = [f"Engine: {behaviour.name}"]
-    for name, variable in behaviour.inputs.items():
-        lo, hi = variable.range
-        lines += [f"InputVariable: {name}", "  enabled: true", f"  range: {lo!r} {hi!r}",
-                  "  lock-range: true"]
-        lines += [f"  term: {set_name} Trapezoid {' '.join(repr(float(p)) for p in quad)}"
-                  for set_name, quad in variable.sets.items()]
-    commands = behaviour.output.commands
-    lines += [f"OutputVariable: {behaviour.output.name}", "  enabled: true",
-              f"  range: {min(commands.values())!r} {max(commands.values())!r}",
-              "  lock-range: false", "  aggregation: none",
-              "  defuzzifier: WeightedAverage TakagiSugeno", "  default: nan",
-              "  lock-previous: false"]
-    lines += [f"  term: {command} Constant {float(value)!r}"
-              for command, value in commands.items()]
-    lines += ["RuleBlock: rules", "  enabled: true", "  conjunction: Minimum",
-              "  disjunction: none", "  implication: none", "  activation: General"]
-    for sets, command in rule_texts(behaviour, controller):
-        condition = " and ".join(f"{name} is {set_name}" for name, set_name in sets.items())
-        lines.append(f"  rule: if {condition} then {behaviour.output.name} is {command}")
-    return fl.FllImporter().from_string("\n".join(lines) + "\n")
+    from flctool import with_rules
+    from flctool.export.fll import FllExporter
+
+    assert controller.consequents is not None
+    deployable = with_rules(behaviour, controller.consequents)
+    return fl.FllImporter().from_string(FllExporter().to_string(deployable))
 
 
 def fuzzylite_one(engine: Any) -> Callable[[np.ndarray], float]:

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import importlib.util
 import json
+
+import jsonschema
 
 from flctool import load_behaviour
 from flctool.export.json_format import JsonExporter
@@ -19,9 +20,6 @@ def test_json_is_the_behaviour_and_matches_the_schema() -> None:
     for behaviour in [load_behaviour(SHIPPED[0]), random_behaviour(4)]:
         data = json.loads(JsonExporter().to_string(behaviour))
         assert behaviour_from_data(data) == behaviour
-        if importlib.util.find_spec("jsonschema") is not None:  # not a dependency of flctool
-            import jsonschema
-
-            jsonschema.validate(data, schema)
+        jsonschema.validate(data, schema)
         assert set(data) <= set(schema["properties"])
         assert set(schema["required"]) <= set(data)
