@@ -38,8 +38,9 @@ from flctool import __version__
 from flctool.atomic import write_text_atomic
 from flctool.compile import with_rules
 from flctool.envs.base import BatchEnv
-from flctool.errors import FlcError, RunDirError, SpecError
+from flctool.errors import FlcError, LearnError, RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.learners.base import population_problem
 from flctool.spec import (
     Behaviour,
     behaviour_from_data,
@@ -57,6 +58,9 @@ STRENGTHS_FILE = "strengths.csv"
 BEST_FILE = "best.yaml"
 CHECKPOINT_DIR = "checkpoints"
 _CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
+# What every checkpoint holds (learners with rule strengths add "q" and "traces").
+_CHECKPOINT_KEYS = ("learner", "generation", "elapsed", "population", "fitness", "rng",
+                    "metrics")
 
 
 # -- resolving a behaviour for a run ------------------------------------------------------
@@ -168,16 +172,50 @@ class Run:
         return self.path / CHECKPOINT_DIR / f"gen-{generation:05d}.json"
 
     def checkpoint(self, generation: int) -> dict[str, Any]:
+        """The checkpoint of ``generation``, checked to be whole: :class:`RunDirError` naming
+        the file if it is missing or damaged."""
         path = self.checkpoint_path(generation)
         try:
-            data: dict[str, Any] = json.loads(path.read_text(encoding="utf-8"))
+            data = json.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise RunDirError(f"{self.path}: no checkpoint of generation {generation}",
                               hint=self._generations_hint()) from None
         except (OSError, ValueError) as exc:
-            raise RunDirError(f"{path}: cannot read the checkpoint ({exc})",
-                              hint="the file is damaged; resume from an earlier run") from None
-        return data
+            raise self._damaged(generation, f"the checkpoint cannot be read ({exc})") from None
+        problem = self._checkpoint_problem(data, generation)
+        if problem is not None:
+            raise self._damaged(generation, f"the checkpoint {problem}")
+        checked: dict[str, Any] = data
+        return checked
+
+    def _checkpoint_problem(self, data: Any, generation: int) -> str | None:
+        if not isinstance(data, dict):
+            return f"holds a JSON {type(data).__name__}, not an object"
+        missing = [key for key in _CHECKPOINT_KEYS if key not in data]
+        if missing:
+            return f"has no {', '.join(repr(key) for key in missing)}"
+        if data["generation"] != generation:
+            return f"is of generation {data['generation']!r}, not {generation}"
+        try:
+            metrics = GenerationMetrics.from_row(data["metrics"])
+            population = np.array(data["population"], dtype=np.intp)
+            fitness = np.array(data["fitness"], dtype=np.float64)
+        except (KeyError, TypeError, ValueError) as exc:
+            return f"is damaged ({exc!r})"
+        if metrics.generation != generation:
+            return f"has the metrics of generation {metrics.generation}, not {generation}"
+        problem = population_problem(population, fitness, self.behaviour.rule_count,
+                                     len(self.behaviour.output.commands))
+        return None if problem is None else f"is damaged: its {problem}"
+
+    def _damaged(self, generation: int, problem: str) -> RunDirError:
+        path = self.checkpoint_path(generation)
+        later = " and the checkpoints after it" if generation < max(
+            self.checkpoint_generations(), default=generation) else ""
+        then = (f"resume from generation {generation - 1}" if generation > 0
+                else "start the run again from generation 0")
+        return RunDirError(f"{path}: {problem}",
+                           hint=f"delete {path}{later} to {then}")
 
     def last_checkpoint(self) -> dict[str, Any] | None:
         generations = self.checkpoint_generations()
@@ -239,9 +277,12 @@ class Run:
         if learner is None:
             learner = make_learner(self.behaviour, env)
         try:
-            last = self.last_checkpoint()
-            if last is not None:
-                learner.load_state_dict(last)
+            generations = self.checkpoint_generations()
+            if generations:
+                try:
+                    learner.load_state_dict(self.checkpoint(generations[-1]))
+                except LearnError as error:  # the run's own learner: the file is damaged
+                    raise self._damaged(generations[-1], error.args[0]) from None
             train(learner, [RunRecorder(self), *callbacks])
         finally:
             learner.env.close()
@@ -280,6 +321,13 @@ class Run:
         write_text_atomic(self.path / BEHAVIOUR_FILE, _behaviour_text(self.behaviour))
 
 
+def _shape(value: Any) -> tuple[int, ...] | None:
+    try:
+        return tuple(np.shape(value))
+    except ValueError:  # a ragged list
+        return None
+
+
 def _behaviour_text(behaviour: Behaviour) -> str:
     return behaviour_to_yaml(behaviour, (
         f"Resolved by flctool learn {__version__}: the behaviour file with its seed and any "
@@ -303,6 +351,11 @@ class RunRecorder(Callback):
         write_text_atomic(run.path / METRICS_FILE, _metrics_text(
             GenerationMetrics.from_row(s["metrics"]) for s in states))
         if learner.uses_strengths:
+            shape = (learner.controller.n_rules, learner.controller.n_commands)
+            for state in states:
+                if _shape(state.get("q")) != shape:
+                    raise run._damaged(state["generation"], f"the checkpoint has no q table of "
+                                       f"shape (rules, commands) = {shape}")
             write_text_atomic(run.path / STRENGTHS_FILE, _strengths_text(
                 ((s["generation"], s["q"]) for s in states),
                 learner.controller.command_names))

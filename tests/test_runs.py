@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import csv
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -176,3 +178,81 @@ def test_overrides_are_validated_like_the_file() -> None:
         resolve_behaviour(behaviour, {"seed.x": 1})
     with pytest.raises(SpecError, match="unknown key 'temprature'"):
         resolve_behaviour(behaviour, {"q.temprature": 1})
+
+
+class Crash(Callback):
+    def __init__(self, generation: int, error: BaseException) -> None:
+        self.generation, self.error = generation, error
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        if metrics.generation == self.generation:
+            raise self.error
+        return True
+
+
+@pytest.mark.parametrize("error", [RuntimeError("boom"), KeyboardInterrupt()])
+def test_a_crashed_or_interrupted_run_is_recorded_as_stopped(tmp_path: Path,
+                                                             error: BaseException) -> None:
+    run = create_run(ballchase(learner="pitt"), tmp_path / "run")
+    with pytest.raises(type(error)):
+        run.train([Crash(2, error)])
+    info = json.loads((run.path / "run.json").read_text())
+    assert info["status"] == "stopped" and info["best"]["generation"] == 2
+    assert open_run(run.path).train().status == "finished"
+
+
+def write_checkpoint(run_path: Path, generation: int, data: object) -> Path:
+    path = run_path / "checkpoints" / f"gen-{generation:05d}.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.parametrize(("damage", "message"), [
+    (lambda state: [state], "the checkpoint holds a JSON list, not an object"),
+    (lambda state: {k: v for k, v in state.items() if k != "metrics"},
+     "the checkpoint has no 'metrics'"),
+    (lambda state: {**state, "metrics": {"generation": 2}}, "the checkpoint is damaged"),
+    (lambda state: {**state, "generation": 1}, "the checkpoint is of generation 1, not 2"),
+    (lambda state: {**state, "population": [[9] * 15] * 6},
+     r"its population holds command indices 9\.\.9, outside 0\.\.4"),
+    (lambda state: {**state, "q": [[0.0]]}, r"'q' table has shape \(1, 1\)"),
+    (lambda state: {**state, "traces": []}, r"'traces' table has shape \(0,\)"),
+    (lambda state: {**state, "rng": {}}, "no state of the random generator"),
+])
+def test_a_damaged_checkpoint_names_its_file_and_how_to_get_past_it(
+        tmp_path: Path, damage: Callable[[dict[str, Any]], object], message: str) -> None:
+    run = create_run(ballchase(generations=3), tmp_path / "run")
+    run.train([StopAfter(2)])
+    path = write_checkpoint(run.path, 2, damage(run.checkpoint(2)))
+    with pytest.raises(RunDirError, match=message) as caught:
+        open_run(run.path).train()
+    assert str(caught.value).startswith(f"{path}: ")
+    assert caught.value.hint == f"delete {path} to resume from generation 1"
+    path.unlink()
+    assert open_run(run.path).train().status == "finished"
+
+
+def test_a_damaged_earlier_checkpoint_says_to_delete_the_later_ones_too(
+        tmp_path: Path) -> None:
+    run = create_run(ballchase(generations=3), tmp_path / "run")
+    run.train()
+    path = write_checkpoint(run.path, 0, {"learner": "hybrid"})
+    with pytest.raises(RunDirError, match=r"gen-00000\.json: the checkpoint has no "
+                                          r"'generation', 'elapsed'") as caught:
+        run.metrics()
+    assert caught.value.hint == (f"delete {path} and the checkpoints after it to start the "
+                                 "run again from generation 0")
+    with pytest.raises(RunDirError, match="gen-00000"):
+        run.behaviour_for(generation=0)
+
+
+def test_a_damaged_earlier_q_table_is_found_when_the_tables_are_rebuilt(
+        tmp_path: Path) -> None:
+    run = create_run(ballchase(generations=3), tmp_path / "run")
+    run.train([StopAfter(1)])
+    path = write_checkpoint(run.path, 0, {**run.checkpoint(0), "q": [[0.0]]})
+    with pytest.raises(RunDirError, match=r"gen-00000\.json: the checkpoint has no q table "
+                                          r"of shape \(rules, commands\) = \(15, 5\)"):
+        open_run(run.path).train()
+    assert json.loads((run.path / "run.json").read_text())["status"] == "stopped"
+    assert path.exists()

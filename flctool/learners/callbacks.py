@@ -30,7 +30,8 @@ class Callback:
         return True
 
     def on_end(self) -> None:
-        """Called once when training ends (finished, stopped early, or on an error)."""
+        """Called once when training ends: finished, stopped early, or on an error or Ctrl-C
+        (then also if :meth:`on_start` raised, so :attr:`learner` may still be None)."""
 
 
 class CallbackList(Callback):
@@ -49,8 +50,16 @@ class CallbackList(Callback):
         return all(answers)
 
     def on_end(self) -> None:
+        # Every callback ends even if one fails (a run directory must not stay "running"
+        # because a progress bar raised); the first failure is raised after all have run.
+        failure: BaseException | None = None
         for callback in self.callbacks:
-            callback.on_end()
+            try:
+                callback.on_end()
+            except BaseException as error:  # re-raised below, after the others ended
+                failure = failure or error
+        if failure is not None:
+            raise failure
 
 
 class FunctionCallback(Callback):

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from flctool.errors import LearnError
 from flctool.learners import (
     LEARNERS,
     TRAIN_SEED_LOW,
@@ -123,3 +124,66 @@ def test_a_checkpoint_of_another_learner_is_refused() -> None:
     hybrid = make_learner(line_behaviour(learner="hybrid"), LineEnv())
     with pytest.raises(Exception, match="learner 'pitt', not 'hybrid'"):
         hybrid.load_state_dict(pitt.state_dict())
+
+
+class Crash(Recorder):
+    """Raises ``error`` from on_generation at ``generation``."""
+
+    def __init__(self, generation: int, error: BaseException) -> None:
+        super().__init__()
+        self.generation, self.error = generation, error
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        super().on_generation(metrics)
+        if metrics.generation == self.generation:
+            raise self.error
+        return True
+
+
+@pytest.mark.parametrize("error", [RuntimeError("boom"), KeyboardInterrupt()])
+def test_on_end_runs_when_training_fails_or_is_interrupted(error: BaseException) -> None:
+    crash, after = Crash(1, error), Recorder()
+    learner = make_learner(line_behaviour(learner="pitt"), LineEnv())
+    with pytest.raises(type(error)):
+        train(learner, [crash, after])
+    assert crash.events == ["start", "gen0", "gen1", "end"]
+    assert after.events == ["start", "gen0", "end"]  # its on_generation never ran for gen 1
+    assert learner.generation == 1
+
+
+def damage(state: dict[str, object], **changes: object) -> dict[str, object]:
+    damaged = json.loads(json.dumps(state))
+    damaged.update(changes)
+    return {k: v for k, v in damaged.items() if v is not None}
+
+
+@pytest.mark.parametrize(("changes", "message"), [
+    ({"population": [[0, 1, 3]] * 6}, r"population holds command indices 0\.\.3, outside "
+                                      r"0\.\.2"),
+    ({"population": [[0, -1, 2]] * 6}, r"command indices -1\.\.2"),
+    ({"population": [0, 1, 2]}, r"population has shape \(3,\)"),
+    ({"population": [[0, 1]] * 6}, "controllers have 2 rules, the behaviour 3"),
+    ({"population": [[0, 1], [2]]}, "incomplete or damaged"),
+    ({"fitness": [0.5]}, r"fitness has shape \(1,\), not \(6,\)"),
+    ({"q": [[0.0] * 3] * 2}, r"'q' table has shape \(2, 3\), not \(rules, commands\) = "
+                            r"\(3, 3\)"),
+    ({"traces": None}, r"'traces' table has shape \(\)"),
+    ({"rng": {"ga": {}}}, "no state of the random generator.*env, explore"),
+    ({"rng": {"ga": {}, "env": {}, "explore": {}}}, "random generator states are damaged"),
+    ({"generation": None}, "incomplete or damaged"),
+])
+def test_a_damaged_checkpoint_is_refused_and_leaves_the_learner_as_it_was(
+        changes: dict[str, object], message: str) -> None:
+    trained = make_learner(line_behaviour(learner="hybrid"), LineEnv())
+    train(trained)
+    fresh = make_learner(line_behaviour(learner="hybrid"), LineEnv())
+    before = fresh.state_dict()
+    with pytest.raises(LearnError, match=message):
+        fresh.load_state_dict(damage(trained.state_dict(), **changes))
+    assert fresh.state_dict() == before
+
+
+def test_a_checkpoint_that_is_not_an_object_is_refused() -> None:
+    learner = make_learner(line_behaviour(learner="pitt"), LineEnv())
+    with pytest.raises(LearnError, match="a checkpoint is a JSON object, not list"):
+        learner.load_state_dict([1, 2])  # type: ignore[arg-type]

@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import pytest
 
-from flctool.learners import CallbackList, FunctionCallback, GenerationMetrics, StopAtFitness
+from flctool.learners import (
+    Callback,
+    CallbackList,
+    FunctionCallback,
+    GenerationMetrics,
+    StopAtFitness,
+)
 
 
 def metrics(mean: float, best: float) -> GenerationMetrics:
@@ -30,3 +36,20 @@ def test_a_callback_list_stops_if_any_member_asks_and_still_calls_all() -> None:
     callbacks = CallbackList([StopAtFitness(0.0), FunctionCallback(lambda m: seen.append(1))])
     assert not callbacks.on_generation(metrics(0.5, 1.0))
     assert seen == [1]
+
+
+def test_a_callback_list_ends_every_member_even_if_one_fails() -> None:
+    ended: list[str] = []
+
+    class Failing(Callback):
+        def on_end(self) -> None:
+            ended.append("failing")
+            raise RuntimeError("progress bar broke")
+
+    class Closing(Callback):
+        def on_end(self) -> None:
+            ended.append("closing")
+
+    with pytest.raises(RuntimeError, match="progress bar broke"):
+        CallbackList([Failing(), Closing()]).on_end()
+    assert ended == ["failing", "closing"]
