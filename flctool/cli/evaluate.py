@@ -14,6 +14,7 @@ from rich.table import Table
 
 from flctool.atomic import write_text_atomic
 from flctool.cli.app import app, console, user_errors
+from flctool.cli.locate import located_in
 from flctool.compile import compile_behaviour
 from flctool.envs import make_env
 from flctool.errors import FlcError, Problem, SpecError
@@ -81,7 +82,8 @@ def evaluate_command(
         _deployable(behaviour, str(file))
         controller = compile_behaviour(behaviour)
         seeds = evaluation_seeds(seed, episodes)
-        env = make_env(behaviour, episodes)
+        with located_in(file):  # an adapter's complaint about the file, at its line
+            env = make_env(behaviour, episodes)
         try:
             result = evaluate(controller, env, seeds)
         finally:

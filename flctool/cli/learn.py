@@ -12,9 +12,17 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from flctool.cli.app import app, console, err_console, user_errors
+from flctool.cli.locate import located_in
 from flctool.errors import Problem, RunDirError, SpecError
 from flctool.learners import FunctionCallback, GenerationMetrics, Learner, make_learner
-from flctool.runs import Run, RunSummary, create_run, open_run, resolve_behaviour
+from flctool.runs import (
+    BEHAVIOUR_FILE,
+    Run,
+    RunSummary,
+    create_run,
+    open_run,
+    resolve_behaviour,
+)
 from flctool.spec import Behaviour, behaviour_to_data, load_behaviour
 
 
@@ -33,6 +41,32 @@ def parse_assignments(assignments: list[str]) -> dict[str, Any]:
         except yaml.YAMLError:
             overrides[key] = value
     return overrides
+
+
+def set_keys(assignments: list[str]) -> list[str]:
+    """The keys of ``--set key=value`` assignments, as given."""
+    return [text.partition("=")[0].strip() for text in assignments]
+
+
+_GENERATIONS_KEYS = ("generations", "learning.generations")
+
+
+def _resume_generations(run: Run, generations: int | None,
+                        overrides: dict[str, Any]) -> int | None:
+    """The new generation budget of a resumed run: ``-g``, or ``--set generations=N`` (taken
+    out of ``overrides``, which must otherwise match the run)."""
+    for key in _GENERATIONS_KEYS:
+        if key not in overrides:
+            continue
+        value = overrides.pop(key)
+        # Validated like the file's own field (an int >= 1), named as the user wrote it.
+        budget = resolve_behaviour(run.behaviour, {"generations": value},
+                                   f"--set {key}").learning.generations
+        if generations is not None and generations != budget:
+            raise RunDirError(f"--generations {generations} and --set {key}={value} ask for "
+                              "different budgets", hint="give the new total once")
+        generations = budget
+    return generations
 
 
 def _differences(a: Any, b: Any, path: str = "") -> list[str]:
@@ -87,7 +121,6 @@ def learn(
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
     with user_errors():
-        learner_: Learner | None = None
         overrides = parse_assignments(set_ or [])
         for key, value in (("learner", learner), ("seed", seed), ("population", population)):
             if value is not None:
@@ -97,11 +130,14 @@ def learn(
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
             run = open_run(resume)
+            generations = _resume_generations(run, generations, overrides)
             if file is not None or overrides:
                 base = load_behaviour(file) if file is not None else run.behaviour
                 _check_same_run(run, resolve_behaviour(base, overrides))
             if generations is not None and generations != run.behaviour.learning.generations:
                 run.extend(generations)
+            source, overridden = run.path / BEHAVIOUR_FILE, []
+            behaviour = run.behaviour
         else:
             if file is None:
                 raise RunDirError("give a behaviour file to learn, or --resume a run directory",
@@ -110,8 +146,17 @@ def learn(
                 overrides["generations"] = generations
             behaviour = resolve_behaviour(load_behaviour(file), overrides,
                                           f"{file} with command-line options")
-            learner_ = make_learner(behaviour)  # environment errors before any directory
-            run = create_run(behaviour, out)
+            source, overridden = file, set_keys(set_ or [])
+        # The environment is built before any directory is made, so that its errors (located
+        # in the file they are about) leave nothing behind.
+        with located_in(source, overridden):
+            learner_ = make_learner(behaviour)
+        if resume is None:
+            try:
+                run = create_run(behaviour, out)
+            except BaseException:
+                learner_.env.close()  # Run.train closes it from here on (a robot gets stop)
+                raise
         summary = _train(run, learner_, show_progress=not as_json)
     if as_json:
         print(json.dumps(summary.to_dict(), indent=2))
@@ -119,7 +164,7 @@ def learn(
         _report(summary)
 
 
-def _train(run: Run, learner: Learner | None, show_progress: bool) -> RunSummary:
+def _train(run: Run, learner: Learner, show_progress: bool) -> RunSummary:
     config = run.behaviour.learning
     done = len(run.checkpoint_generations())
     progress = Progress(

@@ -14,6 +14,7 @@ and one-at-a-time runs agree. gymnasium is an optional extra: ``pip install 'flc
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -35,6 +36,9 @@ def import_gymnasium() -> Any:
     return gymnasium
 
 
+_GYM_SUGGESTION = re.compile(r"\s*Did you mean: `[^`]*`\?")
+
+
 def _spec_error(path: tuple[str | int, ...], message: str, hint: str = "") -> SpecError:
     return SpecError([Problem(path, message, hint)])
 
@@ -49,19 +53,24 @@ class GymnasiumEnv(BatchEnv):
         self.observation_names = input_names
         self._commands = commands
         self._envs: list[Any] = [self._make()]
-        first = self._envs[0]
-        self._indices = self._observation_indices(first.observation_space, input_names)
-        self._discrete, self._action_of = self._action_mapping(first.action_space, commands)
-        limit = getattr(first.spec, "max_episode_steps", None)
-        max_steps = config.max_steps or limit
-        if max_steps is None:
-            raise _spec_error(("environment", "max_steps"),
-                              f"'{config.id}' has no time limit of its own",
-                              "set environment.max_steps")
-        self.max_steps = int(max_steps)
-        values = sorted(commands.values())
-        self.action_bounds = (float(values[0]), float(values[-1]))
-        self._grow(batch_size)
+        try:
+            first = self._envs[0]
+            self._indices = self._observation_indices(first.observation_space, input_names)
+            self._discrete, self._action_of = self._action_mapping(first.action_space,
+                                                                   commands)
+            limit = getattr(first.spec, "max_episode_steps", None)
+            max_steps = config.max_steps or limit
+            if max_steps is None:
+                raise _spec_error(("environment", "max_steps"),
+                                  f"'{config.id}' has no time limit of its own",
+                                  "set environment.max_steps")
+            self.max_steps = int(max_steps)
+            values = sorted(commands.values())
+            self.action_bounds = (float(values[0]), float(values[-1]))
+            self._grow(batch_size)
+        except BaseException:  # nobody else holds the environments made so far
+            self.close()
+            raise
         self._reset_state(0)
         self._started = False
 
@@ -78,16 +87,26 @@ class GymnasiumEnv(BatchEnv):
         try:
             return gym.make(config.id, disable_env_checker=True, **config.options)
         except gym.error.Error as error:
-            known = [str(k) for k in gym.envs.registry]
             raise _spec_error(
                 ("environment", "id"),
-                f"Gymnasium cannot make '{config.id}': {error}.{did_you_mean(config.id, known)}",
+                f"Gymnasium cannot make '{config.id}': {self._unknown_id(str(error))}",
                 "use a registered id (python -c 'import gymnasium; "
                 "gymnasium.pprint_registry()'), and import the package that registers it") \
                 from None
         except TypeError as error:
             raise _spec_error(("environment", "options"),
                               f"'{config.id}' does not accept these options: {error}") from None
+
+    def _unknown_id(self, message: str) -> str:
+        """Gymnasium's message with one suggestion: ours, of a whole registered id, in place
+        of Gymnasium's guess at the name part (kept when we have none)."""
+        suggestion = did_you_mean(self.config.id, [str(k) for k in self.gym.envs.registry])
+        if suggestion:
+            message = _GYM_SUGGESTION.sub("", message)
+        message = message.rstrip()
+        if not message.endswith((".", "?")):
+            message += "."
+        return message + suggestion
 
     def _observation_indices(self, space: Any, inputs: tuple[str, ...]) -> NDArray[np.intp]:
         box = self.gym.spaces.Box

@@ -6,9 +6,12 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
 from typer.testing import CliRunner
 
+from flctool import load_behaviour, with_rules
 from flctool.cli import app
+from flctool.spec import behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS
 
@@ -70,3 +73,17 @@ def test_bad_environment_exits_cleanly(tmp_path: Path) -> None:
     result = runner.invoke(app, ["evaluate", str(path)])
     assert result.exit_code == 1
     assert "environment.pitch" in result.output and "too small" in result.output
+
+
+def test_an_environment_error_points_at_the_line_of_the_file(tmp_path: Path) -> None:
+    cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
+    deployable = with_rules(cartpole, np.zeros(cartpole.rule_count, dtype=np.intp))
+    text = behaviour_to_yaml(deployable).replace("id: CartPole-v1", "id: CartPol-v1")
+    file = tmp_path / "cartpole.yaml"
+    file.write_text(text, encoding="utf-8")
+    line = next(n for n, row in enumerate(text.splitlines(), 1) if "CartPol-v1" in row)
+    result = runner.invoke(app, ["evaluate", str(file), "--episodes", "2"])
+    assert result.exit_code == 1
+    assert f"{file}:{line}:" in result.stderr
+    assert "environment.id: Gymnasium cannot make 'CartPol-v1'" in " ".join(
+        result.stderr.split())

@@ -16,6 +16,8 @@ from typer.testing import CliRunner
 
 from flctool import load_behaviour
 from flctool.cli import app
+from flctool.envs.robot_server import RobotServer
+from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS, ROOT
 
@@ -137,3 +139,92 @@ def test_a_behaviour_without_environment_leaves_no_run_directory(tmp_path: Path)
     result = runner.invoke(app, ["learn", str(file), "--out", str(tmp_path / "r")])
     assert result.exit_code == 1 and "no 'environment' section" in result.stderr
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize("key", ["generations", "learning.generations"])
+def test_resume_takes_the_new_budget_from_set_as_from_generations(tmp_path: Path,
+                                                                  key: str) -> None:
+    out = tmp_path / "run"
+    assert runner.invoke(app, ["learn", BALLCHASE, "-g", "2", "-p", "4", "-o",
+                               str(out)]).exit_code == 0
+    result = runner.invoke(app, ["learn", "--resume", str(out), "--set", f"{key}=3",
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["generations"] == 3
+    assert load_behaviour(out / "behaviour.yaml").learning.generations == 3
+    result = runner.invoke(app, ["learn", "--resume", str(out), "--set", f"{key}=5",
+                                 "-g", "4"])
+    assert result.exit_code == 1 and "ask for different budgets" in result.stderr
+    result = runner.invoke(app, ["learn", "--resume", str(out), "--set", f"{key}=many"])
+    assert result.exit_code == 1
+    assert f"--set {key}" in result.stderr and "learning.generations" in result.stderr
+
+
+def test_a_failed_run_directory_closes_the_environment_it_opened(tmp_path: Path) -> None:
+    server = RobotServer.from_behaviour(load_behaviour(BALLCHASE), idle_timeout=5.0)
+    thread = server.serve_in_background(once=True)
+    try:
+        data = behaviour_to_data(load_behaviour(BALLCHASE))
+        data["environment"] = {"adapter": "robot-link", "port": server.port,
+                               "connect_timeout": 5, "retries": 0}
+        file = tmp_path / "link.yaml"
+        file.write_text(behaviour_to_yaml(behaviour_from_data(data)), encoding="utf-8")
+        (tmp_path / "full").mkdir()
+        (tmp_path / "full" / "x").write_text("x")
+        result = runner.invoke(app, ["learn", str(file), "--out", str(tmp_path / "full")])
+        assert result.exit_code == 1 and "is not empty" in result.stderr
+        thread.join(timeout=5)  # --once: it ends when learn disconnects
+        assert not thread.is_alive()
+        assert server.connections == 1 and server.stops == ["the client sent stop (close)"]
+    finally:
+        server.close()
+        thread.join(timeout=5)
+
+
+CARTPOLE = BEHAVIOURS / "cartpole.yaml"
+
+
+def test_an_environment_error_points_at_the_line_of_the_file(tmp_path: Path) -> None:
+    file = tmp_path / "cartpole.yaml"
+    file.write_text(CARTPOLE.read_text(encoding="utf-8").replace("id: CartPole-v1",
+                                                                 "id: CartPol-v1"))
+    line = next(n for n, text in enumerate(file.read_text().splitlines(), 1)
+                if "CartPol-v1" in text)
+    result = runner.invoke(app, ["learn", str(file), "--out", str(tmp_path / "r")])
+    assert result.exit_code == 1
+    message = " ".join(result.stderr.split())  # as printed, without the line wrapping
+    assert f"{file}:{line}:3: environment.id: Gymnasium cannot make 'CartPol-v1'" in message
+    assert message.count("Did you mean") == 1 and "Did you mean 'CartPole-v1'?" in message
+    assert not (tmp_path / "r").exists()
+    result = runner.invoke(app, ["learn", str(CARTPOLE), "--out", str(tmp_path / "r"),
+                                 "--set", "environment.observations.pole_angle=9"])
+    assert result.exit_code == 1
+    assert ("command line (--set environment.observations.pole_angle): "
+            "environment.observations.pole_angle: index 9 is out of range") in (
+        " ".join(result.stderr.split()))
+
+
+def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
+    run = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "flctool", "learn", BALLCHASE, "-g", "100000", "-p", "4",
+         "--json", "--out", str(run)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    try:
+        first = run / "checkpoints" / "gen-00000.json"
+        deadline = time.monotonic() + 60
+        while not first.exists() and process.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=30) == 130
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    info = json.loads((run / "run.json").read_text())
+    assert info["status"] == "stopped" and info["best"] is not None
+    result = runner.invoke(app, ["learn", "--resume", str(run), "-g",
+                                 str(info["best"]["generation"] + 2), "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["status"] == "finished"

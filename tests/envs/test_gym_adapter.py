@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import sys
 
+import gymnasium
 import numpy as np
 import pytest
+from gymnasium.envs.classic_control.cartpole import CartPoleEnv
 
 from flctool import compile_behaviour, load_behaviour, parse_behaviour
 from flctool.envs import check_env, make_env
@@ -85,6 +87,41 @@ def test_unknown_id_suggests_a_registered_one() -> None:
     with pytest.raises(SpecError, match=r"environment\.id: Gymnasium cannot make "
                                         r"'CartPole-v2'.*Did you mean 'CartPole-v1'"):
         make_env(behaviour)
+
+
+def test_an_unknown_name_gets_one_suggestion_not_two() -> None:
+    behaviour = parse_behaviour(_cartpole_env(
+        "environment: {adapter: gymnasium, id: CartPol-v1, actions: {push_left: 0, "
+        "push_right: 1}}\n"))
+    with pytest.raises(SpecError) as caught:
+        make_env(behaviour)
+    message = str(caught.value)
+    assert "Environment `CartPol` doesn't exist. Did you mean 'CartPole-v1'?" in message
+    assert message.count("Did you mean") == 1
+
+
+CLOSED: list[str] = []
+
+
+class _ClosingCartPole(CartPoleEnv):
+    """CartPole that records its closing, to see that a refused environment is closed."""
+
+    def close(self) -> None:
+        CLOSED.append("closed")
+        super().close()
+
+
+def test_an_environment_that_does_not_fit_is_closed() -> None:
+    env_id = "flctool-test/ClosingCartPole-v0"
+    if env_id not in gymnasium.envs.registry:
+        gymnasium.register(env_id, entry_point=_ClosingCartPole, max_episode_steps=50)
+    CLOSED.clear()
+    behaviour = parse_behaviour(_cartpole_env(
+        f"environment: {{adapter: gymnasium, id: '{env_id}', actions: {{push_left: 0, "
+        "push_right: 2}}\n"))
+    with pytest.raises(SpecError, match="action 2 is not in the action space"):
+        make_env(behaviour, 3)
+    assert CLOSED == ["closed"]
 
 
 @pytest.mark.parametrize(("environment", "message"), [
