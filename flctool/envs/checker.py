@@ -86,7 +86,8 @@ def check_env(env: BatchEnv | Callable[[], BatchEnv], batch_size: int = 4,
               seed: int = 0) -> None:
     """Check an adapter (or a zero-argument factory of fresh adapters) against the protocol.
 
-    Raises :class:`EnvError` naming the first broken rule; returns None when all hold.
+    Raises :class:`EnvError` naming the first broken rule; returns None when all hold. Every
+    adapter the check made (or the one given) is closed when it ends, however it ends.
     """
     if isinstance(env, BatchEnv):
         instance = env
@@ -95,6 +96,31 @@ def check_env(env: BatchEnv | Callable[[], BatchEnv], batch_size: int = 4,
             return instance  # one adapter, reset for every run: reset must start afresh
     else:
         make = env
+    fresh = not isinstance(env, BatchEnv)  # a factory: each call makes a new adapter
+    opened: list[BatchEnv] = []
+
+    def make_one() -> BatchEnv:
+        made = make()
+        opened.append(made)
+        return made
+
+    def release(used: BatchEnv) -> None:
+        # A robot serves one client at a time: a fresh adapter is closed as soon as its run
+        # is over, so that the next one is served.
+        if fresh and used in opened:
+            opened.remove(used)
+            used.close()
+
+    try:
+        _check(make_one, release, batch_size, seed)
+    finally:
+        for left in {id(e): e for e in opened}.values():
+            if isinstance(left, BatchEnv):
+                left.close()
+
+
+def _check(make: Callable[[], BatchEnv], release: Callable[[BatchEnv], None],
+           batch_size: int, seed: int) -> None:
     first = make()
     if not isinstance(first, BatchEnv):
         raise _fail(f"{type(first).__name__} is not a BatchEnv")
@@ -110,7 +136,11 @@ def check_env(env: BatchEnv | Callable[[], BatchEnv], batch_size: int = 4,
     seeds = rng.integers(0, 2**31, size=batch_size, dtype=np.int64)
     actions = rng.uniform(low, high, size=(first.max_steps + 1, batch_size))
     together = _run(first, seeds, actions)
-    if not _same(together, _run(make(), seeds, actions)):
+    release(first)
+    again = make()
+    same = _same(together, _run(again, seeds, actions))
+    release(again)
+    if not same:
         raise _fail("the same seeds and actions gave different trajectories")
     alone = make()
     for b in range(batch_size):
@@ -121,5 +151,4 @@ def check_env(env: BatchEnv | Callable[[], BatchEnv], batch_size: int = 4,
         if not _same(one, parts):
             raise _fail(f"episode {b} stepped alone differs from the same episode stepped in a "
                         f"batch of {batch_size}: episode b must use only seeds[b]'s randomness")
-    first.close()
-    alone.close()
+    release(alone)

@@ -7,8 +7,9 @@ in a :class:`~flctool.envs.base.BatchEnv` and pass ``on_stop`` to halt the motor
 One client at a time (a robot has one body); others wait in the listen queue. The server
 brings the robot to a **safe stop** -- ends the running episodes and calls ``on_stop`` --
 when the client sends ``stop``, disconnects, sends nothing for ``idle_timeout`` seconds, sends
-a malformed or unexpected message, or when the environment raises. Every fault is answered
-with an ``error`` message (when the client can still hear it) and closes the connection.
+a malformed or unexpected message, when the environment raises, or when the server itself is
+interrupted (Ctrl-C). Every fault is answered with an ``error`` message (when the client can
+still hear it) and closes the connection.
 """
 
 from __future__ import annotations
@@ -147,6 +148,12 @@ class RobotServer:
             self._send_quietly(channel, {"type": "error", "code": "robot",
                                          "message": f"{type(error).__name__}: {error}",
                                          "hint": hint})
+        except BaseException:  # Ctrl-C, SystemExit: halt the motors before the server goes
+            self.safe_stop("the server was interrupted")
+            self._send_quietly(channel, {"type": "error", "code": "shutdown",
+                                         "message": "the robot server was interrupted",
+                                         "hint": "start the server again, then reconnect"})
+            raise
         finally:
             channel.close()
 

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO
 
@@ -54,13 +55,26 @@ def link_file(tmp_path: Path, source: Path, port: int) -> Path:
     return path
 
 
+@contextmanager
+def server_process(file: Path, *options: str) -> Iterator[tuple[subprocess.Popen[str], int]]:
+    """:func:`spawn_server`, killed at the end if it is still running (a failed assert
+    included), its pipes closed."""
+    process, port = spawn_server(file, *options)
+    try:
+        yield process, port
+    finally:
+        if process.poll() is None:
+            process.kill()
+        process.wait(timeout=5)
+        for pipe in (process.stdout, process.stderr):
+            if pipe is not None:
+                pipe.close()
+
+
 @pytest.fixture
 def served(tmp_path: Path) -> Iterator[tuple[subprocess.Popen[str], int]]:
-    process, port = spawn_server(HANDMADE, "--idle-timeout", "10")
-    yield process, port
-    if process.poll() is None:
-        process.kill()
-        process.wait(timeout=5)
+    with server_process(HANDMADE, "--idle-timeout", "10") as started:
+        yield started
 
 
 def evaluate_json(file: Path, *options: str) -> dict[str, object]:
@@ -73,12 +87,12 @@ def evaluate_json(file: Path, *options: str) -> dict[str, object]:
 
 
 def test_evaluate_over_the_link_equals_the_simulator(tmp_path: Path) -> None:
-    process, port = spawn_server(HANDMADE, "--once", "--idle-timeout", "10")
-    remote = evaluate_json(link_file(tmp_path, HANDMADE, port))
-    assert process.wait(timeout=10) == 0  # --once: it exits when evaluate disconnects
+    with server_process(HANDMADE, "--once", "--idle-timeout", "10") as (process, port):
+        remote = evaluate_json(link_file(tmp_path, HANDMADE, port))
+        assert process.wait(timeout=10) == 0  # --once: it exits when evaluate disconnects
+        assert process.stderr is not None
+        log = process.stderr.read()
     assert remote == evaluate_json(HANDMADE)
-    assert process.stderr is not None
-    log = process.stderr.read()
     assert "client 127.0.0.1:" in log and "safe stop: the client sent stop (close)" in log
 
 
@@ -122,9 +136,8 @@ def test_serving_a_robot_link_is_an_error(tmp_path: Path) -> None:
 
 
 def test_evaluate_without_a_server_says_how_to_start_one(tmp_path: Path) -> None:
-    process, port = spawn_server(HANDMADE, "--once")
-    process.kill()  # the port is free again, and nobody listens
-    process.wait(timeout=5)
+    with server_process(HANDMADE, "--once") as (process, port):
+        process.kill()  # the port is free again, and nobody listens
     result = runner.invoke(app, ["evaluate", str(link_file(tmp_path, HANDMADE, port))])
     assert result.exit_code == 1
     assert "connection refused" in result.stderr and "flctool serve" in result.stderr

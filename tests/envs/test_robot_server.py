@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import socket
+import threading
 from collections.abc import Iterator
 from typing import Any
 
@@ -242,3 +243,34 @@ def test_any_simulator_adapter_can_be_served() -> None:
     client.close()
     thread.join(timeout=5)  # --once: the server ends with its first client
     assert not thread.is_alive()
+
+
+class _Interrupted(_Faulty):
+    """Ctrl-C arrives while the robot is stepping."""
+
+    def step(self, actions: FloatArray) -> Step:
+        raise KeyboardInterrupt
+
+
+def test_ctrl_c_mid_episode_stops_the_robot_before_the_server_ends() -> None:
+    halted: list[str] = []
+    server = RobotServer(_Interrupted(), dict(HANDMADE.output.commands), idle_timeout=5.0,
+                         on_stop=halted.append)
+    replies: list[dict[str, Any] | None] = []
+
+    def drive() -> None:  # the client, in a thread: the server runs here, as `serve` does
+        client = Client(server.port)
+        client.ask(HELLO)
+        client.ask({"type": "reset", "seeds": [1]})
+        replies.append(client.ask({"type": "step", "actions": [0.0]}))
+        client.close()
+
+    thread = threading.Thread(target=drive)
+    thread.start()
+    with pytest.raises(KeyboardInterrupt):
+        server.serve()
+    thread.join(timeout=5)
+    assert halted == ["the server was interrupted"] == server.stops
+    assert replies == [{"type": "error", "code": "shutdown",
+                        "message": "the robot server was interrupted",
+                        "hint": "start the server again, then reconnect"}]
