@@ -144,11 +144,11 @@ class Controller:
             tables = tables.copy()
         out = np.empty((tables.shape[0], array.shape[0]))
         layout = self._layout
-        nan_state = kernels.infer(array, layout.lo, layout.hi, layout.quads, layout.offsets,
-                                  layout.strides, layout.max_sets, layout.grid, tables,
-                                  layout.singletons, out)
-        if nan_state >= 0:
-            self._raise_nan(array)
+        failed = kernels.infer(array, layout.lo, layout.hi, layout.quads, layout.offsets,
+                               layout.strides, layout.max_sets, layout.grid, tables,
+                               layout.singletons, out)
+        if failed >= 0:
+            self._raise_undefined(array, failed)
         return out if table.ndim == 2 else out[0]
 
     def output_one(self, state: FloatArray) -> float:
@@ -161,8 +161,8 @@ class Controller:
         if x.shape != self._state_shape:
             x = self._as_states(x)[0]  # (1, N) is accepted too; other shapes raise
         value: float = self._one_kernel(x)
-        if value != value:  # NaN only from a NaN input: the partitions cover the ranges
-            self._raise_nan(x[None, :])
+        if value != value:  # a NaN input, or no rule fires (never a NaN output)
+            self._raise_undefined(x[None, :], 0)
         return value
 
     @cached_property
@@ -208,6 +208,16 @@ class Controller:
         raise InferenceError(
             f"input '{self.input_names[col]}' is NaN in state {row}",
             hint="NaN has no membership; filter or replace missing sensor readings")
+
+    def _raise_undefined(self, states: FloatArray, row: int) -> None:
+        # Why the kernels could not infer state ``row``: a NaN input, or (covering partitions
+        # make it rare) every activation underflowed to 0, where eq. 3 would be 0 / 0.
+        if np.isnan(states[row]).any():
+            self._raise_nan(states)
+        raise InferenceError(
+            f"no rule fires for state {row}: the sets overlap too little to be computed in "
+            "floating point (every membership underflows to 0)",
+            hint="widen their overlap")
 
     def _consequents(self, consequents: IntArray | None) -> IntArray:
         if consequents is None:

@@ -35,7 +35,7 @@ _F = TypeVar("_F", bound=Callable[..., Any])
 def _jit(function: _F) -> _F:
     # error_model="numpy": a division by zero gives inf/NaN like numpy instead of a Python
     # exception check on every division (the partitions are validated to cover the ranges,
-    # so sum(alpha) > 0 and no division by zero happens).
+    # so sum(alpha) > 0 unless memberships underflow, which the kernels report).
     return cast(_F, numba.njit(cache=True, nogil=True, error_model="numpy")(function))
 
 
@@ -188,7 +188,7 @@ def _dense_block(start: int, count: int, mu: FloatArray, grid: IntArray, table: 
                  denominators: FloatArray, out: FloatArray) -> None:
     """Eq. 2-3 over every rule for a block of states: ``grid (M, N)`` holds each rule's
     rows of ``mu``. Each state's sums run over the rules in increasing order, as the
-    reference's do."""
+    reference's do. ``denominators[:count]`` keeps each state's sum(alpha)."""
     numerators[:, :count] = 0.0
     denominators[:count] = 0.0
     for m in range(grid.shape[0]):
@@ -211,13 +211,28 @@ def _dense_block(start: int, count: int, mu: FloatArray, grid: IntArray, table: 
 
 
 @_jit
+def _first_zero(denominators: FloatArray, count: int, start: int) -> int:
+    # A reduction without a branch per state (it vectorises); the search runs only when
+    # some sum(alpha) is 0, i.e. no rule fired (see infer).
+    empty = False
+    for b in range(count):
+        empty |= denominators[b] == 0.0
+    if empty:
+        for b in range(count):
+            if denominators[b] == 0.0:
+                return start + b
+    return -1
+
+
+@_jit
 def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
                   strides: IntArray, max_sets: int, table: IntArray, singletons: FloatArray,
-                  numerators: FloatArray, out: FloatArray) -> None:
-    """Eq. 2-3 over only the fired rules, state by state, for a block of states."""
+                  numerators: FloatArray, out: FloatArray) -> int:
+    """Eq. 2-3 over only the fired rules, state by state, for a block of states. Returns -1,
+    or the first state where no rule fires (see :func:`infer`)."""
     n = strides.shape[0]
     population = table.shape[0]
-    sets, mus, counts = _work(n, max_sets + 1)
+    sets, mus, counts = _work(n, max_sets)
     rules = np.empty(64, np.intp)  # grown below when more rules fire
     alphas = np.empty(64)
     for b in range(count):
@@ -235,8 +250,11 @@ def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
             denominator += alpha
             for p in range(population):
                 numerators[p, 0] += alpha * singletons[table[p, rule]]
+        if denominator == 0.0:
+            return start + b
         for p in range(population):
             out[p, start + b] = numerators[p, 0] / denominator
+    return -1
 
 
 @_jit
@@ -247,7 +265,11 @@ def infer(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: FloatArray,
 
     ``grid (M, N)``, each rule's sets as rows of ``quads``, walks every rule; an empty
     ``grid (0, N)`` walks only the fired rules (see DENSE_RULES).
-    Returns -1, or the index of the first state with a NaN input (``out`` is then partial).
+    Returns -1, or the index of the first state whose output is undefined (``out`` is then
+    partial): a state with a NaN input, or one where every activation is 0. Validated
+    partitions cover their ranges, so the latter happens only when the memberships underflow
+    (sets thousands of orders of magnitude apart) -- the caller raises rather than return
+    the NaN that 0 / 0 would give.
     """
     n = states.shape[1]
     dense = grid.shape[0] > 0
@@ -264,9 +286,12 @@ def infer(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: FloatArray,
         if dense:
             _dense_block(start, count, mu, grid, table, singletons, alpha, numerators,
                          denominators, out)
+            failed = _first_zero(denominators, count, start)
         else:
-            _sparse_block(start, count, mu, offsets, strides, max_sets, table, singletons,
-                          numerators, out)
+            failed = _sparse_block(start, count, mu, offsets, strides, max_sets, table,
+                                   singletons, numerators, out)
+        if failed >= 0:
+            return failed
     return -1
 
 
@@ -283,7 +308,8 @@ def _unpack(floats: FloatArray, ints: IntArray) -> tuple[FloatArray, FloatArray,
 
 @_jit
 def infer_one(floats: FloatArray, ints: IntArray, table: IntArray, state: FloatArray) -> float:
-    """Eq. 3 for one ``state (N,)`` with one ``table (M,)``; NaN if an input is NaN.
+    """Eq. 3 for one ``state (N,)`` with one ``table (M,)``; NaN if an input is NaN or no
+    rule fires (every activation underflowed to 0: see :func:`infer`).
 
     ``floats``/``ints`` are :class:`Layout`'s packed arrays."""
     lo, hi, quads, singletons, max_sets, offsets, strides = _unpack(floats, ints)
@@ -318,8 +344,9 @@ def active_one(floats: FloatArray, ints: IntArray,
     capacity = _capacity(counts)
     rules = np.empty(capacity, np.intp)
     alphas = np.empty(capacity)
-    _fired_rules(sets, mus, counts, strides, rules, alphas)
-    return rules, alphas, -1
+    # Fewer than the capacity only if an input has no non-zero set (memberships underflowed).
+    fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
+    return rules[:fired], alphas[:fired], -1
 
 
 @_jit

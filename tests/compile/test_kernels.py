@@ -179,3 +179,47 @@ def test_with_consequents_shares_the_layout(handmade_path: Path) -> None:
     flipped = controller.with_consequents(4 - np.asarray(controller.consequents))
     assert flipped._layout is controller._layout
     assert flipped.output_one([0.5, 10.0]) == -controller.output_one([0.5, 10.0])
+
+
+def underflowing_controller(extra_sets: int) -> Controller:
+    """Sets so far apart that both memberships of x = 5e-324 underflow to 0: valid on paper
+    (the partition covers the range), but eq. 3 would be 0 / 0 there. A second input with
+    ``extra_sets`` sets makes M large enough for the fired-rules walk."""
+    y_sets = {f"y{j}": [max(0, j - 1), j, j, min(extra_sets - 1, j + 1)]
+              for j in range(extra_sets)}
+    data = {"flctool": 1, "name": "apart",
+            "inputs": {"x": {"range": [-1e300, 1e300],
+                             "sets": {"a": [-1e300, -1e300, -1e300, 1e-310],
+                                      "b": [0, 1e300, 1e300, 1e300]}},
+                       "y": {"range": [0, extra_sets - 1], "sets": y_sets}},
+            "output": {"name": "u", "commands": {"l": -1, "r": 1}}}
+    controller = compile_behaviour(behaviour_from_data(data))
+    return controller.with_consequents(np.arange(controller.n_rules) % 2)
+
+
+@pytest.mark.parametrize("extra_sets", [2, 17])  # M = 4 (all rules), M = 34 (fired rules)
+def test_no_rule_firing_raises_instead_of_giving_nan(extra_sets: int) -> None:
+    controller = underflowing_controller(extra_sets)
+    assert (controller.n_rules > kernels.DENSE_RULES) == (extra_sets == 17)
+    fine = np.array([[1.0, 0.5], [-1.0, 0.5]])
+    states = np.vstack([np.tile(fine, (20, 1)), [[5e-324, 0.5]]])  # state 40, second block
+    with pytest.raises(InferenceError, match=r"no rule fires for state 40: the sets overlap "
+                                             r"too little.*widen their overlap"):
+        controller.output(states)
+    with pytest.raises(InferenceError, match="no rule fires for state 0"):
+        controller.output_one([5e-324, 0.5])
+    rules, alpha = controller.active_rules(np.array([5e-324, 0.5]))
+    assert rules.shape == alpha.shape == (0,)
+    assert not controller.activations(states[40:]).any()
+    # Elsewhere nothing changes: the same values as the plain eq. 1-3, bit for bit.
+    assert controller.consequents is not None
+    np.testing.assert_array_equal(controller.output(fine), [reference_output(
+        controller, s, controller.consequents) for s in fine])
+    # Both walks report the state rather than write NaN.
+    layout = controller._layout
+    out = np.empty((1, len(states)))
+    table = np.array(controller.consequents, dtype=np.intp)[None, :]
+    for grid in (layout.grid, layout.grid[:0]):
+        assert kernels.infer(states, layout.lo, layout.hi, layout.quads, layout.offsets,
+                             layout.strides, layout.max_sets, grid, table,
+                             layout.singletons, out) == 40
