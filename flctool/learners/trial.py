@@ -65,6 +65,10 @@ class SparseRules:
             rules = [r * width + j for r in rules for j, _ in mus]
             alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
         total = _accumulate(alphas)
+        if not total > 0.0:  # covered ranges fire a rule; only underflow leaves none
+            raise InferenceError(f"no rule fires for the state {state}: the sets overlap too "
+                                 "little to be computed in floating point",
+                                 hint="widen the sets' overlap")
         return rules, alphas, [a / total for a in alphas]
 
     def output(self, alphas: list[float], commands: list[int]) -> float:

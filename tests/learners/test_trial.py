@@ -80,3 +80,15 @@ def test_a_learned_controller_acts_as_it_will_when_deployed() -> None:
 def test_a_nan_observation_is_an_error_as_in_the_controller() -> None:
     with pytest.raises(InferenceError, match="observed NaN for input 'ball_size'"):
         SPARSE.fire([float("nan"), 10.0])
+
+
+def test_no_rule_firing_is_an_error_not_a_division_by_zero() -> None:
+    from flctool.spec import behaviour_from_data
+
+    data = {"flctool": 1, "name": "tiny", "output": {"name": "y", "commands": {"a": 1.0}},
+            "inputs": {"x": {"range": [-1e300, 1e300],
+                             "sets": {"lo": [-1e300, -1e300, -1e300, 1e-310],
+                                      "hi": [0.0, 1e300, 1e300, 1e300]}}}}
+    rules = SparseRules(compile_behaviour(behaviour_from_data(data)))
+    with pytest.raises(InferenceError, match="no rule fires"):
+        rules.fire([5e-324])
