@@ -183,6 +183,13 @@ DENSE_RULES = 32
 
 
 @_jit
+def _within(value: float, low: float, high: float) -> float:
+    # Eq. 3 is a convex combination of the singletons, but rounding can step past the
+    # smallest or largest by an ulp; a command past the robot's largest is never sent.
+    return low if value < low else high if value > high else value
+
+
+@_jit
 def _dense_block(start: int, count: int, mu: FloatArray, grid: IntArray, table: IntArray,
                  singletons: FloatArray, alpha: FloatArray, numerators: FloatArray,
                  denominators: FloatArray, out: FloatArray) -> None:
@@ -205,9 +212,10 @@ def _dense_block(start: int, count: int, mu: FloatArray, grid: IntArray, table: 
             value = singletons[table[p, m]]
             for b in range(count):
                 numerators[p, b] += alpha[b] * value
+    low, high = singletons.min(), singletons.max()
     for p in range(table.shape[0]):
         for b in range(count):
-            out[p, start + b] = numerators[p, b] / denominators[b]
+            out[p, start + b] = _within(numerators[p, b] / denominators[b], low, high)
 
 
 @_jit
@@ -235,6 +243,7 @@ def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
     sets, mus, counts = _work(n, max_sets)
     rules = np.empty(64, np.intp)  # grown below when more rules fire
     alphas = np.empty(64)
+    low, high = singletons.min(), singletons.max()
     for b in range(count):
         _compact(mu, b, offsets, sets, mus, counts)
         capacity = _capacity(counts)
@@ -253,7 +262,7 @@ def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
         if denominator == 0.0:
             return start + b
         for p in range(population):
-            out[p, start + b] = numerators[p, 0] / denominator
+            out[p, start + b] = _within(numerators[p, 0] / denominator, low, high)
     return -1
 
 
@@ -326,7 +335,7 @@ def infer_one(floats: FloatArray, ints: IntArray, table: IntArray, state: FloatA
     for a in range(fired):
         numerator += alphas[a] * singletons[table[rules[a]]]
         denominator += alphas[a]
-    return numerator / denominator
+    return _within(numerator / denominator, singletons.min(), singletons.max())
 
 
 @_jit

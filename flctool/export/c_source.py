@@ -140,7 +140,12 @@ class CExporter(Exporter):
             f"{{{', '.join(map(str, first))}}};", "",
             "/* The commands' singletons c^k. */",
             f"static const {real} {prefix}singletons[{k}] = "
-            f"{{{', '.join(lit(v) for v in behaviour.output.commands.values())}}};", "",
+            f"{{{', '.join(lit(v) for v in behaviour.output.commands.values())}}};",
+            "/* The smallest and largest singleton: the output never leaves them. */",
+            f"static const {real} {prefix}lowest = "
+            f"{lit(min(behaviour.output.commands.values()))};",
+            f"static const {real} {prefix}highest = "
+            f"{lit(max(behaviour.output.commands.values()))};", "",
             "/* The command of each rule, in rule order: the last input varies fastest (eq. 1). */",
             f"static const {ctype} {prefix}consequents[{macro}N_RULES] = {{",
             *_wrapped([str(c) for c in consequents]), "};", "",
@@ -232,5 +237,9 @@ static {real} {prefix}membership({real} s, const {real} q[4])
         }}
         if (i < 0) break;
     }}
-    return weighted / total;
+    weighted /= total;
+    /* eq. 3 is a convex combination; rounding may step an ulp past the singletons */
+    if (weighted < {prefix}lowest) return {prefix}lowest;
+    if (weighted > {prefix}highest) return {prefix}highest;
+    return weighted;
 }}""".splitlines()

@@ -61,7 +61,7 @@ class FllExporter(Exporter):
         values = list(output.commands.values())
         lines += [f"OutputVariable: {output.name}", f"{INDENT}enabled: true",
                   f"{INDENT}range: {number(min(values))} {number(max(values))}",
-                  f"{INDENT}lock-range: false", f"{INDENT}aggregation: none",
+                  f"{INDENT}lock-range: true", f"{INDENT}aggregation: none",
                   f"{INDENT}defuzzifier: WeightedAverage TakagiSugeno",
                   f"{INDENT}default: nan", f"{INDENT}lock-previous: false"]
         lines += [f"{INDENT}term: {command} Constant {number(value)}"

@@ -33,6 +33,7 @@ class SparseRules:
         self.n_commands = controller.n_commands
         self.singletons: list[float] = [float(v) for v in controller.singletons]
         self._names = controller.input_names
+        self._low, self._high = min(self.singletons), max(self.singletons)
         self._lows = [float(v) for v in controller.ranges[:, 0]]
         self._highs = [float(v) for v in controller.ranges[:, 1]]
         self._sets = [[tuple(float(v) for v in quad) for quad in quads]
@@ -77,7 +78,9 @@ class SparseRules:
         numerator = 0.0
         for a, k in zip(alphas, commands, strict=True):
             numerator += a * singletons[k]
-        return numerator / _accumulate(alphas)
+        value = numerator / _accumulate(alphas)
+        # within the commands, as Controller.output keeps it (rounding may step an ulp past)
+        return self._low if value < self._low else self._high if value > self._high else value
 
 
 def _accumulate(values: list[float]) -> float:

@@ -19,7 +19,10 @@ def reference_output(controller: Controller, state: np.ndarray, consequents: np.
                     for i, j in enumerate(sets))  # eq. 2
         numerator += alpha * controller.singletons[consequents[m]]
         denominator += alpha
-    return numerator / denominator  # eq. 3
+    value = numerator / denominator  # eq. 3
+    # a convex combination: only rounding can step past the singletons, and that is clipped
+    return min(max(value, float(controller.singletons.min())),
+               float(controller.singletons.max()))
 
 
 def random_behaviour_data(rng: np.random.Generator, n_inputs: int | None = None,

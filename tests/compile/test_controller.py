@@ -117,8 +117,17 @@ def test_output_stays_within_the_singletons(seed: int, x: list[float]) -> None:
     rng = np.random.default_rng(seed)
     controller = compile_behaviour(behaviour_from_data(random_behaviour_data(rng, 3)))
     value = controller.output(np.array([x]))[0]
-    # eq. 3 is a convex combination of the singletons; only rounding may step past them
-    # (seen: 1 ulp above a lone singleton), so allow a few ulp.
-    lo, hi = controller.singletons.min(), controller.singletons.max()
-    slack = 4 * np.spacing(max(abs(lo), abs(hi)))
-    assert lo - slack <= value <= hi + slack
+    assert controller.singletons.min() <= value <= controller.singletons.max()
+    assert controller.output_one(np.array(x)) == value
+
+
+def test_rounding_never_steps_past_the_singletons() -> None:
+    # With one command, sum(alpha * c) / sum(alpha) is c only up to rounding (an ulp above or
+    # below for most of these states); the output is that command exactly.
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        controller = compile_behaviour(behaviour_from_data(
+            random_behaviour_data(rng, 3, n_commands=1)))
+        states = rng.uniform(controller.ranges[:, 0], controller.ranges[:, 1], size=(50, 3))
+        assert (controller.output(states) == controller.singletons[0]).all()
+        assert all(controller.output_one(s) == controller.singletons[0] for s in states)
