@@ -77,8 +77,23 @@ def show(file: ExistingFile) -> None:
     console.print(f"N = {len(behaviour.inputs)} inputs, M = {m} rules, K = {k} commands; "
                   + ("deployable (all rules given)" if not missing else
                      f"{missing} rules still to learn"))
-    if len(behaviour.inputs) == 2 and len(behaviour.rules):
+    if len(behaviour.inputs) == 2 and behaviour.rules:
         console.print(_rule_grid(behaviour))
+    elif behaviour.rules:
+        console.print(_rule_list(behaviour))
+
+
+def _rule_list(behaviour: Behaviour) -> Table:
+    table = Table(title="rules, in rule order (last input varies fastest)",
+                  title_justify="left")
+    table.add_column("m", justify="right")
+    for name in behaviour.input_names:
+        table.add_column(name)
+    table.add_column("then")
+    then = {tuple(r.if_[n] for n in behaviour.input_names): r.then for r in behaviour.rules}
+    for m, antecedent in enumerate(behaviour.antecedents()):
+        table.add_row(str(m), *antecedent, then.get(antecedent, "[dim]?[/]"))
+    return table
 
 
 def _rule_grid(behaviour: Behaviour) -> Table:

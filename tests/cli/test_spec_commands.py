@@ -81,6 +81,19 @@ def test_show_prints_sets_counts_and_rule_grid() -> None:
     assert "rules: rows ball_size, columns pan" in result.output
 
 
+def test_show_lists_the_rules_of_other_behaviours(tmp_path: Path) -> None:
+    from flctool import with_rules
+    from flctool.spec import behaviour_to_yaml
+
+    cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
+    learned = tmp_path / "cartpole.yaml"
+    learned.write_text(behaviour_to_yaml(with_rules(cartpole, np.zeros(81, dtype=np.intp))))
+    result = runner.invoke(app, ["show", str(learned)], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "rules, in rule order" in result.output
+    assert "M = 81 rules" in result.output and "80" in result.output
+
+
 def test_show_behaviour_to_learn() -> None:
     result = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase.yaml")])
     assert result.exit_code == 0
