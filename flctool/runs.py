@@ -64,6 +64,13 @@ _CHECKPOINT_KEYS = ("learner", "generation", "elapsed", "population", "fitness",
 
 
 # -- resolving a behaviour for a run ------------------------------------------------------
+def override_path(key: str) -> tuple[str, ...]:
+    """The field path an override key names: ``q.alpha`` is ``learning.q.alpha``; keys may
+    also start with ``learning.`` or ``environment.``."""
+    path = tuple(key.split("."))
+    return path if path[0] in ("learning", "environment") else ("learning", *path)
+
+
 def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
                       source: str = "command line") -> Behaviour:
     """The behaviour with ``overrides`` applied and validated like the file itself.
@@ -73,9 +80,7 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
     """
     data = behaviour_to_data(behaviour)
     for key, value in overrides.items():
-        path = key.split(".")
-        if path[0] not in ("learning", "environment"):
-            path = ["learning", *path]
+        path = list(override_path(key))
         node = data
         for depth, part in enumerate(path[:-1]):
             child = node.setdefault(part, {})

@@ -12,16 +12,11 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-from flctool.errors import PathPart, Problem, SpecError
+from flctool.errors import Problem, SpecError
+from flctool.runs import override_path
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
 COMMAND_LINE = "command line"
-
-
-def _override_path(key: str) -> tuple[PathPart, ...]:
-    # As flctool.runs.resolve_behaviour reads the keys of --set.
-    path = tuple(key.split("."))
-    return path if path[0] in ("learning", "environment") else ("learning", *path)
 
 
 def locate_in_file(error: SpecError, path: Path,
@@ -38,7 +33,7 @@ def locate_in_file(error: SpecError, path: Path,
         _, source = read_yaml(path.read_text(encoding="utf-8"), str(path))
     except (OSError, UnicodeDecodeError, SpecError):
         source = SourceMap(str(path))
-    overridden = [(key, _override_path(key)) for key in overrides]
+    overridden = [(key, override_path(key)) for key in overrides]
     problems: list[Problem] = []
     for problem in error.problems:
         if problem.file is not None:
