@@ -1,0 +1,39 @@
+"""The one exception tree: how problems and errors read."""
+
+from __future__ import annotations
+
+from flctool.errors import (
+    EnvError,
+    FlcError,
+    LinkError,
+    MissingDependencyError,
+    Problem,
+    SpecError,
+    format_path,
+)
+
+
+def test_paths_read_as_written() -> None:
+    assert format_path(("inputs", "pan", "sets", "left")) == "inputs.pan.sets.left"
+    assert format_path(("rules", 3, "then")) == "rules[3].then"
+    assert format_path(()) == "(top level)"
+
+
+def test_a_problem_names_file_line_column_field_and_fix() -> None:
+    problem = Problem(("output", "name"), "is missing", "add it", file="b.yaml", line=4,
+                      column=3)
+    assert str(problem) == "b.yaml:4:3: output.name: is missing (fix: add it)"
+    assert str(Problem((), "bad")) == "<behaviour>: (top level): bad"
+
+
+def test_spec_error_lists_every_problem() -> None:
+    error = SpecError([Problem(("a",), "one"), Problem(("b",), "two")], "f.yaml")
+    assert str(error).splitlines() == ["f.yaml: 2 problems", "  <behaviour>: a: one",
+                                       "  <behaviour>: b: two"]
+
+
+def test_the_tree_and_the_install_hint() -> None:
+    assert issubclass(LinkError, EnvError) and issubclass(EnvError, FlcError)
+    error = MissingDependencyError("gymnasium", "gym", "The gymnasium adapter")
+    assert str(error) == ("The gymnasium adapter needs the optional package 'gymnasium', which "
+                          "is not installed (fix: pip install 'flctool[gym]')")
