@@ -381,16 +381,30 @@ class RunRecorder(Callback):
                 [(metrics.generation, strengths.tolist())], learner.controller.command_names,
                 header=False))
         individual, consequents, fitness = learner.best()  # as Run.behaviour_for picks it
-        self.best = {"learner": run.learner, "seed": run.seed, "generation": metrics.generation,
-                     "individual": individual, "fitness": fitness}
-        write_text_atomic(run.path / BEST_FILE, behaviour_to_yaml(
-            with_rules(run.behaviour, consequents), _best_header(self.best, run.path.name)))
+        self._write_best(with_rules(run.behaviour, consequents), {
+            "learner": run.learner, "seed": run.seed, "generation": metrics.generation,
+            "individual": individual, "fitness": fitness})
         return True
+
+    def _write_best(self, behaviour: Behaviour, provenance: dict[str, Any]) -> None:
+        write_text_atomic(self.run.path / BEST_FILE, behaviour_to_yaml(
+            behaviour, _best_header(provenance, self.run.path.name)))
+        self.best = provenance
 
     def on_end(self) -> None:
         learner = self.learner
         finished = learner is not None and learner.generation + 1 >= (
             learner.config.generations)
+        # The checkpoints are the record: a stop between a checkpoint and best.yaml (Ctrl-C,
+        # an error) still leaves best.yaml and run.json naming the last checkpoint's best.
+        if self.run.checkpoint_generations():
+            try:
+                behaviour, provenance = self.run.behaviour_for()
+            except FlcError:
+                pass  # a damaged checkpoint: report what the run knew, not a second error
+            else:
+                if provenance != self.best:
+                    self._write_best(behaviour, provenance)
         self.run.write_info("finished" if finished else "stopped",
                             self.best or self.run.info().get("best"))
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -35,3 +37,23 @@ def minimal_text() -> str:
 @pytest.fixture
 def handmade_path() -> Path:
     return BEHAVIOURS / "ballchase-handmade.yaml"
+
+
+def restore_sigint() -> None:
+    """``preexec_fn`` for a child process the test interrupts with SIGINT.
+
+    A shell that starts a command in the background (as a CI runner may) makes it ignore
+    SIGINT, and children inherit that; Python then installs no KeyboardInterrupt handler.
+    With the default disposition back, the child handles Ctrl-C as it would for a user.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@pytest.fixture
+def ctrl_c_raises() -> Iterator[None]:
+    """SIGINT raises KeyboardInterrupt in this process, whatever it inherited."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -201,6 +201,33 @@ def test_a_crashed_or_interrupted_run_is_recorded_as_stopped(tmp_path: Path,
     assert open_run(run.path).train().status == "finished"
 
 
+def test_a_stop_between_checkpoint_and_best_yaml_still_names_the_checkpoint_s_best(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Ctrl-C may land after a generation's checkpoint is written but before best.yaml is:
+    # the run must still describe its last checkpoint, as an uninterrupted run would.
+    from flctool import runs
+
+    real_append = runs._append
+    calls = {"n": 0}
+
+    def interrupted_append(path: Path, text: str) -> None:
+        calls["n"] += 1
+        if calls["n"] == 3:  # generation 2's metrics row, right after its checkpoint
+            raise KeyboardInterrupt
+        real_append(path, text)
+
+    monkeypatch.setattr(runs, "_append", interrupted_append)
+    run = create_run(ballchase(learner="pitt"), tmp_path / "run")
+    with pytest.raises(KeyboardInterrupt):
+        run.train()
+    monkeypatch.setattr(runs, "_append", real_append)
+    info = json.loads((run.path / "run.json").read_text())
+    assert info["status"] == "stopped"
+    _, provenance = open_run(run.path).behaviour_for()
+    assert provenance["generation"] == 2 and info["best"] == provenance
+    assert f"generation {provenance['generation']}," in (run.path / "best.yaml").read_text()
+
+
 def write_checkpoint(run_path: Path, generation: int, data: object) -> Path:
     path = run_path / "checkpoints" / f"gen-{generation:05d}.json"
     path.write_text(json.dumps(data))

@@ -19,7 +19,7 @@ from flctool.cli import app
 from flctool.envs.robot_server import RobotServer
 from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml
 
-from ..conftest import BEHAVIOURS, ROOT
+from ..conftest import BEHAVIOURS, ROOT, restore_sigint
 
 runner = CliRunner()
 BALLCHASE = str(BEHAVIOURS / "ballchase.yaml")
@@ -210,14 +210,15 @@ def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
     process = subprocess.Popen(
         [sys.executable, "-m", "flctool", "learn", BALLCHASE, "-g", "100000", "-p", "4",
          "--json", "--out", str(run)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
+        preexec_fn=restore_sigint)
     try:
         first = run / "checkpoints" / "gen-00000.json"
         deadline = time.monotonic() + 60
         while not first.exists() and process.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
         process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=30) == 130
+        assert process.wait(timeout=60) == 130
     finally:
         if process.poll() is None:
             process.kill()

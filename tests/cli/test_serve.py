@@ -21,7 +21,7 @@ from flctool import load_behaviour
 from flctool.cli import app
 from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml
 
-from ..conftest import BEHAVIOURS, ROOT
+from ..conftest import BEHAVIOURS, ROOT, restore_sigint
 
 runner = CliRunner()
 HANDMADE = BEHAVIOURS / "ballchase-handmade.yaml"
@@ -32,7 +32,8 @@ def spawn_server(file: Path, *options: str) -> tuple[subprocess.Popen[str], int]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     process = subprocess.Popen(
         [sys.executable, "-m", "flctool", "serve", str(file), "--port", "0", *options],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        preexec_fn=restore_sigint)
     assert process.stdout is not None
     line = process.stdout.readline()
     assert line.startswith("listening on 127.0.0.1:"), _failure(process, line)
@@ -89,7 +90,7 @@ def evaluate_json(file: Path, *options: str) -> dict[str, object]:
 def test_evaluate_over_the_link_equals_the_simulator(tmp_path: Path) -> None:
     with server_process(HANDMADE, "--once", "--idle-timeout", "10") as (process, port):
         remote = evaluate_json(link_file(tmp_path, HANDMADE, port))
-        assert process.wait(timeout=10) == 0  # --once: it exits when evaluate disconnects
+        assert process.wait(timeout=60) == 0  # --once: it exits when evaluate disconnects
         assert process.stderr is not None
         log = process.stderr.read()
     assert remote == evaluate_json(HANDMADE)
@@ -104,7 +105,7 @@ def test_trace_over_the_link_has_the_simulator_s_state(
     evaluate_json(HANDMADE, "--trace", str(local))
     assert remote.read_text(encoding="utf-8") == local.read_text(encoding="utf-8")
     process.send_signal(signal.SIGINT)  # Ctrl-C ends the server
-    assert process.wait(timeout=10) == 130
+    assert process.wait(timeout=60) == 130
 
 
 def _metrics(run: Path) -> list[dict[str, str]]:

@@ -269,6 +269,7 @@ def test_an_error_from_the_robot_side_is_reported_with_its_hint() -> None:
 
 
 @pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs POSIX signals")
+@pytest.mark.usefixtures("ctrl_c_raises")
 def test_an_interrupt_stops_the_robot_and_propagates() -> None:
     main = threading.main_thread().ident
     assert main is not None and threading.current_thread().ident == main
@@ -279,7 +280,9 @@ def test_an_interrupt_stops_the_robot_and_propagates() -> None:
             return None
         return reset_reply(message)
     bridge = ScriptedBridge(interrupt)
-    link = make_env(link_behaviour(HANDMADE, bridge.port))
+    # a long step timeout: the interrupt, not the timeout, must end the wait, even on a
+    # loaded machine
+    link = make_env(link_behaviour(HANDMADE, bridge.port, step_timeout=60.0))
     link.reset(np.array([1]))
     with pytest.raises(KeyboardInterrupt):
         link.step(np.array([0.5]))
