@@ -40,7 +40,8 @@ def plot(
             raise FlcError("give run directories, or a single trace CSV",
                            hint="plot traces one at a time")
         runs = [open_run(s) for s in sources]
-        strengths = len(runs) == 1 and runs[0].learner != "pitt"
+        # the checkpoints say whether the learner kept rule strengths (hybrid, fuzzy_q)
+        strengths = len(runs) == 1 and "q" in (runs[0].last_checkpoint() or {})
         if rule is not None and not strengths:
             raise FlcError("--rule picks the rule of one run whose learner keeps strengths "
                            "(hybrid, fuzzy_q)", hint="plot that run on its own")

@@ -62,8 +62,6 @@ class Learner(ABC):
     """
 
     name: ClassVar[str]
-    #: Whether the learner keeps rule strengths (a q table) -- then :meth:`strengths` is set.
-    uses_strengths: ClassVar[bool] = False
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
     fuzzy_q: FuzzyQ | None = None
 
@@ -90,6 +88,11 @@ class Learner(ABC):
     @abstractmethod
     def advance(self) -> None:
         """Turn the evaluated generation into the next one (breed, decay exploration)."""
+
+    @property
+    def uses_strengths(self) -> bool:
+        """Whether the learner keeps rule strengths (a q table): then :meth:`strengths` is set."""
+        return self.fuzzy_q is not None
 
     def strengths(self) -> FloatArray | None:
         """The q table (M, K), for learners that keep one."""

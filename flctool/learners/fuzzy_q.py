@@ -205,7 +205,6 @@ class FuzzyQLearner(Learner):
     """
 
     name: ClassVar[str] = "fuzzy_q"
-    uses_strengths: ClassVar[bool] = True
     fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:

@@ -33,7 +33,6 @@ class HybridLearner(Learner):
     """GA exploration of whole controllers + Q-learning credit assignment to single rules."""
 
     name: ClassVar[str] = "hybrid"
-    uses_strengths: ClassVar[bool] = True
     fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
