@@ -1,6 +1,8 @@
 """FIS, the text format of MATLAB's Fuzzy Logic Toolbox: a Sugeno system, constant outputs.
 
-Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``), commands are ``constant`` output MFs,
+Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``) with no vertical edge, as MATLAB and
+Octave require: a shoulder's plateau and foot lie outside the range, an edge inside it has its
+foot one ulp away (:func:`~flctool.export.base.sloped_quad`); commands are ``constant`` MFs,
 ``AndMethod='min'`` is eq. 2 and ``DefuzzMethod='wtaver'`` is eq. 3. A rule line lists the set
 index of every input, then the command index, the weight (1) and the connection (1 = AND).
 MATLAB does not clip inputs to their range: clip states before evaluating to match flctool.
@@ -10,7 +12,7 @@ from __future__ import annotations
 
 import re
 
-from flctool.export.base import Exporter, Importer, number, require_deployable
+from flctool.export.base import Exporter, Importer, number, require_deployable, sloped_quad
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
@@ -42,7 +44,10 @@ class FisExporter(Exporter):
         for index, (name, variable) in enumerate(behaviour.inputs.items(), start=1):
             lines += ["", f"[Input{index}]", f"Name='{name}'",
                       f"Range={_vector(list(variable.range))}", f"NumMFs={len(variable.sets)}"]
-            for k, (set_name, (pa, pb, pc, pd)) in enumerate(variable.sets.items(), start=1):
+            for k, (set_name, quad) in enumerate(variable.sets.items(), start=1):
+                # MATLAB and Octave refuse trapmf with a == b and trimf with a == b or
+                # b == c: no vertical edges (exact under clipping, see sloped_quad)
+                pa, pb, pc, pd = sloped_quad(quad, variable.range)
                 shape = (f"'trimf',{_vector([pa, pb, pd])}" if pb == pc
                          else f"'trapmf',{_vector([pa, pb, pc, pd])}")
                 lines.append(f"MF{k}='{set_name}':{shape}")

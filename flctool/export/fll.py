@@ -10,7 +10,6 @@ Numbers are written with repr (full precision), never fuzzylite's default 3 deci
 
 from __future__ import annotations
 
-import math
 import re
 
 from flctool.errors import ExportError
@@ -23,6 +22,8 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
+    check_term_arity,
+    fuzzylite_quad,
     parse_number,
 )
 from flctool.spec import Behaviour
@@ -234,34 +235,11 @@ class _FllReader:
         return parts[0], parts[1], parts[2:]
 
     def quad(self, kind: str, params: list[str], line: int) -> tuple[float, float, float, float]:
-        arity = {"Trapezoid": 4, "Triangle": 3, "Rectangle": 2}
-        if kind not in arity:
-            raise self.fail(line, f"a {kind} term: flctool's sets are trapezoids",
-                            "use Trapezoid, Triangle or Rectangle terms")
-        n = arity[kind]
-        if len(params) not in (n, n + 1):
-            raise self.fail(line, f"a {kind} takes {n} numbers (and an optional height)")
+        n = check_term_arity(kind, len(params), self.file, line)
         if len(params) > n and parse_number(params[n], self.file, line, "height") != 1.0:
             raise self.fail(line, f"a term of height {params[n]}: flctool's sets reach 1")
         values = [self.point(p, line, kind) for p in params[:n]]
-        if kind == "Triangle":
-            pa, pb, pc, pd = values[0], values[1], values[1], values[2]
-        elif kind == "Rectangle":  # membership 1 on [a, b], 0 elsewhere
-            pa, pb, pc, pd = values[0], values[0], values[1], values[1]
-        else:
-            pa, pb, pc, pd = values
-        # fuzzylite gives membership 1 up to an infinite foot: a shoulder whatever the
-        # neighbouring point, which build_behaviour brings to the range's end.
-        if pa == -math.inf:
-            pa = pb = -math.inf
-        if pd == math.inf:
-            pc = pd = math.inf
-        left = pa == pb == -math.inf or (math.isfinite(pa) and math.isfinite(pb))
-        right = pc == pd == math.inf or (math.isfinite(pc) and math.isfinite(pd))
-        if not (left and right):
-            raise self.fail(line, f"a {kind} with an infinite point that is not a shoulder's "
-                            "foot", "only the outer feet may be -inf (first) or inf (last)")
-        return pa, pb, pc, pd
+        return fuzzylite_quad(kind, values, self.file, line)
 
     def point(self, text: str, line: int, kind: str) -> float:
         """A term's point: a number, or -inf / inf for a shoulder's foot."""
