@@ -72,19 +72,38 @@ class Exporter(ABC):
         return write_files(self.texts(behaviour, Path(path)), force=force)
 
 
+#: The largest file an importer reads, in characters: far above any controller written by
+#: hand or by a tool (a 4-input, 10-set grid of 10,000 rules is about 1 MB of FCL), and small
+#: enough that every importer, linear in the text, reads it in seconds.
+MAX_IMPORT_CHARS = 8_000_000
+
+
 class Importer(ABC):
-    """Reads the subset of one format that flctool can express."""
+    """Reads the subset of one format that flctool can express.
+
+    Every importer reads its text in time linear in its length (no backtracking regular
+    expression), and refuses a text longer than :data:`MAX_IMPORT_CHARS`.
+    """
 
     format: ClassVar[str]
 
-    @abstractmethod
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
         """The controller in ``text`` as a behaviour (``file`` names it in messages)."""
+        if len(text) > MAX_IMPORT_CHARS:
+            raise ExportError(f"{file}:1: the file holds {len(text):,} characters, more than "
+                              f"the {MAX_IMPORT_CHARS:,} an import reads",
+                              hint="is it really a controller? split it or shorten it")
+        return self.parse(text, file)
+
+    @abstractmethod
+    def parse(self, text: str, file: str) -> Behaviour:
+        """The controller in ``text`` (at most MAX_IMPORT_CHARS long) as a behaviour."""
 
     def from_file(self, path: str | Path) -> Behaviour:
         path = Path(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            with path.open(encoding="utf-8") as handle:
+                text = handle.read(MAX_IMPORT_CHARS + 1)
         except FileNotFoundError:
             raise ExportError(f"{path}: no such file", hint="check the path") from None
         except (OSError, UnicodeDecodeError) as exc:

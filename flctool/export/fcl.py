@@ -198,7 +198,7 @@ class FclImporter(Importer):
 
     format = "fcl"
 
-    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+    def parse(self, text: str, file: str) -> Behaviour:
         return build_behaviour(_FclParser(tokenize(text, file), file).parse())
 
 

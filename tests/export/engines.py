@@ -93,3 +93,22 @@ def assert_fuzzylite_agrees(behaviour: Behaviour, text: str, format: str, states
     worst = float(np.max(np.abs(got[keep] - want[keep])))
     assert worst <= 1e-12, f"fuzzylite 6 differs by {worst} ({format})"
     return worst
+
+
+def octave_outputs(fis_text: str, states: np.ndarray, folder: Path) -> np.ndarray:
+    """Octave's fuzzy-logic-toolkit ``evalfis`` on (S, N) ``states`` (it refuses states
+    outside the ranges, so clip them first); skips when Octave or the toolkit is missing."""
+    octave = shutil.which("octave")
+    if octave is None:
+        pytest.skip("Octave is not installed (an optional check)")
+    (folder / "system.fis").write_text(fis_text, encoding="utf-8")
+    np.savetxt(folder / "states.txt", states, fmt="%.17g")
+    script = ("pkg load fuzzy-logic-toolkit; fis = readfis('system.fis'); "
+              "y = evalfis(load('states.txt'), fis); printf('%.17g\\n', y);")
+    result = subprocess.run([octave, "--no-gui", "--quiet", "--no-init-file", "--eval", script],
+                            cwd=folder, capture_output=True, text=True, timeout=300,
+                            check=False)
+    if "package" in result.stderr and "not installed" in result.stderr:
+        pytest.skip("Octave's fuzzy-logic-toolkit is not installed (an optional check)")
+    assert result.returncode == 0, result.stderr + result.stdout
+    return np.array([float(v) for v in result.stdout.split()])
