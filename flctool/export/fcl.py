@@ -33,6 +33,7 @@ from flctool.export.imported import (
     unsupported,
 )
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.
@@ -79,7 +80,7 @@ class FclExporter(Exporter):
         _check_names(behaviour)
         output = behaviour.output
         lines = [f"(* {line} *)" for line in header_lines(behaviour, self.options.provenance)]
-        lines += [f"FUNCTION_BLOCK {behaviour.name}", "", "VAR_INPUT"]
+        lines += [f"FUNCTION_BLOCK {identifier(behaviour.name)}", "", "VAR_INPUT"]
         lines += [f"{INDENT}{name} : REAL;" for name in behaviour.inputs]
         lines += ["END_VAR", "", "VAR_OUTPUT", f"{INDENT}{output.name} : REAL;", "END_VAR", ""]
         for name, variable in behaviour.inputs.items():
