@@ -43,6 +43,7 @@ from flctool.export.imported import (
     zero_order_constant,
 )
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.
@@ -101,7 +102,7 @@ class FclExporter(Exporter):
         about = header_lines(behaviour, self.options.provenance)
         # fuzzylite 6 skips lines starting with '//' (and refuses '(* ... *)')
         lines = [f"// {line}" if fuzzylite else f"(* {line} *)" for line in about]
-        lines += [f"FUNCTION_BLOCK {behaviour.name}", "", "VAR_INPUT"]
+        lines += [f"FUNCTION_BLOCK {identifier(behaviour.name)}", "", "VAR_INPUT"]
         lines += [f"{INDENT}{name} : REAL;" for name in behaviour.inputs]
         lines += ["END_VAR", "", "VAR_OUTPUT", f"{INDENT}{output.name} : REAL;", "END_VAR", ""]
         for name, variable in behaviour.inputs.items():

@@ -28,6 +28,7 @@ from flctool.export.imported import (
     zero_order_constant,
 )
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.
 RESERVED = frozenset({"if", "is", "then", "and", "or", "with", "not", "any", "extremely",
@@ -43,7 +44,7 @@ class FllExporter(Exporter):
         require_deployable(behaviour)
         _check_names(behaviour)
         lines = [f"# {line}" for line in header_lines(behaviour, self.options.provenance)]
-        lines.append(f"Engine: {behaviour.name}")
+        lines.append(f"Engine: {identifier(behaviour.name)}")
         if behaviour.description:
             # FLL values are one line long and '#' starts a comment.
             description = " ".join(behaviour.description.split()).partition("#")[0].strip()
