@@ -48,7 +48,8 @@ def _membership(s: np.ndarray, q: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         falling = np.where(q[3] > q[2], np.maximum((q[3] - s) / (q[3] - q[2]), zero), zero)
         rising = np.where(q[1] > q[0], np.maximum((s - q[0]) / (q[1] - q[0]), zero), zero)
-    return np.where(s > q[2], falling, np.where(s < q[1], rising, F32(1))).astype(F32)
+    mu: np.ndarray = np.where(s > q[2], falling, np.where(s < q[1], rising, F32(1)))
+    return mu.astype(F32)
 
 
 def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
@@ -73,7 +74,8 @@ def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
         total += alpha
     with np.errstate(divide="ignore", invalid="ignore"):
         out = weighted / total
-    return np.clip(out, singletons.min(), singletons.max()).astype(np.float64)
+    clipped: np.ndarray = np.clip(out, singletons.min(), singletons.max())
+    return clipped.astype(np.float64)
 
 
 def near_vertical_edges(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
