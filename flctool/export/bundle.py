@@ -87,6 +87,7 @@ class BundleExporter(Exporter):
     format = "bundle"
 
     def to_string(self, behaviour: Behaviour) -> str:
+        require_deployable(behaviour)
         raise ExportError("a bundle is a folder of several files",
                           hint="give the folder to write with -o DIR")
 

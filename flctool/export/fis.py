@@ -14,6 +14,7 @@ import re
 
 from flctool.export.base import Exporter, Importer, number, require_deployable, sloped_quad
 from flctool.export.imported import (
+    DONT_CARE_HINT,
     ImportedCommand,
     ImportedController,
     ImportedInput,
@@ -333,8 +334,9 @@ class _FisReader:
         for variable, index in zip(self.result.inputs, sets, strict=True):
             k = self.index(index, line, f"input '{variable.name}'")
             if k == 0:
-                raise self.fail(line, f"the rule leaves out input '{variable.name}' (index 0)",
-                                "flctool rules name one set of every input (eq. 1)")
+                raise self.fail(line, f"the rule leaves out input '{variable.name}' (index 0):"
+                                " it fires with the other inputs' minimum alone, which no "
+                                "rule of the full grid (eq. 1-2) does", DONT_CARE_HINT)
             if k < 0:
                 raise self.fail(line, f"NOT (a negative index) on input '{variable.name}'")
             if k > len(variable.sets):

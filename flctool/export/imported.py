@@ -317,6 +317,12 @@ def zero_order_constant(kind: str, params: list[float], inputs: int, file: str, 
                       "flctool's commands are singletons", NOT_A_CONSTANT)
 
 
+#: The fix for an imported rule that leaves out an input.
+DONT_CARE_HINT = ("name a set of every input in each rule (one rule per set of the input left "
+                  "out), accepting the change in weight, or write the rules in a behaviour "
+                  "file, where leaving out an input means just that expansion")
+
+
 def check_unique(file: str, items: Iterable[tuple[str, int]], kind: str, of: str = "") -> None:
     """Refuse a name given twice (``items`` are (name, line)), naming both lines."""
     first: dict[str, int] = {}
@@ -436,8 +442,10 @@ def _check_rules(imported: ImportedController) -> None:
         left_out = [n for n in inputs if n not in rule.antecedent]
         if left_out:
             raise unsupported(
-                file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}",
-                "flctool rules name one set of every input (the full grid of eq. 1)")
+                file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}: it "
+                "fires with the other inputs' minimum alone, which no rule of the full grid "
+                "(eq. 1-2) does, so expanding it over the sets would change the output",
+                DONT_CARE_HINT)
         if rule.command not in commands:
             raise unsupported(file, rule.line,
                               f"the output has no term '{rule.command}' (in a rule)")
