@@ -238,6 +238,10 @@ class Executor(ABC):
 def prepare_experiment(behaviour: Behaviour, plan: ExperimentPlan, path: Path) -> Experiment:
     """A new experiment directory, or the existing one at ``path`` if it holds the same plan
     (then running it continues where it stopped)."""
+    if behaviour.learning.stop.seconds is not None:
+        raise RunDirError("learning.stop.seconds: a time budget ends runs at different points "
+                          "on different machines, so the experiment would not reproduce",
+                          hint="budget episodes or steps instead (stop.episodes, stop.steps)")
     text = _behaviour_text(behaviour)
     plan_file = path / PLAN_FILE
     if plan_file.is_file():
