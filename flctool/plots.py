@@ -293,7 +293,6 @@ def plot_surface(behaviour: Behaviour, path: Path, resolution: int = 121) -> lis
     figure, axes = plt.subplots(figsize=(6, 4.5))
     mesh = axes.pcolormesh(grid_x, grid_y, output, cmap="coolwarm", shading="auto",
                            rasterized=True)
-    axes.contour(grid_x, grid_y, output, colors="black", linewidths=0.5, alpha=0.5)
     unit = f" ({behaviour.output.unit})" if behaviour.output.unit else ""
     figure.colorbar(mesh, ax=axes, label=f"{behaviour.output.name}{unit}")
     axes.set_xlabel(_axis_label(behaviour, names[0]))
