@@ -55,11 +55,24 @@ def _save(figure: Any, path: Path) -> list[Path]:
         buffer = io.BytesIO()
         figure.savefig(buffer, format=suffix, dpi=110, bbox_inches="tight",
                        metadata={"Software": None} if suffix == "png" else {"Date": None})
+        data = _palette_png(buffer.getvalue()) if suffix == "png" else buffer.getvalue()
         target = path.with_suffix(f".{suffix}")
-        write_bytes_atomic(target, buffer.getvalue())
+        write_bytes_atomic(target, data)
         written.append(target)
     _pyplot().close(figure)
     return written
+
+
+def _palette_png(data: bytes) -> bytes:
+    """The PNG with a 256-colour palette: line plots look the same at a quarter of the size.
+    (Pillow comes with matplotlib.)"""
+    from PIL import Image
+
+    image = Image.open(io.BytesIO(data)).convert("RGBA")
+    buffer = io.BytesIO()
+    image.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(
+        buffer, format="PNG", optimize=True)
+    return buffer.getvalue()
 
 
 def _label(run: Run) -> str:
