@@ -39,7 +39,8 @@ def ballchase_world(config: BallchaseSimConfig) -> World:
     half_x, half_y = config.pitch.length / 2.0, config.pitch.width / 2.0
     robot, goal = config.robot, config.goal
     return World(
-        max_steps=config.max_steps, nearest=config.action == "nearest",
+        # a vote's output is a singleton, so it executes as the nearest command does
+        max_steps=config.max_steps, nearest=config.action in ("nearest", "vote"),
         half_x=half_x, half_y=half_y, goal_half_width=0.0, robot_radius=robot.radius,
         neck_offset=robot.neck_offset, neck_range=robot.neck_range,
         touch=config.ball.diameter / (2.0 * math.tan(robot.camera_fov * _RAD / 2.0)),
@@ -67,7 +68,7 @@ class BallchaseSim(PitchSim):
         _check_fit(config, commands, observation_names)
         self.config = config
         super().__init__(ballchase_world(config), commands, config.motion, config.noise,
-                         observation_names)
+                         observation_names, votes=config.action == "vote")
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour, batch_size: int = 1) -> BallchaseSim:

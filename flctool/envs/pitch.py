@@ -170,7 +170,7 @@ def world_from_config(config: PitchConfig) -> World:
     heading_lo, heading_hi = start.robot.heading
     bs = start.ball
     return World(
-        max_steps=config.max_steps, nearest=config.action == "nearest",
+        max_steps=config.max_steps, nearest=config.action in ("nearest", "vote"),
         half_x=pitch.length / 2.0, half_y=pitch.width / 2.0,
         goal_half_width=pitch.goal_width / 2.0, robot_radius=robot.radius,
         neck_offset=robot.neck_offset, neck_range=robot.neck_range,
@@ -406,8 +406,10 @@ class PitchSim(BatchEnv):
 
     def __init__(self, world: World, commands: dict[str, float], motion: dict[str, Motion],
                  noise: dict[str, MotionNoise], channels: tuple[str, ...],
-                 observation_names: tuple[str, ...] | None = None) -> None:
+                 observation_names: tuple[str, ...] | None = None, votes: bool = False,
+                 ) -> None:
         self.world = world
+        self.votes = votes
         self.channels = channels
         self.observation_names = observation_names or channels
         self.max_steps = world.max_steps
@@ -451,7 +453,7 @@ class PitchSim(BatchEnv):
             raise SpecError(problems)
         channels = tuple(config.channel_of(name) for name in behaviour.input_names)
         return cls(world_from_config(config), dict(behaviour.output.commands), config.motion,
-                   config.noise, channels, behaviour.input_names)
+                   config.noise, channels, behaviour.input_names, config.action == "vote")
 
     # -- the poses, from whichever path ran last ---------------------------------------------
     def _pose(self, name: str) -> FloatArray:

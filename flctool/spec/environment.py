@@ -154,9 +154,11 @@ class BallchaseSimConfig(Section):
     max_steps: int = Field(200, ge=1, description="steps before an episode is truncated")
     step_period: float = Field(0.25, gt=0, description=(
         "s per step; documents the units of the motion table (a step is one command)"))
-    action: Literal["crisp", "nearest"] = Field("crisp", description=(
+    action: Literal["crisp", "nearest", "vote"] = Field("crisp", description=(
         "crisp: blend the two commands around the output a (piecewise linear over the "
-        "sorted singletons); nearest: execute the command whose singleton is nearest a"))
+        "sorted singletons); nearest: execute the command whose singleton is nearest a; "
+        "vote: each command's firing rules sum their activations, the strongest command "
+        "runs"))
     robot: Robot = Robot()
     ball: Ball = Ball()
     start: Start = Start()
@@ -404,8 +406,9 @@ class PitchConfig(Section):
         "steps before an episode ends with the timeout outcome"))
     step_period: float = Field(0.25, gt=0, description=(
         "s per step; documents the units of the motion table (a step is one command)"))
-    action: Literal["crisp", "nearest"] = Field("crisp", description=(
-        "crisp: blend the two commands around the output a; nearest: the nearest command"))
+    action: Literal["crisp", "nearest", "vote"] = Field("crisp", description=(
+        "crisp: blend the two commands around the output a; nearest: the nearest command; "
+        "vote: each command's firing rules sum their activations, the strongest command runs"))
     robot: Robot = Robot()
     ball: PitchBall = PitchBall()
     pitch: Field2D = Field2D()
@@ -529,6 +532,10 @@ class GymnasiumConfig(Section):
         "Discrete action spaces: command name -> action index; the crisp output executes "
         "the action of the command with the nearest singleton. Box action spaces: leave "
         "empty, the crisp output is the action"))
+    action: Literal["nearest", "vote"] = Field("nearest", description=(
+        "nearest: the command whose singleton is nearest the crisp output (eq. 3) runs; "
+        "vote: each command's firing rules sum their activations and the strongest command "
+        "runs (no dead zone between opposite commands)"))
     success: Literal["terminated", "truncated", "never"] = Field("terminated", description=(
         "which episode end counts as success: terminated (reached a goal, e.g. "
         "MountainCar), truncated (survived to the time limit, e.g. CartPole), or never"))
