@@ -323,6 +323,7 @@ def _sense(ops: _Ops, w: World, s: _State, cos_h: Any, sin_h: Any,
     if needed.heading:
         true["heading"] = _wrap(ops, s.heading) * _DEG
     true["x"], true["y"] = s.x, s.y
+    true["ball_x"], true["ball_y"] = s.ball_x, s.ball_y
     return true
 
 

@@ -241,7 +241,8 @@ class BallchaseSimConfig(Section):
 #: bearings in degrees relative to the robot's heading (positive = to the left), distances mm.
 PITCH_CHANNELS = (
     "ball_size", "pan", "ball_distance", "goal_bearing", "goal_distance", "obstacle_bearing",
-    "obstacle_distance", "home_bearing", "home_distance", "heading", "x", "y")
+    "obstacle_distance", "home_bearing", "home_distance", "heading", "x", "y", "ball_x",
+    "ball_y")
 #: Channels whose noise is relative (reading * (1 + std * z)); the others add std * z.
 RELATIVE_CHANNELS = ("ball_size", "ball_distance", "goal_distance", "obstacle_distance",
                      "home_distance")
@@ -349,6 +350,8 @@ class PitchSensorNoise(Section):
     heading: float = Field(5.0, ge=0, description="deg")
     x: float = Field(50.0, ge=0, description="mm")
     y: float = Field(50.0, ge=0, description="mm")
+    ball_x: float = Field(50.0, ge=0, description="mm")
+    ball_y: float = Field(50.0, ge=0, description="mm")
 
 
 class Outcome(Section):

@@ -33,7 +33,8 @@ RANGES = {"ball_size": (0, 1), "pan": (-90, 90), "ball_distance": (0, 6000),
           "goal_bearing": (-180, 180), "goal_distance": (0, 6000),
           "obstacle_bearing": (-180, 180), "obstacle_distance": (0, 6000),
           "home_bearing": (-180, 180), "home_distance": (0, 6000), "heading": (-180, 180),
-          "x": (-3000, 3000), "y": (-2000, 2000)}
+          "x": (-3000, 3000), "y": (-2000, 2000), "ball_x": (-3000, 3000),
+          "ball_y": (-2000, 2000)}
 
 
 def _behaviour(environment: str, inputs: tuple[str, ...] = ("pan",), file: str = "p.yaml"):
@@ -132,7 +133,7 @@ def test_channels_read_the_geometry() -> None:
   obstacles: [{x: [-500, -500], y: [0, 0], radius: 100}]
   sensor_noise: {ball_size: 0, pan: 0, ball_distance: 0, goal_bearing: 0, goal_distance: 0,
                  obstacle_bearing: 0, obstacle_distance: 0, home_bearing: 0, home_distance: 0,
-                 heading: 0, x: 0, y: 0}
+                 heading: 0, x: 0, y: 0, ball_x: 0, ball_y: 0}
 """
     names = tuple(RANGES)
     _, obs = _start_state(exact, names)
@@ -147,6 +148,7 @@ def test_channels_read_the_geometry() -> None:
     assert read["obstacle_distance"] == pytest.approx(500.0 - 150.0 - 100.0)  # surfaces
     assert read["heading"] == pytest.approx(90.0)
     assert (read["x"], read["y"]) == (0.0, 0.0)
+    assert (read["ball_x"], read["ball_y"]) == (0.0, 1000.0)
 
 
 def test_sensors_map_inputs_to_channels_with_their_noise() -> None:
@@ -312,7 +314,7 @@ def test_bad_world_is_a_located_error(env_yaml: str, inputs: tuple[str, ...], pa
     assert "p.yaml:" in text
 
 
-@pytest.mark.parametrize("name", ["face-goal", "return-home"])
+@pytest.mark.parametrize("name", ["face-goal", "return-home", "avoid-obstacle", "dribble"])
 def test_shipped_pitch_behaviours_are_pitch_worlds(name: str) -> None:
     behaviour = load_behaviour(BEHAVIOURS / f"{name}.yaml")
     assert behaviour.environment is not None and behaviour.environment.adapter == "pitch"
