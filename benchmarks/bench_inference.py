@@ -168,13 +168,14 @@ def main() -> None:
 
     # -- 2. one state per call ---------------------------------------------------------------
     one_states = list(states[:subset["flctool_single"]])
-    single = common.per_call_seconds(controller.output_one, one_states, repeats)
+    one_call = common.per_call_seconds(controller.output_one, one_states, repeats)
     arrays = naive_arrays(controller)
     naive_rows = [s[None, :].copy() for s in one_states]
     naive_single = common.per_call_seconds(lambda row: naive_infer(row, *arrays), naive_rows,
                                            repeats)
-    print(f"\n2. output_one: {single * 1e6:.3f} µs per call (CPU, least of {repeats}); the "
-          f"naive kernel on one state {naive_single * 1e6:.3f} µs: {naive_single / single:.2f}x")
+    print(f"\n2. output_one: {one_call * 1e6:.3f} µs per call (CPU, least of {repeats}); the "
+          f"naive kernel on one state {naive_single * 1e6:.3f} µs: "
+          f"{naive_single / one_call:.2f}x")
 
     # -- 3. both cores -----------------------------------------------------------------------
     threaded_wall = common.best_wall_seconds(lambda: controller.output(states, threads=2),
@@ -194,7 +195,7 @@ def main() -> None:
     rows: list[dict[str, Any]] = []
     batched = common.best_seconds(lambda: controller.output(states), repeats)
     rows.append({"library": "flctool", "states_per_s": args.batch / batched,
-                 "us_per_state": single * 1e6, "batched_how": f"batch of {args.batch:,}"})
+                 "us_per_state": one_call * 1e6, "batched_how": f"batch of {args.batch:,}"})
 
     n = subset["skfuzzy_batch"]
     skfuzzy_batch = common.skfuzzy_simulation(behaviour, controller)  # new array shape
@@ -231,7 +232,7 @@ def main() -> None:
 
     by_name = {row["library"]: row for row in rows}
     goals = {
-        "single_us": (single * 1e6, "<=", GOALS["single_us"]),
+        "single_us": (one_call * 1e6, "<=", GOALS["single_us"]),
         "batched_vs_naive": (batched_vs_naive, ">=", GOALS["batched_vs_naive"]),
         "every_size_vs_naive": (worst["ratio"], ">=", GOALS["every_size_vs_naive"]),
         "vs_pyfuzzylite": (by_name["pyfuzzylite 7.1"]["batched_ratio"], ">=",
@@ -255,8 +256,8 @@ def main() -> None:
         "small_batch": kernels.SMALL_BATCH, "walks_every_rule": controller._layout.dense,
         "timing": "CPU time (time.process_time), least of the repeats",
         "against_naive": sizes,
-        "output_one": {"us": single * 1e6, "naive_us": naive_single * 1e6,
-                       "ratio": naive_single / single},
+        "output_one": {"us": one_call * 1e6, "naive_us": naive_single * 1e6,
+                       "ratio": naive_single / one_call},
         "threads": {"threads": 2, "wall_speedup": one_wall / threaded_wall,
                     "cpu_ns_per_state": threaded_cpu * 1e9 / args.batch,
                     "identical": identical},

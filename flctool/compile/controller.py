@@ -12,7 +12,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache, cached_property
-from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar, cast
+from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -109,7 +109,7 @@ class Controller:
         array = self._as_states(states)
         alpha = np.zeros((array.shape[0], self.n_rules))
         layout = self._layout
-        if self._kernels.activations(array, layout.floats, layout.ints, alpha) >= 0:
+        if _kernel("activations")(array, layout.floats, layout.ints, alpha) >= 0:
             self._raise_nan(array)
         return alpha
 
@@ -122,7 +122,7 @@ class Controller:
         """
         x = self._as_state(state)
         layout = self._layout
-        rules, alpha, nan_input = self._kernels.active_one(layout.floats, layout.ints, x)
+        rules, alpha, nan_input = _kernel("active_one")(layout.floats, layout.ints, x)
         if nan_input >= 0:
             self._raise_nan(x[None, :])
         return rules, alpha
@@ -181,10 +181,11 @@ class Controller:
 
         layout = self._layout
         bounds = np.linspace(0, states.shape[0], threads + 1).astype(int).tolist()
+        infer = _kernel("infer")
         with ThreadPoolExecutor(threads) as pool:
             failures = list(pool.map(
-                lambda start, stop: self._kernels.infer(states, layout.floats, layout.ints,
-                                                        tables, out, start, stop, layout.dense),
+                lambda start, stop: infer(states, layout.floats, layout.ints, tables, out, start,
+                                          stop, layout.dense),
                 bounds[:-1], bounds[1:]))
         return next((failed for failed in failures if failed >= 0), -1)
 
@@ -193,10 +194,6 @@ class Controller:
         from flctool.compile import kernels
 
         return kernels.layout(self.ranges, self.quadruples, self.rule_grid, self.singletons)
-
-    @cached_property
-    def _kernels(self) -> _Kernels:
-        return _kernels()
 
     @cached_property
     def _tables(self) -> IntArray:
@@ -209,7 +206,7 @@ class Controller:
         # What a batched call with this controller's consequents passes, looked up once.
         layout = self._layout
         tables = self._tables if self.consequents is not None else None
-        return (layout.floats, layout.ints, tables, layout.dense, self._kernels.infer,
+        return (layout.floats, layout.ints, tables, layout.dense, _kernel("infer"),
                 self.n_inputs)
 
     @cached_property
@@ -218,7 +215,7 @@ class Controller:
         # the kernel. The consequents follow the layout's ints (see kernels.infer_one).
         layout = self._layout
         ints = np.concatenate([layout.ints, self._tables[0]])
-        return layout.floats, ints, self._kernels.infer_one
+        return layout.floats, ints, _kernel("infer_one")
 
     @cached_property
     def _state_shape(self) -> tuple[int]:
@@ -279,26 +276,19 @@ class Controller:
         controller = Controller(self.input_names, self.set_names, self.output_name,
                                 self.command_names, self.ranges, self.quadruples,
                                 self.rule_grid, self.singletons, _frozen(table.copy()))
-        for shared in ("_layout", "_kernels"):  # same sets: share what depends on them
+        for shared in ("_layout",):  # same sets: share what depends on them
             if shared in self.__dict__:
                 controller.__dict__[shared] = self.__dict__[shared]
         return controller
 
 
-class _Kernels(NamedTuple):
-    infer: Callable[..., int]
-    infer_one: Callable[..., float]
-    active_one: Callable[..., tuple[IntArray, FloatArray, int]]
-    activations: Callable[..., int]
-
-
 @cache
-def _kernels() -> _Kernels:
-    # The kernels' compiled entry points, found once a process (importing numba, and
-    # compiling or loading the cached machine code, only when inference first runs).
+def _kernel(name: str) -> Callable[..., Any]:
+    # A kernel's compiled entry point, found once a process and only when first used
+    # (importing numba, and compiling or loading the cached machine code of that kernel).
     from flctool.compile import kernels
 
-    return _Kernels(*(kernels.entry(name) for name in _Kernels._fields))
+    return kernels.entry(name)
 
 
 def compile_behaviour(behaviour: Behaviour) -> Controller:
