@@ -13,11 +13,18 @@ vertical (``pa == pb``) is two points at the same x.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, Importer, header_lines, require_deployable
+from flctool.export.base import (
+    Exporter,
+    Importer,
+    header_lines,
+    require_deployable,
+    sloped_quad,
+)
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
@@ -26,13 +33,17 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
+    check_term_arity,
     check_unique,
+    fuzzylite_quad,
     parse_number,
     quad_from_points,
     span,
     unsupported,
+    zero_order_constant,
 )
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.
@@ -62,13 +73,18 @@ def set_points(quad: tuple[float, float, float, float],
     lo, hi = span
     points: list[tuple[float, int]] = []
     if not pa == pb == lo:  # a vertical edge at the range's end needs no foot: inputs clip
-        points.append((pa, 0))
+        # an edge inside the range gets its foot one ulp away: no double lies between
+        points.append((math.nextafter(pb, -math.inf) if pa == pb else pa, 0))
     points.append((pb, 1))
     if pc != pb:
         points.append((pc, 1))
     if not pc == pd == hi:
-        points.append((pd, 0))
+        points.append((math.nextafter(pc, math.inf) if pc == pd else pd, 0))
     return points
+
+
+#: The dialects the exporter writes.
+DIALECTS = ("iec", "fuzzylite")
 
 
 class FclExporter(Exporter):
@@ -77,34 +93,61 @@ class FclExporter(Exporter):
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)
         _check_names(behaviour)
+        dialect = self.options.dialect
+        if dialect not in DIALECTS:
+            raise ExportError(f"unknown FCL dialect '{dialect}'",
+                              hint=f"use one of {', '.join(DIALECTS)}")
+        fuzzylite = dialect == "fuzzylite"
         output = behaviour.output
-        lines = [f"(* {line} *)" for line in header_lines(behaviour, self.options.provenance)]
-        lines += [f"FUNCTION_BLOCK {behaviour.name}", "", "VAR_INPUT"]
+        about = header_lines(behaviour, self.options.provenance)
+        # fuzzylite 6 skips lines starting with '//' (and refuses '(* ... *)')
+        lines = [f"// {line}" if fuzzylite else f"(* {line} *)" for line in about]
+        lines += [f"FUNCTION_BLOCK {identifier(behaviour.name)}", "", "VAR_INPUT"]
         lines += [f"{INDENT}{name} : REAL;" for name in behaviour.inputs]
         lines += ["END_VAR", "", "VAR_OUTPUT", f"{INDENT}{output.name} : REAL;", "END_VAR", ""]
         for name, variable in behaviour.inputs.items():
             lines.append(f"FUZZIFY {name}")
-            for set_name, quad in variable.sets.items():
-                points = " ".join(f"({fcl_number(x)}, {mu})"
-                                  for x, mu in set_points(quad, variable.range))
-                lines.append(f"{INDENT}TERM {set_name} := {points};")
             lo, hi = variable.range
+            for set_name, quad in variable.sets.items():
+                lines.append(f"{INDENT}TERM {set_name} := "
+                             f"{_term(quad, variable.range, fuzzylite=fuzzylite)};")
             lines += [f"{INDENT}RANGE := ({fcl_number(lo)} .. {fcl_number(hi)});",
                       "END_FUZZIFY", ""]
         values = list(output.commands.values())
         lines.append(f"DEFUZZIFY {output.name}")
         lines += [f"{INDENT}TERM {command} := {fcl_number(value)};"
                   for command, value in output.commands.items()]
-        lines += [f"{INDENT}METHOD : COGS;", f"{INDENT}DEFAULT := 0.0;",
+        lines += [f"{INDENT}METHOD : COGS;"]
+        if fuzzylite:  # fuzzylite 6 reads ACCU here, and refuses it in the RULEBLOCK
+            lines.append(f"{INDENT}ACCU : NSUM;")
+        lines += [f"{INDENT}DEFAULT := 0.0;",
                   f"{INDENT}RANGE := ({fcl_number(min(values))} .. {fcl_number(max(values))});",
                   "END_DEFUZZIFY", "", "RULEBLOCK rules", f"{INDENT}AND : MIN;",
-                  f"{INDENT}ACT : MIN;", f"{INDENT}ACCU : NSUM;"]
+                  f"{INDENT}ACT : MIN;"]
+        if not fuzzylite:
+            lines.append(f"{INDENT}ACCU : NSUM;")
+        # fuzzylite 6 parses rules with lower-case keywords only (and silently drops others)
+        if_, is_, and_, then = ("if", "is", "and", "then") if fuzzylite else (
+            "IF", "IS", "AND", "THEN")
         for index, rule in enumerate(behaviour.rules, start=1):
-            condition = " AND ".join(f"{n} IS {rule.if_[n]}" for n in behaviour.input_names)
-            lines.append(f"{INDENT}RULE {index} : IF {condition} THEN {output.name} IS "
-                         f"{rule.then};")
+            condition = f" {and_} ".join(f"{n} {is_} {rule.if_[n]}"
+                                         for n in behaviour.input_names)
+            lines.append(f"{INDENT}RULE {index} : {if_} {condition} {then} {output.name} "
+                         f"{is_} {rule.then};")
         lines += ["END_RULEBLOCK", "", "END_FUNCTION_BLOCK"]
         return "\n".join(lines) + "\n"
+
+
+def _term(quad: tuple[float, float, float, float], span: tuple[float, float], *,
+          fuzzylite: bool) -> str:
+    """A set as IEC points, or as fuzzylite's Trapezoid / Triangle with shoulders' feet
+    outside the range (fuzzylite does not clip FCL inputs; see sloped_quad)."""
+    if not fuzzylite:
+        return " ".join(f"({fcl_number(x)}, {mu})" for x, mu in set_points(quad, span))
+    pa, pb, pc, pd = sloped_quad(quad, span, interior=False)
+    if pb == pc:
+        return f"Triangle {fcl_number(pa)} {fcl_number(pb)} {fcl_number(pd)}"
+    return "Trapezoid " + " ".join(fcl_number(x) for x in (pa, pb, pc, pd))
 
 
 def _check_names(behaviour: Behaviour) -> None:
@@ -121,7 +164,7 @@ _TOKEN = re.compile(r"""
     (?P<space>\s+) | (?P<comment>\(\*.*?\*\)|//[^\n]*|/\*.*?\*/)
   | (?P<number>[+-]?(\d(_?\d)*(\.(?!\.)(\d(_?\d)*)?)?|\.\d(_?\d)*)([eE][+-]?\d(_?\d)*)?)
   | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<symbol>:=|\.\.|[:;(),])
+  | (?P<symbol>:=|\.\.|[:;(),|])
 """, re.VERBOSE | re.DOTALL)
 
 
@@ -157,7 +200,7 @@ class FclImporter(Importer):
 
     format = "fcl"
 
-    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+    def parse(self, text: str, file: str) -> Behaviour:
         return build_behaviour(_FclParser(tokenize(text, file), file).parse())
 
 
@@ -280,7 +323,11 @@ class _FclParser:
             if key.word == "TERM":
                 term = self.name()
                 self.expect(":=")
-                terms.append((term, self.points(term)))
+                if self.peek().kind == "name":  # fuzzylite's syntax: Trapezoid a b c d
+                    quad = self.fuzzylite_term(term)
+                    variable.sets.append(ImportedSet(term.text, quad, term.line))
+                else:
+                    terms.append((term, self.points(term)))
                 self.expect(";")
             elif key.word == "RANGE":
                 variable.range = self.range_()
@@ -293,6 +340,37 @@ class _FclParser:
             quad = quad_from_points(points, extent, (self.file, term.line), term.text)
             variable.sets.append(ImportedSet(term.text, quad, term.line))
         return token.text
+
+    def fuzzylite_term(self, term: Token) -> tuple[float, float, float, float]:
+        """fuzzylite's term syntax, ``Trapezoid a b c d`` (see FUZZYLITE_TERMS), to ';'."""
+        kind = self.take()
+        values: list[float] = []
+        while self.peek().word != ";":
+            token = self.take()
+            if token.kind == "name" and token.text.lower() in ("inf", "-inf"):
+                values.append(float(token.text))
+            elif token.kind == "number":
+                values.append(parse_number(token.text, self.file, token.line, kind.text))
+            else:
+                raise self.fail(token, f"'{token.text}' in the {kind.text} term "
+                                f"'{term.text}'", "write the term's numbers, then ';'")
+            if len(values) > 5:
+                break
+        n = check_term_arity(kind.text, len(values), self.file, kind.line)
+        if len(values) > n and values[n] != 1.0:
+            raise self.fail(kind, f"a term of height {values[n]!r}: flctool's sets reach 1")
+        return fuzzylite_quad(kind.text, values[:n], self.file, kind.line)
+
+    def fuzzylite_output(self, term: Token) -> float:
+        """fuzzylite's ``Constant c`` or zero-order ``Linear 0 ... 0 c`` output term."""
+        kind = self.take()
+        numbers: list[float] = []
+        while self.peek().kind == "number" and len(numbers) <= len(self.input_names):
+            numbers.append(self.number())
+        if self.peek().word != ";":
+            numbers = []  # not numbers only: refused below as not a constant
+        return zero_order_constant(kind.text, numbers, len(self.input_names), self.file,
+                                   kind.line, term.text)
 
     def points(self, term: Token) -> list[tuple[float, float]]:
         points = []
@@ -330,11 +408,14 @@ class _FclParser:
             if key.word == "TERM":
                 term = self.name()
                 self.expect(":=")
-                if self.peek().kind != "number":
+                if self.peek().kind == "name":  # fuzzylite's syntax: Constant c, Linear ...
+                    value = self.fuzzylite_output(term)
+                elif self.peek().kind != "number":
                     raise self.fail(term, f"output term '{term.text}' is not a singleton: "
                                     "a Mamdani output set cannot be expressed (flctool's "
                                     "commands are singletons)", "write TERM name := value;")
-                value = self.number()
+                else:
+                    value = self.number()
                 self.expect(";")
                 self.result.commands.append(ImportedCommand(term.text, value, term.line))
             elif key.word == "METHOD":
@@ -419,9 +500,12 @@ class _FclParser:
                 raise self.fail(end, f"a rule weight of {weight!r}: flctool's rules all weigh 1")
             end = self.take()
         if end.word == ",":
-            raise self.fail(end, "a rule with several conclusions")
-        if end.word != ";":
-            raise self.fail(end, f"'{end.text}' where the rule should end with ';'")
+            raise self.fail(end, "a rule with several conclusions", "split it into rules")
+        if end.word in ("RULE", "END_RULEBLOCK"):  # fuzzylite ends rules at the line's end
+            self.at -= 1
+        elif end.word != ";":
+            raise self.fail(end, f"'{end.text}' where the rule should end with ';'",
+                            "end the rule with ';'")
         self.result.rules.append(ImportedRule(antecedent, command, start.line))
 
     def proposition(self) -> tuple[Token, str]:
@@ -437,7 +521,8 @@ class _FclParser:
         if term.kind != "name":
             raise self.fail(term, f"'{term.text}' where a term name should be")
         following = self.peek()
-        if following.kind == "name" and following.word not in ("AND", "OR", "THEN", "WITH"):
+        if following.kind == "name" and following.word not in ("AND", "OR", "THEN", "WITH",
+                                                                 "RULE", "END_RULEBLOCK"):
             raise self.fail(term, f"the hedge '{term.text}' before '{following.text}': "
                             "flctool's rules use plain terms")
         return first, term.text

@@ -2,19 +2,28 @@
 
 from __future__ import annotations
 
+import itertools
+from pathlib import Path
+
+import numpy as np
 import pytest
 
-from flctool import load_behaviour
+from flctool import compile_behaviour, load_behaviour
 from flctool.errors import ExportError
+from flctool.export.base import sloped_quad
 from flctool.export.fis import FisExporter, FisImporter
+from flctool.spec import Behaviour
 
+from .controllers import random_behaviour, random_states
+from .engines import assert_fuzzylite_agrees, octave_outputs
 from .roundtrip import SHIPPED
 
 
 def test_the_system_computes_eq_3() -> None:
     text = FisExporter().to_string(load_behaviour(SHIPPED[0]))
     for line in ("Type='sugeno'", "AndMethod='min'", "DefuzzMethod='wtaver'",
-                 "MF1='small':'trapmf',[0.0 0.0 0.1 0.3]", "MF2='right':'trimf',[-60.0 -30.0 0.0]",
+                 "MF1='small':'trapmf',[-2.0 -1.0 0.1 0.3]",
+                 "MF2='right':'trimf',[-60.0 -30.0 0.0]",
                  "MF1='turn_right':'constant',[-1.0]", "1 1, 1 (1) : 1"):
         assert line in text
 
@@ -59,7 +68,7 @@ def test_import_reads_the_subset() -> None:
 @pytest.mark.parametrize(("old", "new", "message"), [
     ("Type='sugeno'", "Type='mamdani'", r"tiny.fis:3: Type='mamdani'.*Mamdani output sets"),
     ("MF2='up':'constant',[1]", "MF2='up':'linear',[1 0]",
-     r"tiny.fis:21: output membership function 'up' is a linear"),
+     r"tiny.fis:21: output term 'up' is first-order Takagi-Sugeno"),
     ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'gaussmf',[0.1 1]",
      r"tiny.fis:14: membership function 'high' is a gaussmf"),
     ("1, 2 (1) : 1", "1, 2 (0.5) : 1", r"tiny.fis:24: a rule weight of 0.5"),
@@ -94,11 +103,17 @@ def test_duplicate_antecedents_are_refused_with_both_lines() -> None:
         FisImporter().from_string(text, "tiny.fis")
 
 
-def test_invalid_names_are_located() -> None:
-    from flctool.errors import SpecError
-
-    with pytest.raises(SpecError, match=r"tiny.fis:10:1: inputs.*'x y' is not a valid name"):
-        FisImporter().from_string(SYSTEM.replace("Name='x'", "Name='x y'"), "tiny.fis")
+def test_names_become_identifiers_unless_two_collide() -> None:
+    """MATLAB files name things 'Food-Quality': the import derives 'Food_Quality'."""
+    text = SYSTEM.replace("Name='x'", "Name='x y'").replace("'low'", "'Low-1'")
+    behaviour = FisImporter().from_string(text, "tiny.fis")
+    assert list(behaviour.inputs) == ["x_y"]
+    assert list(behaviour.inputs["x_y"].sets) == ["Low_1", "high"]
+    assert behaviour.rules[0].if_ == {"x_y": "Low_1"}
+    with pytest.raises(ExportError, match=r"tiny.fis:14: the set of input 'x' names 'low-1' "
+                       r"\(line 13\) and 'low_1' both become 'low_1'"):
+        FisImporter().from_string(SYSTEM.replace("'low'", "'low-1'").replace(
+            "'high'", "'low_1'"), "tiny.fis")
 
 
 @pytest.mark.parametrize(("old", "new", "message"), [
@@ -130,3 +145,71 @@ def test_a_second_input_with_the_same_name_is_refused() -> None:
     with pytest.raises(ExportError, match=r"the input 'ball_size' is defined twice, at lines "
                        r"\d+ and \d+"):
         FisImporter().from_string(text, "x.fis")
+
+
+def _fis_quads(behaviour: Behaviour) -> list[list[tuple[float, ...]]]:
+    return [[sloped_quad(q, v.range) for q in v.sets.values()]
+            for v in behaviour.inputs.values()]
+
+
+@pytest.mark.parametrize("source", [*SHIPPED, 3, 11, 12, 21], ids=str)
+def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
+    """fuzzylite 6 reads the export and agrees within 1e-12 apart from its 1e-6 tolerance,
+    20 % past the range's ends too: shoulders' feet lie a range width outside it."""
+    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
+                 else load_behaviour(str(source)))
+    states = random_states(behaviour, 10_000, seed=5)
+    assert_fuzzylite_agrees(behaviour, FisExporter().to_string(behaviour), "fis", states,
+                            _fis_quads(behaviour), tmp_path)
+
+
+def test_no_mf_has_a_vertical_edge() -> None:
+    """Octave's toolkit refuses trapmf with a == b and trimf with a == b or b == c."""
+    for seed in range(20):
+        for line in FisExporter().to_string(random_behaviour(seed)).splitlines():
+            if "'trapmf'" in line or "'trimf'" in line:
+                values = [float(v) for v in line.split("[")[1].rstrip("]").split()]
+                assert all(a < b for a, b in itertools.pairwise(values)) or (
+                    len(values) == 4 and values[0] < values[1] <= values[2] < values[3])
+
+
+@pytest.mark.parametrize("source", [*SHIPPED, 12], ids=str)
+def test_octave_reads_and_agrees(source: object, tmp_path: Path) -> None:
+    """Optional: Octave's fuzzy-logic-toolkit (readfis / evalfis) reads the export and agrees
+    within 1e-12 on states clipped to the ranges (evalfis refuses others)."""
+    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
+                 else load_behaviour(str(source)))
+    controller = compile_behaviour(behaviour)
+    states = np.clip(random_states(behaviour, 300, seed=5), controller.ranges[:, 0],
+                     controller.ranges[:, 1])
+    got = octave_outputs(FisExporter().to_string(behaviour), states, tmp_path)
+    assert np.max(np.abs(got - controller.output(states))) <= 1e-12
+
+
+def test_what_other_toolchains_write_imports_exactly() -> None:
+    """MATLAB's shoulder feet outside the range, a zero-order linear output, fuzzylite's
+    Enabled / Default / LockRange keys, and max aggregation where no rules share a term."""
+    text = (SYSTEM.replace("[0 0 0.2 0.8]", "[-1 0 0.2 0.8]").replace("[0.2 1 1]", "[0.2 1 7]")
+            .replace("'constant',[1]", "'linear',[0 1]")
+            .replace("Name='x'", "Name='x'\nEnabled=1")
+            .replace("Name='u'", "Name='u'\nDefault=nan\nLockPrevious=0\nLockRange=0")
+            .replace("DefuzzMethod", "AggMethod='max'\nDefuzzMethod"))
+    behaviour = FisImporter().from_string(text, "tiny.fis")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    assert behaviour.output.commands == {"down": -1.0, "up": 1.0}
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("[0 0 0.2 0.8]", "[-1 0.5 0.6 0.8]", r"tiny.fis:13: set 'low' .* has a ramp that the "
+     r"range's low end 0.0 cuts.*\(fix: move its first two points"),
+    ("'constant',[1]", "'linear',[2 1]", r"tiny.fis:21: output term 'up' is first-order"),
+    ("'constant',[1]", "'trimf',[0 1 2]", r"tiny.fis:21: output term 'up' is a trimf, not a "
+     r"constant.*\(fix: flctool's commands are constants"),
+    ("Name='x'", "Name='x'\nEnabled=0", r"tiny.fis:11: a disabled variable"),
+    ("Name='x'", "Name='x'\nColour=1", r"tiny.fis:11: 'Colour' in an input section \(fix:"),
+])
+def test_refusals_of_other_toolchains_files_say_what_to_do(old: str, new: str,
+                                                           message: str) -> None:
+    with pytest.raises(ExportError, match=message):
+        FisImporter().from_string(SYSTEM.replace(old, new), "tiny.fis")
