@@ -204,8 +204,8 @@ def test_what_other_toolchains_write_imports_exactly() -> None:
     ("[0 0 0.2 0.8]", "[-1 0.5 0.6 0.8]", r"tiny.fis:13: set 'low' .* has a ramp that the "
      r"range's low end 0.0 cuts.*\(fix: move its first two points"),
     ("'constant',[1]", "'linear',[2 1]", r"tiny.fis:21: output term 'up' is first-order"),
-    ("'constant',[1]", "'trimf',[0 1 2]", r"tiny.fis:21: output term 'up' is a trimf, not a "
-     r"constant.*\(fix: flctool's commands are constants"),
+    ("'constant',[1]", "'trimf',[0 1 2]", r"tiny.fis:21: output term 'up' is a trimf, a Mamdani "
+     r"output set.*\(fix: import with --mamdani-singletons"),
     ("Name='x'", "Name='x'\nEnabled=0", r"tiny.fis:11: a disabled variable"),
     ("Name='x'", "Name='x'\nColour=1", r"tiny.fis:11: 'Colour' in an input section \(fix:"),
 ])
