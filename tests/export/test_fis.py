@@ -15,7 +15,7 @@ from flctool.export.fis import FisExporter, FisImporter
 from flctool.spec import Behaviour
 
 from .controllers import random_behaviour, random_states
-from .engines import assert_fuzzylite_agrees, octave_outputs
+from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, octave_outputs, reference_controller
 from .roundtrip import SHIPPED
 
 
@@ -152,12 +152,12 @@ def _fis_quads(behaviour: Behaviour) -> list[list[tuple[float, ...]]]:
             for v in behaviour.inputs.values()]
 
 
-@pytest.mark.parametrize("source", [*SHIPPED, 3, 11, 12, 21], ids=str)
+@pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
+                         ids=lambda s: getattr(s, "name", str(s)))
 def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
     """fuzzylite 6 reads the export and agrees within 1e-12 apart from its 1e-6 tolerance,
     20 % past the range's ends too: shoulders' feet lie a range width outside it."""
-    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
-                 else load_behaviour(str(source)))
+    behaviour = reference_controller(source)
     states = random_states(behaviour, 10_000, seed=5)
     assert_fuzzylite_agrees(behaviour, FisExporter().to_string(behaviour), "fis", states,
                             _fis_quads(behaviour), tmp_path)
