@@ -303,6 +303,16 @@ EQUATIONS: dict[str, tuple[str, str]] = {
     "exploration.epsilon": ("ε of ε-greedy", "fuzzy_q"),
     "exploration.decay": ("multiplies T (or ε) after every generation", "fuzzy_q"),
     "exploration.minimum": ("floor of the decayed T or ε", "fuzzy_q"),
+    "selection": ("not in the paper (which keeps the last generation's best): candidates "
+                  "are compared on held-out selection episodes, counted in the run's budget",
+                  "all"),
+    "selection.candidates": ("not in the paper: controllers kept for validation", "all"),
+    "selection.episodes": ("not in the paper: validation episodes per candidate", "all"),
+    "stop": ("not in the paper (a fixed number of generations): a budget", "all"),
+    "stop.episodes": ("not in the paper: at most this many episodes in all", "all"),
+    "stop.steps": ("not in the paper: at most about this many environment steps", "all"),
+    "stop.seconds": ("not in the paper: training time", "all"),
+    "stop.target": ("not in the paper: stop at this validated mean fitness", "all"),
 }
 
 

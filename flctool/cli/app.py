@@ -42,8 +42,22 @@ def main(
     debug: Annotated[bool, typer.Option("--debug", help="Show full tracebacks on errors.")] = False,
     version: Annotated[bool | None, typer.Option(
         "--version", callback=_version, is_eager=True, help="Print the version and exit.")] = None,
+    import_module: Annotated[list[str] | None, typer.Option(
+        "--import-module", metavar="MODULE", help="Import this Python module first (it "
+        "registers Gymnasium environments); an environment id 'MODULE:Env-v0' may then name "
+        "it. A behaviour file never imports modules by itself.")] = None,
 ) -> None:
     _state["debug"] = debug
+    if import_module:
+        from flctool.envs.gym_adapter import import_user_modules
+
+        with user_errors():
+            import_user_modules(import_module)
+
+
+def debug_enabled() -> bool:
+    """Whether --debug was given (tracebacks are wanted)."""
+    return _state["debug"]
 
 
 def print_error(error: FlcError) -> None:

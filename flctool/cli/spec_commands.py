@@ -13,12 +13,15 @@ from rich.table import Table
 from flctool.cli.app import (
     app,
     console,
+    debug_enabled,
+    err_console,
     print_error,
     read_user_file,
     user_errors,
     write_user_file,
 )
 from flctool.compile import compile_behaviour
+from flctool.envs.preflight import validate_file
 from flctool.errors import FlcError
 from flctool.spec import Behaviour, load_behaviour
 from flctool.spec.schema import behaviour_schema_text
@@ -38,11 +41,24 @@ def validate(
     failed = 0
     for path in files:
         try:
-            behaviour = load_behaviour(path)
+            report = validate_file(path)
         except FlcError as error:
             failed += 1
             print_error(error)
             continue
+        except Exception as error:  # a bug on one file must not stop the check of the others
+            if debug_enabled():
+                raise
+            failed += 1
+            print_error(FlcError(f"{path}: internal error while checking it: "
+                                 f"{type(error).__name__}: {error}",
+                                 hint="run with --debug for the traceback, and report it"))
+            continue
+        behaviour = report.behaviour
+        for warning in report.warnings:
+            err_console.print(f"[yellow]warning:[/] {escape(str(warning))}", highlight=False)
+        if report.adapter_note:
+            console.print(f"[yellow]note:[/] {escape(str(path))}: {escape(report.adapter_note)}")
         state = ("deployable" if behaviour.is_deployable
                  else f"{len(behaviour.missing_rules())} of {behaviour.rule_count} rules to learn")
         console.print(f"[green]ok[/] {escape(str(path))}: {behaviour.name} ({state})")
