@@ -303,16 +303,19 @@ EQUATIONS: dict[str, tuple[str, str]] = {
     "exploration.epsilon": ("ε of ε-greedy", "fuzzy_q"),
     "exploration.decay": ("multiplies T (or ε) after every generation", "fuzzy_q"),
     "exploration.minimum": ("floor of the decayed T or ε", "fuzzy_q"),
-    "selection": ("not in the paper (which keeps the last generation's best): candidates "
-                  "are compared on held-out selection episodes, counted in the run's budget",
-                  "all"),
-    "selection.candidates": ("not in the paper: controllers kept for validation", "all"),
-    "selection.episodes": ("not in the paper: validation episodes per candidate", "all"),
-    "stop": ("not in the paper (a fixed number of generations): a budget", "all"),
-    "stop.episodes": ("not in the paper: at most this many episodes in all", "all"),
-    "stop.steps": ("not in the paper: at most about this many environment steps", "all"),
-    "stop.seconds": ("not in the paper: training time", "all"),
-    "stop.target": ("not in the paper: stop at this validated mean fitness", "all"),
+    "selection": ("an addition to the paper: which controller the run returns, chosen on "
+                  "validation episodes instead of one noisy trial", "all"),
+    "selection.candidates": ("an addition: the best distinct controllers kept for validation",
+                             "all"),
+    "selection.episodes": ("an addition: validation episodes per candidate (seeds disjoint from "
+                           "training and from evaluate)", "all"),
+    "stop": ("an addition: the run's budget; the paper stops after a number of generations",
+             "all"),
+    "stop.episodes": ("an addition: stop after this many episodes, selection included", "all"),
+    "stop.steps": ("an addition: stop after this many environment steps", "all"),
+    "stop.seconds": ("an addition: stop after this much training time", "all"),
+    "stop.target": ("an addition: stop once the validated controller reaches this fitness",
+                    "all"),
 }
 
 
