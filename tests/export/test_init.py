@@ -77,3 +77,15 @@ def test_every_exporter_refuses_missing_rules(format: str) -> None:
         EXPORTERS.get(format)().to_string(incomplete)
     assert "IF ball_size IS small AND pan IS far_right" in str(error.value)
     assert "... and 5 more" in str(error.value)
+
+
+def test_importing_export_loads_no_learner() -> None:
+    import subprocess
+    import sys
+
+    code = ("import sys, flctool.export; "
+            "print(sorted(m for m in sys.modules if m.startswith('flctool.learners') "
+            "or m == 'flctool.runs'))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=120, check=True)
+    assert result.stdout.strip() == "[]"
