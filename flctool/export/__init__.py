@@ -10,10 +10,11 @@ registered by its name, loaded lazily::
 
 from __future__ import annotations
 
-from flctool.export.base import Exporter, ExportOptions, Importer, require_deployable
+from flctool.export.base import Exporter, ExportOptions, Importer
 from flctool.export.source import load_source
 from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.spec import require_deployable
 
 #: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.exporters`` entries).
 EXPORTERS: Registry[type[Exporter]] = registry("exporter", "export format")

@@ -23,6 +23,7 @@ from pydantic import (
     model_validator,
 )
 
+from flctool.errors import NotDeployableError
 from flctool.plugins import names, plugins
 from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
@@ -194,3 +195,27 @@ class Behaviour(Section):
     @property
     def is_deployable(self) -> bool:
         return len(self.rules) == self.rule_count and not self.missing_rules()
+
+
+#: How many missing rules a :class:`NotDeployableError` lists.
+LISTED_MISSING = 10
+
+
+def require_deployable(behaviour: Behaviour, file: str | None = None) -> None:
+    """Raise :class:`NotDeployableError`, listing the missing rules, unless ``behaviour``
+    gives all M consequents of eq. 1 (``file`` names where it came from)."""
+    missing = behaviour.missing_rules()
+    if not missing:
+        return
+    names = behaviour.input_names
+    listed = [" AND ".join(f"{n} IS {s}" for n, s in zip(names, sets, strict=True))
+              for sets in missing[:LISTED_MISSING]]
+    more = len(missing) - len(listed)
+    text = "".join(f"\n  IF {rule}" for rule in listed)
+    if more:
+        text += f"\n  ... and {more} more"
+    where = f"{file}: " if file else ""
+    raise NotDeployableError(
+        f"{where}behaviour '{behaviour.name}' is not deployable: {len(missing)} of "
+        f"{behaviour.rule_count} rules have no consequent:{text}",
+        hint="learn them (flctool learn) and use the run directory, or add the rules")
