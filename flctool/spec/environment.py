@@ -704,10 +704,3 @@ class RobotLinkConfig(Section):
         "further connection attempts after a refused or timed-out connect; steps are never "
         "retried (a step moves the robot)"))
     retry_delay: float = Field(1.0, ge=0, description="s between connection attempts")
-
-
-EnvironmentConfig = Annotated[
-    BallchaseSimConfig | PitchConfig | GymnasiumConfig | RobotLinkConfig,
-    Field(discriminator="adapter"),
-]
-ADAPTER_NAMES = ("ballchase-sim", "pitch", "gymnasium", "robot-link")

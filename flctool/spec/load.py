@@ -16,8 +16,15 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.registry import did_you_mean
 from flctool.spec.checks import check_input, check_rules, limit_problems
-from flctool.spec.environment import ADAPTER_NAMES, EnvironmentConfig
-from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
+from flctool.spec.models import (
+    ADAPTER_NAMES,
+    FORMAT_VERSION,
+    LEARNING_TAGS,
+    Behaviour,
+    EnvironmentConfig,
+    InputVariable,
+    Rule,
+)
 from flctool.spec.rules import expand_dont_care
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
@@ -200,7 +207,8 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     message = error["msg"]
     hint = ""
     # A discriminated union puts the chosen tag into the path; the file does not have it.
-    if len(loc) >= 2 and loc[0] == "environment" and loc[1] in ADAPTER_NAMES:
+    if len(loc) >= 2 and ((loc[0] == "environment" and loc[1] in ADAPTER_NAMES)
+                          or (loc[0] == "learning" and loc[1] in LEARNING_TAGS)):
         del loc[1]
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
