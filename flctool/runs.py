@@ -3,16 +3,20 @@
 A run directory holds::
 
     behaviour.yaml          the resolved behaviour: the file, its seed, command-line overrides
-    run.json                learner, seed, status (running / stopped / finished), best so far
+    run.json                learner, seed, status (running / stopped / finished), best so far,
+                            and the model-selection record: every validated candidate, the
+                            episodes and steps of training and of selection, why it stopped
     metrics.csv             one row per generation: generation, mean, std, best, min fitness,
-                            episodes, steps, wall_time (seconds)
+                            episodes, steps, wall_time (seconds), selection_episodes,
+                            selection_steps, validated
     strengths.csv           learners with rule strengths: the q table after each generation,
                             one row per (generation, rule, command) -- the paper's Fig. 7
     checkpoints/gen-NNNNN.json
                             after every generation: the evaluated population and its fitness,
                             q table and traces, the state of every random generator, and the
                             generation's metrics row
-    best.yaml               the best controller of the last generation, deployable
+    best.yaml               the run's best controller, deployable: the best validated
+                            candidate (flctool.learners.selection)
 
 Every file is written atomically (write, then rename), checkpoints first: a run killed at any
 moment loses at most the generation in progress, and ``--resume`` rebuilds metrics.csv and
