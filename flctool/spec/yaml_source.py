@@ -104,18 +104,21 @@ class SourceMap:
 
     file: str
     marks: dict[Path, tuple[int, int]] = field(default_factory=dict)
+    #: Whether this map is of a parsed file (then every problem has at least line 1).
+    parsed: bool = False
     #: The text of plain scalars read as booleans or null (``true``, ``~``) or as text that
     #: YAML 1.1 would have read as one (``off``, ``yes``, ``1:00``), so a message can say what
     #: the user wrote.
     raw: dict[Path, str] = field(default_factory=dict)
 
     def locate(self, path: Path) -> tuple[int | None, int | None]:
-        """The position of ``path``, or of its nearest ancestor that the file has."""
+        """The position of ``path``, or of its nearest ancestor that the file has (the start
+        of the file for an empty one)."""
         for end in range(len(path), -1, -1):
             mark = self.marks.get(tuple(path[:end]))
             if mark is not None:
                 return mark
-        return None, None
+        return (1, 1) if self.parsed else (None, None)
 
     def problem(self, path: Path, message: str, hint: str = "") -> Problem:
         line, column = self.locate(path)
@@ -277,7 +280,7 @@ def read_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     YAML, duplicate keys, object-building or misplaced tags, recursive aliases and files past
     the bounds MAX_DEPTH, MAX_VALUES, MAX_INT_DIGITS and MAX_FILE_CHARS.
     """
-    source = SourceMap(file)
+    source = SourceMap(file, parsed=True)
     if len(text) > MAX_FILE_CHARS:
         raise SpecError([Problem((), f"the file has {len(text):,} characters, more than the "
                                  f"{MAX_FILE_CHARS:,} a behaviour file may have", file=file)],
