@@ -2,6 +2,7 @@
 
 from flctool.cli import (
     evaluate,  # noqa: F401  (registers evaluate)
+    experiment,  # noqa: F401  (registers experiment)
     export_commands,  # noqa: F401  (registers export, import)
     learn,  # noqa: F401  (registers learn)
     plot,  # noqa: F401  (registers plot)

@@ -38,6 +38,9 @@ def export_controller(
         "--float", help="c only: float instead of double arithmetic.")] = False,
     prefix: Annotated[str | None, typer.Option(
         help="c only: prefix of the C names (default flc_, giving flc_output).")] = None,
+    dialect: Annotated[str | None, typer.Option(
+        help="fcl only: iec (IEC 61131-7, the default) or fuzzylite (what fuzzylite 6 "
+        "reads).")] = None,
 ) -> None:
     """Export a controller so that it runs elsewhere, with the same outputs."""
     with user_errors():
@@ -45,10 +48,13 @@ def export_controller(
         if format != "c" and (single or prefix is not None):
             raise ExportError("--float and --prefix apply to --format c only",
                               hint="leave them out, or add --format c")
+        if format != "fcl" and dialect is not None:
+            raise ExportError("--dialect applies to --format fcl only",
+                              hint="leave it out, or add --format fcl")
         behaviour, provenance = load_source(source, generation, individual)
         exporter = exporter_class(ExportOptions(provenance=provenance,
                                                 prefix="flc_" if prefix is None else prefix,
-                                                single=single))
+                                                single=single, dialect=dialect or "iec"))
         if output is None:
             sys.stdout.write(exporter.to_string(behaviour))
             return

@@ -169,13 +169,15 @@ def _train(run: Run, learner: Learner, show_progress: bool) -> RunSummary:
     done = len(run.checkpoint_generations())
     progress = Progress(
         TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-        TextColumn("best {task.fields[best]}  mean {task.fields[mean]}"), TimeElapsedColumn(),
+        TextColumn("validated best {task.fields[best]}  training mean {task.fields[mean]}"),
+        TimeElapsedColumn(),
         console=err_console, disable=not show_progress, transient=False)
     task = progress.add_task(f"{config.learner} gen", total=config.generations,
                              completed=done, best="-", mean="-")
 
     def advance(metrics: GenerationMetrics) -> None:
-        progress.update(task, completed=metrics.generation + 1, best=f"{metrics.best:.3f}",
+        validated = "-" if metrics.validated != metrics.validated else f"{metrics.validated:.3f}"
+        progress.update(task, completed=metrics.generation + 1, best=validated,
                         mean=f"{metrics.mean:.3f}")
 
     with progress:
@@ -190,8 +192,18 @@ def _report(summary: RunSummary) -> None:
         last = summary.last
         console.print(f"last generation: mean fitness {last.mean:.3f} (std {last.std:.3f}), "
                       f"best {last.best:.3f}; {last.wall_time:.2f} s of training")
+    usage = summary.usage
+    if usage:
+        console.print(f"used {usage['training_episodes']} training episodes "
+                      f"({usage['training_steps']} steps) and {usage['selection_episodes']} "
+                      f"selection episodes ({usage['selection_steps']} steps)")
     if best:
+        validation = best.get("validation")
+        score = (f"validated mean fitness {validation['value']:.3f} [{validation['low']:.3f}, "
+                 f"{validation['high']:.3f}] over {validation['n']} episodes"
+                 if validation and validation.get("low") is not None
+                 else f"fitness {best['fitness']:.3f} in training")
         console.print(f"best controller: generation {best['generation']}, individual "
-                      f"{best['individual']}, fitness {best['fitness']:.3f} -> "
+                      f"{best['individual']}, {score} -> "
                       f"{escape(str(summary.path / 'best.yaml'))}")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

@@ -7,6 +7,9 @@ a Discrete or one-component Box action space, as a :class:`~flctool.envs.base.Ba
   ``a`` (eq. 3) executes the action of the command whose singleton is nearest ``a``.
 * Box actions: the singletons are action values and ``a`` itself is the action (clipped to
   the space's bounds).
+* ``environment.action: vote``: the controller's output is the singleton of the command
+  whose firing rules have the largest summed activation (see docs/learning.md), so a
+  Discrete space executes exactly that command.
 
 Episode ``b`` runs in its own Gymnasium environment, reset with ``seed=seeds[b]``, so batched
 and one-at-a-time runs agree. gymnasium is an optional extra: ``pip install 'flctool[gym]'``.
@@ -83,6 +86,7 @@ class GymnasiumEnv(BatchEnv):
         self.config = config
         self.observation_names = input_names
         self._commands = commands
+        self.votes = config.action == "vote"
         self._envs: list[Any] = [self._make()]
         try:
             first = self._envs[0]

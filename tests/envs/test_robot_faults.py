@@ -12,8 +12,8 @@ uninterrupted one would have been.
 from __future__ import annotations
 
 import contextlib
+import csv
 import json
-import re
 import socket
 import threading
 import time
@@ -199,9 +199,11 @@ def _behaviour_file(tmp_path: Path, port: int) -> Path:
     return path
 
 
-def _metrics(run: Path) -> list[str]:
-    lines = (run / "metrics.csv").read_text().splitlines()
-    return [re.sub(r",[^,]*$", "", line) for line in lines]  # all but wall_time
+def _metrics(run: Path) -> list[dict[str, str]]:
+    """metrics.csv without its wall_time column (the only one a resume may change)."""
+    with (run / "metrics.csv").open(encoding="utf-8") as handle:
+        return [{k: v for k, v in row.items() if k != "wall_time"}
+                for row in csv.DictReader(handle)]
 
 
 @pytest.mark.parametrize("name", list(FAULTS))
