@@ -72,3 +72,14 @@ def test_stale_temporaries_are_removed_and_nothing_else(tmp_path: Path) -> None:
     assert remove_stale_temporaries(tmp_path) == [stale]
     assert all(other.exists() for other in others)
     assert remove_stale_temporaries(tmp_path / "missing") == []
+
+
+def test_only_durable_writes_wait_for_the_disk(tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    synced: list[int] = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: synced.append(fd) or real_fsync(fd))
+    write_text_atomic(tmp_path / "quick.txt", "a", durable=False)
+    assert synced == [] and (tmp_path / "quick.txt").read_text() == "a"
+    write_text_atomic(tmp_path / "durable.txt", "b")
+    assert len(synced) == 1 and (tmp_path / "durable.txt").read_text() == "b"

@@ -5,6 +5,7 @@ from flctool.cli import (
     experiment,  # noqa: F401  (registers experiment)
     export_commands,  # noqa: F401  (registers export, import)
     learn,  # noqa: F401  (registers learn)
+    new,  # noqa: F401  (registers new)
     plot,  # noqa: F401  (registers plot)
     serve,  # noqa: F401  (registers serve)
     spec_commands,  # noqa: F401  (registers validate, show, infer, schema)

@@ -24,7 +24,8 @@ def export_controller(
     source: Annotated[Path, typer.Argument(
         help="A deployable behaviour file, or a run directory (its best controller).")],
     format: Annotated[str, typer.Option(
-        "--format", "-f", help="yaml, json, fll, fcl, fis or c.")] = "yaml",
+        "--format", "-f", help="yaml, json, fll, fcl, fis, c, or bundle (a folder: the "
+        "controller, its wiring and a C and a Python harness).")] = "yaml",
     output: Annotated[Path | None, typer.Option(
         "--output", "-o", help="Where to write (default: stdout). For c, -o NAME writes "
         "NAME.h and NAME.c.")] = None,

@@ -104,12 +104,12 @@ class SourceMap:
 
     file: str
     marks: dict[Path, tuple[int, int]] = field(default_factory=dict)
-    #: Whether this map is of a parsed file (then every problem has at least line 1).
-    parsed: bool = False
     #: The text of plain scalars read as booleans or null (``true``, ``~``) or as text that
     #: YAML 1.1 would have read as one (``off``, ``yes``, ``1:00``), so a message can say what
     #: the user wrote.
     raw: dict[Path, str] = field(default_factory=dict)
+    #: Whether this map is of a parsed file (then every problem has at least line 1).
+    parsed: bool = False
 
     def locate(self, path: Path) -> tuple[int | None, int | None]:
         """The position of ``path``, or of its nearest ancestor that the file has (the start
