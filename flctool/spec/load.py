@@ -178,7 +178,7 @@ def _not_a_number(value: bool | str, raw: str | None, source: SourceMap,
                               "write a number here")
     if raw is None:
         return source.problem(path, f"'{value}' is not a number",
-                              "write a number, without quotes")
+                              "write a number here (a quoted number is text)")
     if ":" in value:
         hint = "write the number itself (YAML 1.1 read 1:00 as 60; flctool reads YAML 1.2)"
     elif "_" in value:
