@@ -481,8 +481,9 @@ class PitchConfig(Section):
     """A football pitch with goals, a ball, the robot and obstacles (docs/environments.md)."""
 
     adapter: Literal["pitch"]
-    max_steps: int = Field(200, ge=1, le=100_000, description=(
-        "steps before an episode ends with the timeout outcome"))
+    max_steps: int = Field(200, ge=1, le=10_000, description=(
+        "steps before an episode ends with the timeout outcome (at most 10,000: each "
+        "episode draws its noise for every step at reset)"))
     step_period: float = Field(0.25, gt=0, description=(
         "s per step; documents the units of the motion table (a step is one command)"))
     action: Literal["crisp", "nearest", "vote"] = Field("crisp", description=(
