@@ -190,7 +190,8 @@ def run_block(block: Block, cwd: Path) -> None:
             result = _run(["bash", "-o", "pipefail", "-c", command], cwd)
             assert output_matches(expected, result.stdout), (
                 f"{block.where}: `{command}` printed (exit {result.returncode}):\n"
-                f"{result.stdout}\n--- but the page shows:\n{expected}")
+                f"{result.stdout}\n--- but the page shows:\n{expected}\n--- if the new output "
+                f"is right: python -m tests.update_docs_output {_display(block.page)}")
 
 
 def _workspace(tmp_path: Path) -> Path:
