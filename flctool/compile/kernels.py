@@ -198,14 +198,14 @@ def _compact(mu: FloatArray, b: int, ints: IntArray, scratch: IntArray,
 
 
 # Batched inference walks every rule for a block of states at once (loops over states that
-# vectorise, 0.15 to 0.23 ns per rule, input and state) while that costs less than finding
+# vectorise, 0.13 to 0.23 ns per rule, input and state) while that costs less than finding
 # each state's fired rules and walking only those (about 2 ns per set, plus a cost per state
-# that doubles or so with each input, whatever M is). The per-state costs below were
+# that grows with each input, whatever M is). The per-state costs below were
 # measured on both walks (benchmarks/bench_scaling.py prints them around the switch); with
 # the switch where they cross, going past it costs no more than staying (no cliff).
 _DENSE_NS_PER_RULE_INPUT = (0.15, 0.15, 0.15, 0.23)  # index: N (more: the last); 2 fused
 _SPARSE_NS_PER_SET = 2.0
-_SPARSE_NS_BY_INPUTS = (0.0, 20.0, 40.0, 100.0, 180.0, 420.0)  # index: N
+_SPARSE_NS_BY_INPUTS = (0.0, 50.0, 95.0, 170.0, 235.0, 450.0)  # index: N
 
 
 def walks_every_rule(n_rules: int, n_inputs: int, n_sets: int) -> bool:
