@@ -10,7 +10,7 @@ import typer
 from rich.markup import escape
 
 from flctool import __version__
-from flctool.cli.app import app, console, user_errors
+from flctool.cli.app import app, console, err_console, user_errors
 from flctool.errors import ExportError
 from flctool.export import EXPORTERS, IMPORTERS, ExportOptions, load_source
 from flctool.export.base import comment_safe, write_files
@@ -72,6 +72,9 @@ def import_controller(
     force: Force = False,
     format: Annotated[str | None, typer.Option(
         "--format", "-f", help="fll, fcl or fis (default: from the file's suffix).")] = None,
+    mamdani_singletons: Annotated[bool, typer.Option(
+        "--mamdani-singletons", help="fis only: replace a Mamdani system's output sets by "
+        "singletons at their centroids, and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
     with user_errors():
@@ -79,7 +82,16 @@ def import_controller(
         if format is None and name not in IMPORTERS:
             raise ExportError(f"cannot tell the format of {file} from its suffix",
                               hint="name it .fll, .fcl or .fis, or pass --format")
-        behaviour = IMPORTERS.get(name)().from_file(file)
+        importer_class = IMPORTERS.get(name)
+        if mamdani_singletons and name != "fis":
+            raise ExportError("--mamdani-singletons applies to FIS files only",
+                              hint="leave it out")
+        importer = (importer_class(mamdani_singletons=True)  # type: ignore[call-arg]
+                    if mamdani_singletons else importer_class())
+        behaviour = importer.from_file(file)
+        report = getattr(importer, "report", "")
+        if report:  # on stderr: the YAML may be going to stdout
+            err_console.print(escape(report))
         text = imported_yaml(behaviour, f"{behaviour.name}: imported by flctool {__version__} "
                              f"from {comment_safe(file)}")
         if output is None:
