@@ -166,8 +166,9 @@ class Controller:
         The fast path for a control loop that infers one state at a time (well under a
         microsecond a call); equal to ``output(state[None])[0]``.
         """
+        # Any float64 (N,) array goes to the kernel as it is (it reads strides).
         if not (type(state) is np.ndarray and state.dtype is _FLOAT64
-                and state.shape == self._state_shape and state.flags.c_contiguous):
+                and state.shape == self._state_shape):
             state = self._as_state(state)
         floats, ints, kernel = self._one
         value: float = kernel(floats, ints, state)
