@@ -6,33 +6,42 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
-from flctool.cli.app import app, console, user_errors
+from flctool.cli.app import Force, app, check_output, console, escape, example, user_errors
 from flctool.errors import FlcError
 
 
-@app.command()
+@app.command(epilog=example("flctool plot runs/first",
+                            "flctool plot runs/hybrid runs/pitt -o figures",
+                            "flctool plot chase.csv --force"))
 def plot(
     sources: Annotated[list[Path], typer.Argument(
-        exists=True, help="Run directories (learning curves; several are overlaid), or one "
-        "trace CSV from 'flctool evaluate --trace'.")],
-    out: Annotated[Path, typer.Option(
-        "--out", "-o", help="Folder for the PNG files (default: the first run directory, or "
-        "beside the trace).")] = Path(),
+        metavar="SOURCE...", help="Run directories (learning curves; several are overlaid), "
+        "or one trace CSV from 'flctool evaluate --trace'.")],
+    out: Annotated[Path | None, typer.Option(
+        "--out", "-o", help="Folder for the PNG files, created if missing (default: the first "
+        "run directory, or the trace's folder).")] = None,
     rule: Annotated[int | None, typer.Option(
         help="Rule whose strengths to plot (0-based, last input fastest; default: the rule "
         "whose strengths moved most).")] = None,
+    force: Force = False,
 ) -> None:
-    """Plot learning curves (paper Fig. 5-6), one rule's strengths (Fig. 7) or a trajectory
-    (Fig. 8) as PNG files."""
-    from flctool import plots
-    from flctool.runs import open_run
+    """Plot learning curves, a rule's strengths or a trajectory as PNG files.
 
+    The paper's figures: learning curves (Fig. 5-6), one rule's strengths (Fig. 7), a
+    trajectory (Fig. 8)."""
     with user_errors():
+        from flctool import plots
+        from flctool.runs import open_run
+
+        for source in sources:
+            if not source.exists():
+                raise FlcError(f"{source}: no such file or directory",
+                               hint="give run directories, or one trace CSV")
         if len(sources) == 1 and sources[0].is_file():
             trace = sources[0]
-            target = _folder(out, trace.parent) / f"{trace.stem}.png"
+            target = (out or trace.parent) / f"{trace.stem}.png"
+            check_output(target, "plot", force=force)
             plots.plot_trajectory(plots.read_trace(trace), target, f"trajectory: {trace.name}")
             console.print(f"wrote {escape(str(target))}")
             return
@@ -45,15 +54,12 @@ def plot(
         if rule is not None and not strengths:
             raise FlcError("--rule picks the rule of one run whose learner keeps strengths "
                            "(hybrid, fuzzy_q)", hint="plot that run on its own")
-        folder = _folder(out, runs[0].path)
-        plots.plot_fitness(runs, folder / "fitness.png")
-        console.print(f"wrote {escape(str(folder / 'fitness.png'))}")
+        folder = out or runs[0].path
+        targets = [folder / "fitness.png", *([folder / "strengths.png"] if strengths else [])]
+        for target in targets:  # refuse before drawing anything
+            check_output(target, "plot", force=force)
+        plots.plot_fitness(runs, targets[0])
+        console.print(f"wrote {escape(str(targets[0]))}")
         if strengths:
-            plotted = plots.plot_strengths(runs[0], folder / "strengths.png", rule)
-            console.print(f"wrote {escape(str(folder / 'strengths.png'))} (rule {plotted})")
-
-
-def _folder(out: Path, default: Path) -> Path:
-    folder = default if out == Path() else out
-    folder.mkdir(parents=True, exist_ok=True)
-    return folder
+            plotted = plots.plot_strengths(runs[0], targets[1], rule)
+            console.print(f"wrote {escape(str(targets[1]))} (rule {plotted})")

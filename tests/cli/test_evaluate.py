@@ -51,11 +51,15 @@ def test_trace_csv(tmp_path: Path) -> None:
     assert rows[0]["step"] == "0" and rows[-1]["command"] == ""
 
 
-def test_trace_into_a_missing_directory_is_a_clear_error(tmp_path: Path) -> None:
-    result = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace",
-                                 str(tmp_path / "nowhere" / "trace.csv")])
-    assert result.exit_code == 1
-    assert "cannot write the trace" in result.output
+def test_trace_creates_its_folder_and_is_replaced_only_with_force(tmp_path: Path) -> None:
+    trace = tmp_path / "nowhere" / "trace.csv"
+    first = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace", str(trace)])
+    assert first.exit_code == 0, first.output
+    again = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace", str(trace)])
+    assert again.exit_code == 1 and "already exists" in again.output
+    forced = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace", str(trace),
+                                 "--force"])
+    assert forced.exit_code == 0, forced.output
 
 
 def test_non_deployable_controller_lists_missing_rules() -> None:
