@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 
 from flctool.errors import Problem, SpecError
 
-#: Data rows parsed, inferred and written per step of a stream (about 2 MB of text for a
-#: table of a few columns).
-CHUNK_ROWS = 65_536
+#: Characters of rows parsed, inferred and written per step of a stream (a chunk of 2 MB
+#: holds about 100,000 rows of a few columns).
+CHUNK_CHARACTERS = 2**21
 #: Longest cell shown in a message; longer ones are cut (a cell may be megabytes long).
 SHOWN_CELL = 40
 #: Most problems reported for one chunk before the rest are summarised.
@@ -77,6 +77,7 @@ class StateReader:
         self._check_header(reserved)
         self._index = [self.header.index(c) for c in self.columns]
         self._blank: list[int] = []  # blank lines seen since the last row
+        self._numbers: Sequence[int] = []  # line numbers of the rows of the current chunk
 
     # -- header --------------------------------------------------------------------------
     def _check_header(self, reserved: Sequence[str]) -> None:
@@ -96,44 +97,60 @@ class StateReader:
                               f"the header must name the inputs: {', '.join(self.columns)}")
 
     # -- rows ----------------------------------------------------------------------------
-    def chunks(self, rows: int = CHUNK_ROWS) -> Iterator[tuple[list[str], NDArray[np.float64]]]:
-        """``(lines, states (B, N))`` for up to ``rows`` data lines at a time."""
+    def chunks(self, size: int = CHUNK_CHARACTERS
+               ) -> Iterator[tuple[list[str], NDArray[np.float64]]]:
+        """``(lines, states (B, N))`` for about ``size`` characters of rows at a time."""
         while True:
             try:
-                raw = list(itertools.islice(self._stream, rows))
+                text = self._stream.read(size)
+                if text and not text.endswith("\n"):
+                    text += self._stream.readline()  # complete the last line
             except UnicodeDecodeError as error:
                 raise self._not_utf8(error) from None
-            if not raw:
+            if not text:
                 return
-            first_line = self._line + 1
-            self._line += len(raw)
-            lines = self._rows(raw, first_line)
-            if lines:
-                yield lines, self._parse(lines)
+            lines = text.split("\n")
+            if lines[-1] == "":
+                lines.pop()  # the end of the last line, not a line
+            first = self._line + 1
+            self._line += len(lines)
+            rows = self._rows(lines, first)
+            if rows:
+                yield rows, self._parse(rows, text)
 
-    def _rows(self, raw: list[str], first_line: int) -> list[str]:
-        """The non-blank lines of a chunk. A blank line is kept back until a row follows it,
-        which makes it an error; blank lines at the end of the file are fine."""
-        lines: list[str] = []
-        for number, text in enumerate(raw, start=first_line):
-            line = text.rstrip("\n")
+    def _rows(self, lines: list[str], first: int) -> list[str]:
+        """The rows of a chunk, and their line numbers in ``self._numbers``. A blank line is
+        kept back until a row follows it, which makes it an error; blank lines at the end of
+        the file are fine."""
+        if "" not in lines and lines[-1].strip() and (len(self.header) > 1
+                                                       or all(map(str.strip, lines))):
+            # no blank line (one of spaces between rows has too few cells: _parse says so)
+            if self._blank:
+                raise self._blank_error()
+            self._numbers = range(first, first + len(lines))
+            return lines
+        rows: list[str] = []
+        numbers: list[int] = []
+        for number, line in enumerate(lines, start=first):
             if not line.strip():
                 self._blank.append(number)
                 continue
             if self._blank:
-                raise self._error(self._blank[0], None, "a blank line between rows",
-                                  "remove it, or give the missing reading")
-            lines.append(line)
-        # line numbers of the rows, for messages (blank lines are never among them)
-        self._numbers = [n for n, text in enumerate(raw, start=first_line) if text.strip()]
-        return lines
+                raise self._blank_error()
+            rows.append(line)
+            numbers.append(number)
+        self._numbers = numbers
+        return rows
 
-    def _parse(self, lines: list[str]) -> NDArray[np.float64]:
-        width = len(self.header)
-        if all(line.count(",") == width - 1 and '"' not in line for line in lines):
-            # The usual table: no quoting, the right number of cells. numpy's C parser reads
-            # the numbers (correctly rounded, like float()); anything it refuses is
-            # re-read cell by cell below to name the culprit.
+    def _blank_error(self) -> SpecError:
+        return self._error(self._blank[0], None, "a blank line between rows",
+                           "remove it, or give the missing reading")
+
+    def _parse(self, lines: list[str], text: str) -> NDArray[np.float64]:
+        if '"' not in text and self._cell_counts_agree(lines):
+            # The usual table: no quoting, the right number of cells in every row. numpy's C
+            # parser reads the numbers (correctly rounded, like float()); anything it refuses
+            # is re-read cell by cell below to name the culprit.
             try:
                 values = np.loadtxt(lines, delimiter=",", usecols=self._index,
                                     dtype=np.float64, ndmin=2, comments=None,
@@ -141,9 +158,13 @@ class StateReader:
             except ValueError:
                 pass
             else:
-                if not np.isnan(values).any():
+                if values.shape[0] == len(lines) and not np.isnan(values).any():
                     return values
         return self._parse_cells(lines)
+
+    def _cell_counts_agree(self, lines: list[str]) -> bool:
+        """Whether every line has exactly ``len(header) - 1`` commas."""
+        return set(map(str.count, lines, itertools.repeat(","))) == {len(self.header) - 1}
 
     def _parse_cells(self, lines: list[str]) -> NDArray[np.float64]:
         width = len(self.header)
@@ -200,8 +221,11 @@ class StateReader:
 
 def format_rows(lines: Sequence[str], values: NDArray[np.float64]) -> str:
     """The lines with one more cell each: the value's shortest round-trip text (``repr``)."""
-    return "".join([f"{line},{value!r}\n" for line, value in
-                    zip(lines, values.tolist(), strict=True)])
+    if len(lines) != values.shape[0]:
+        raise ValueError(f"{len(lines)} lines but {values.shape[0]} values")
+    cells = map(repr, values.tolist())
+    return "".join(map("".join, zip(lines, itertools.repeat(","), cells,
+                                    itertools.repeat("\n"))))
 
 
 def write_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:

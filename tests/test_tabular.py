@@ -11,9 +11,10 @@ from flctool.errors import SpecError
 from flctool.tabular import StateReader, format_rows, text_stream
 
 
-def _read(data: bytes, rows: int = 3) -> tuple[StateReader, list[tuple[list[str], np.ndarray]]]:
+def _read(data: bytes, size: int = 2**20
+          ) -> tuple[StateReader, list[tuple[list[str], np.ndarray]]]:
     reader = StateReader(text_stream(io.BytesIO(data)), ["a", "b"], "t.csv", reserved=["y"])
-    return reader, list(reader.chunks(rows))
+    return reader, list(reader.chunks(size))
 
 
 def _error(data: bytes) -> str:
@@ -23,10 +24,16 @@ def _error(data: bytes) -> str:
 
 
 def test_rows_in_chunks_keep_the_cells_as_written() -> None:
-    reader, chunks = _read(b"id,a,b\nx,1,2\ny, 3.5 ,-inf\nz,0,1e-3\nw,5,6\n")
+    data = b"id,a,b\nx,1,2\ny, 3.5 ,-inf\nz,0,1e-3\nw,5,6"  # no newline at the end
+    reader, chunks = _read(data, size=10)
     assert reader.header == ["id", "a", "b"]
-    assert [lines for lines, _ in chunks] == [["x,1,2", "y, 3.5 ,-inf", "z,0,1e-3"], ["w,5,6"]]
-    assert chunks[0][1].tolist() == [[1.0, 2.0], [3.5, -np.inf], [0.0, 0.001]]
+    assert len(chunks) > 1  # whole lines in each chunk, however small the size
+    assert [line for lines, _ in chunks for line in lines] == [
+        "x,1,2", "y, 3.5 ,-inf", "z,0,1e-3", "w,5,6"]
+    assert np.concatenate([values for _, values in chunks]).tolist() == [
+        [1.0, 2.0], [3.5, -np.inf], [0.0, 0.001], [5.0, 6.0]]
+    _, whole = _read(data)
+    assert len(whole) == 1
 
 
 def test_bom_crlf_cr_only_and_trailing_blank_lines_are_accepted() -> None:
@@ -38,6 +45,9 @@ def test_bom_crlf_cr_only_and_trailing_blank_lines_are_accepted() -> None:
 
 def test_a_blank_line_between_rows_is_an_error() -> None:
     assert "t.csv:3: (top level): a blank line between rows" in _error(b"a,b\n1,2\n\n3,4\n")
+    with pytest.raises(SpecError, match=r"t\.csv:3: .*a blank line between rows"):
+        _read(b"a,b\n1,2\n\n3,4\n", size=5)  # the blank line ends one chunk
+    assert "t.csv:3: (top level): expected 2 cells, found 1" in _error(b"a,b\n1,2\n  \n3,4\n")
 
 
 def test_duplicated_and_reserved_columns_are_errors() -> None:

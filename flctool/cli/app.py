@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import signal
 import sys
 from collections.abc import Iterator, Mapping, Sequence
@@ -164,22 +165,37 @@ def escape(text: str) -> str:
     return rich_escape(text)
 
 
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")
+
+
+def plain(text: str) -> str:
+    """``text`` with control characters (terminal escape sequences, carriage returns) shown
+    as escapes: a message may quote a file or a robot, and must not drive the terminal."""
+    return _CONTROL.sub(lambda match: f"\\x{ord(match.group()):02x}", text)
+
+
+def say(text: str, label: str = "", colour: str = "green", err: bool = False) -> None:
+    """One plain line (``label`` coloured on a terminal), without loading rich."""
+    head = typer.style(label, fg=colour, bold=True) + " " if label else ""
+    typer.echo(head + plain(text), err=err)
+
+
 def print_message(message: str, hint: str = "") -> None:
     """One ``error: message (fix: hint)`` line on stderr."""
     fix = f" (fix: {hint})" if hint else ""
-    err_console.print(f"[bold red]error:[/] {escape(message + fix)}", highlight=False)
+    say(message + fix, "error:", "red", err=True)
 
 
 def print_error(error: FlcError) -> None:
     """Render a flctool error for a person: one located line per problem."""
     if isinstance(error, SpecError):
         count = len(error.problems)
-        err_console.print(f"[bold red]error:[/] {escape(error.file or 'input')} has "
-                          f"{count} problem{'s' if count != 1 else ''}")
+        say(f"{error.file or 'input'} has {count} problem{'s' if count != 1 else ''}",
+            "error:", "red", err=True)
         for problem in error.problems:
-            err_console.print(f"  {escape(str(problem))}", highlight=False)
+            say(f"  {problem}", err=True)
         return
-    err_console.print(f"[bold red]error:[/] {escape(str(error))}", highlight=False)
+    say(str(error), "error:", "red", err=True)
 
 
 def _print_usage_error(error: click_errors.UsageError) -> None:
@@ -189,7 +205,7 @@ def _print_usage_error(error: click_errors.UsageError) -> None:
     print_message(f"{path}: {message[:1].lower() + message[1:]}",
                   f"see '{path} --help'")
     if ctx is not None:
-        err_console.print(f"  {escape(ctx.get_usage())}", highlight=False)
+        say(f"  {ctx.get_usage()}", err=True)
 
 
 def usage_error(message: str, option: str | None = None) -> click_errors.UsageError:
@@ -204,14 +220,14 @@ def usage_error(message: str, option: str | None = None) -> click_errors.UsageEr
 # -- exits -----------------------------------------------------------------------------------
 def _interrupted() -> int:
     if not _state["reported"]:
-        err_console.print("[yellow]interrupted[/]", highlight=False)
+        say("interrupted", err=True)
         _state["reported"] = True
     return EXIT_INTERRUPTED
 
 
 def report_interrupted(message: str) -> None:
     """Say once, after Ctrl-C, what was interrupted (instead of a bare 'interrupted')."""
-    err_console.print(f"[yellow]interrupted:[/] {escape(message)}", highlight=False)
+    say(message, "interrupted:", "yellow", err=True)
     _state["reported"] = True
 
 

@@ -118,8 +118,9 @@ def compiling(enabled: bool = True) -> Iterator[None]:
 
     def notice() -> None:
         shown.set()
-        err_console.print("[dim]compiling the inference kernels (numba; first run on this "
-                          "machine, cached for the next runs)...[/]", highlight=False)
+        err_console.print("[dim]preparing the inference kernels (numba compiles them on a "
+                          "machine's first run and caches them for the next)...[/]",
+                          highlight=False)
 
     timer = threading.Timer(COMPILE_NOTICE_AFTER, notice)
     timer.daemon = True
@@ -131,5 +132,5 @@ def compiling(enabled: bool = True) -> Iterator[None]:
         timer.cancel()
         _compiled["done"] = True
     if shown.is_set():
-        err_console.print(f"[dim]compiled in {time.monotonic() - start:.1f} s[/]",
+        err_console.print(f"[dim]kernels ready after {time.monotonic() - start:.1f} s[/]",
                           highlight=False)

@@ -16,6 +16,7 @@ from flctool.cli.app import (
     example,
     print_error,
     read_user_file,
+    say,
     user_errors,
     write_output,
 )
@@ -49,7 +50,7 @@ def validate(
             continue
         state = ("deployable" if behaviour.is_deployable
                  else f"{len(behaviour.missing_rules())} of {behaviour.rule_count} rules to learn")
-        console.print(f"[green]ok[/] {escape(str(path))}: {behaviour.name} ({state})")
+        say(f"{path}: {behaviour.name} ({state})", "ok")
     if failed:
         raise typer.Exit(1)
 
@@ -140,10 +141,10 @@ def schema(
             if current != text:
                 raise FlcError(f"{path} is {'missing' if current is None else 'stale'}",
                                hint="run 'flctool schema --force' and commit the result")
-            console.print(f"[green]ok[/] {escape(str(path))} is up to date")
+            say(f"{path} is up to date", "ok")
             return
         if current == text:
-            console.print(f"{escape(str(path))} is already up to date")
+            say(f"{path} is already up to date")
             return
         write_output(path, text, "schema", force=force)
-    console.print(f"wrote {escape(str(path))}")
+    say(f"wrote {path}")
