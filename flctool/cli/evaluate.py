@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from flctool.spec import Behaviour
 
 #: Episodes stepped together; the peak memory of an evaluation follows this, not --episodes.
-CHUNK_EPISODES = 4096
+CHUNK_EPISODES = 1024
 #: Most episodes one --seeds list may name.
 MAX_LISTED_SEEDS = 10_000_000
 #: Training episodes use seeds from 2^32 up (flctool.learners.base.TRAIN_SEED_LOW).
@@ -209,10 +209,11 @@ def evaluate_in_chunks(controller: Controller, env: BatchEnv, seeds: NDArray[np.
 
     parts: list[EvaluationResult] = []
     total = int(seeds.shape[0])
+    with compiling():  # load (or, on a machine's first run, compile) the kernels
+        controller.output(controller.ranges[:, 0][None, :])
     with Progress("episodes", total, terminal=show_progress) as progress:
         for start in range(0, total, chunk):
-            with compiling():
-                parts.append(evaluate(controller, env, seeds[start:start + chunk]))
+            parts.append(evaluate(controller, env, seeds[start:start + chunk]))
             done = start + parts[-1].episodes
             if success:
                 rate = sum(int(p.success.sum()) for p in parts) / done
