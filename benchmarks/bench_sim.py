@@ -27,32 +27,32 @@ def one_at_a_time(episodes: int) -> tuple[int, float, float]:
     env = make_env(load_behaviour(HANDMADE), 1)
     steps = 0
     resetting = 0.0
-    start = time.perf_counter()
+    start = time.process_time()
     for seed in range(episodes):
-        before = time.perf_counter()
+        before = time.process_time()
         obs = env.reset_one(seed)
-        resetting += time.perf_counter() - before
+        resetting += time.process_time() - before
         while True:
             obs, _, terminated, truncated = env.step_one(max(-1.0, min(1.0, obs[1] / 60.0)))
             steps += 1
             if terminated or truncated:
                 break
-    return steps, time.perf_counter() - start - resetting, resetting
+    return steps, time.process_time() - start - resetting, resetting
 
 
 def batched(episodes: int) -> tuple[int, float, float]:
     env = make_env(load_behaviour(HANDMADE), episodes)
     steps = 0
-    start = time.perf_counter()
+    start = time.process_time()
     obs, _ = env.reset(np.arange(episodes, dtype=np.int64))
-    resetting = time.perf_counter() - start
-    start = time.perf_counter()
+    resetting = time.process_time() - start
+    start = time.process_time()
     done = np.zeros(episodes, dtype=bool)
     while not done.all():
         steps += int((~done).sum())
         step = env.step(np.clip(obs[:, 1] / 60.0, -1.0, 1.0))
         obs, done = step.observations, step.terminated | step.truncated
-    return steps, time.perf_counter() - start, resetting
+    return steps, time.process_time() - start, resetting
 
 
 def main() -> None:
@@ -76,12 +76,12 @@ def main() -> None:
     controller = compile_behaviour(behaviour)
     seeds = np.arange(episodes, dtype=np.int64)
     single = make_env(behaviour, 1)
-    start = time.perf_counter()
+    start = time.process_time()
     lengths = [int(evaluate(controller, single, [s]).lengths[0]) for s in seeds]
-    loop_time = time.perf_counter() - start
-    start = time.perf_counter()
+    loop_time = time.process_time() - start
+    start = time.process_time()
     result = evaluate(controller, make_env(behaviour, episodes), seeds)
-    lock_time = time.perf_counter() - start
+    lock_time = time.process_time() - start
     assert lengths == result.lengths.tolist()
     print(f"rollout.evaluate with the handmade controller, {int(result.lengths.sum())} steps")
     print(f"  {episodes} x evaluate(B=1): {loop_time:.3f} s;  evaluate(B={episodes}): "

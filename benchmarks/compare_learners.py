@@ -2,13 +2,17 @@
 
 For each learner and each of ``--seeds`` training seeds, ``flctool learn`` is run (through
 the library, into a temporary run directory) with the behaviour's protocol -- by default the
-paper's: population 10, pc 0.2, pm 0.1, 30 generations, one trial per individual. Its
-``best.yaml`` is then evaluated on ``--episodes`` held-out episodes (seeds 0..E-1; training
-episodes use seeds >= 2^32, so none is shared). Prints, per learner, the median, mean and
-worst held-out success over the seeds, and the area under the mean-fitness curve (sum over
-generations of the generation's mean fitness), and writes everything as JSON.
+paper's: population 10, pc 0.2, pm 0.1, 30 generations, one trial per individual -- and the
+behaviour's model selection (``learning.selection``). Its ``best.yaml`` is then evaluated on
+``--episodes`` held-out episodes drawn as ``flctool evaluate --seed 0`` draws them (seeds
+below 2^31; training uses seeds in [2^32, 2^62), selection in [2^62, 2^63), so none is
+shared). Prints, per learner, the median, mean and worst held-out success over the seeds,
+the area under the mean-fitness curve (sum over generations of the generation's mean
+fitness), and the episodes every run used -- training and selection, both counted -- and
+writes everything as JSON.
 
-    python benchmarks/compare_learners.py                     # 20 seeds, 1,000 episodes
+    python benchmarks/compare_learners.py                     # 30 seeds, 1,000 episodes
+    python benchmarks/compare_learners.py --set selection.candidates=0   # no selection
     python benchmarks/compare_learners.py --set trials=2 --set common_starts=true
 """
 
@@ -22,13 +26,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.envs import make_env
 from flctool.learners import TRAIN_SEED_LOW
-from flctool.rollout import evaluate
+from flctool.rollout import evaluate, evaluation_seeds
 from flctool.runs import BEST_FILE, create_run, resolve_behaviour
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,28 +42,34 @@ def run_one(behaviour_path: Path, learner: str, seed: int, overrides: dict[str, 
     behaviour = resolve_behaviour(load_behaviour(behaviour_path),
                                   {**overrides, "learner": learner, "seed": seed})
     run = create_run(behaviour, workdir / f"{learner}-{seed}")
-    started = time.perf_counter()
+    started = time.process_time()
     summary = run.train()
-    train_seconds = time.perf_counter() - started
+    train_seconds = time.process_time() - started
     metrics = run.metrics()
     best = load_behaviour(run.path / BEST_FILE)
-    seeds = np.arange(episodes, dtype=np.int64)
-    assert seeds.max() < TRAIN_SEED_LOW  # held out: training never uses these
+    seeds = evaluation_seeds(0, episodes)  # what `flctool evaluate` runs
+    assert seeds.max() < TRAIN_SEED_LOW  # held out: training and selection never use these
     result = evaluate(compile_behaviour(best), make_env(best, episodes), seeds)
+    usage = summary.usage
     return {"learner": learner, "seed": seed,
             "success": float(result.success_rate.value),
+            "mean_return": float(result.mean_return.value),
             "auc": float(sum(m.mean for m in metrics)),
             "final_mean": metrics[-1].mean, "best_fitness": summary.best["fitness"],
-            "train_seconds": train_seconds,
-            "episodes": int(sum(m.episodes for m in metrics)),
-            "steps": int(sum(m.steps for m in metrics))}
+            "validated": (summary.best.get("validation") or {}).get("value"),
+            "train_cpu_seconds": train_seconds,
+            "training_episodes": int(sum(m.episodes for m in metrics)),
+            "selection_episodes": int(sum(m.selection_episodes for m in metrics)),
+            "episodes": int(usage.get("training_episodes", 0)
+                            + usage.get("selection_episodes", 0)),
+            "steps": int(usage.get("training_steps", 0) + usage.get("selection_steps", 0))}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--behaviour", type=Path, default=ROOT / "behaviours/ballchase.yaml")
     parser.add_argument("--learners", default="pitt,hybrid,fuzzy_q")
-    parser.add_argument("--seeds", type=int, default=20)
+    parser.add_argument("--seeds", type=int, default=30)
     parser.add_argument("--episodes", type=int, default=1000)
     parser.add_argument("--set", dest="assignments", action="append", default=[],
                         help="override a learning hyperparameter, e.g. trials=2")
@@ -79,7 +88,7 @@ def main() -> None:
     print(f"{args.behaviour.name}: {args.seeds} training seeds, best.yaml on {args.episodes} "
           f"held-out episodes; overrides {overrides or 'none'}")
     print(f"{'learner':8} {'median':>7} {'mean':>7} {'worst':>7} {'(seed)':>6} {'AUC':>7} "
-          f"{'train s':>8} {'episodes':>8}")
+          f"{'cpu s':>6} {'training':>8} {'selection':>9} {'episodes':>8}")
     for learner in learners:
         rows = [r for r in results if r["learner"] == learner]
         success = [r["success"] for r in rows]
@@ -88,12 +97,15 @@ def main() -> None:
             "median_success": statistics.median(success), "mean_success": statistics.mean(success),
             "worst_success": worst["success"], "worst_seed": worst["seed"],
             "mean_auc": statistics.mean(r["auc"] for r in rows),
-            "mean_train_seconds": statistics.mean(r["train_seconds"] for r in rows),
+            "mean_train_cpu_seconds": statistics.mean(r["train_cpu_seconds"] for r in rows),
+            "mean_training_episodes": statistics.mean(r["training_episodes"] for r in rows),
+            "mean_selection_episodes": statistics.mean(r["selection_episodes"] for r in rows),
             "mean_episodes": statistics.mean(r["episodes"] for r in rows)}
         s = summary[learner]
         print(f"{learner:8} {s['median_success']:7.3f} {s['mean_success']:7.3f} "
               f"{s['worst_success']:7.3f} {s['worst_seed']:6d} {s['mean_auc']:7.2f} "
-              f"{s['mean_train_seconds']:8.3f} {s['mean_episodes']:8.0f}")
+              f"{s['mean_train_cpu_seconds']:6.2f} {s['mean_training_episodes']:8.0f} "
+              f"{s['mean_selection_episodes']:9.0f} {s['mean_episodes']:8.0f}")
     if "pitt" in summary and "hybrid" in summary:
         ratio = summary["hybrid"]["mean_auc"] / summary["pitt"]["mean_auc"]
         print(f"hybrid AUC / pitt AUC = {ratio:.3f}")

@@ -146,6 +146,31 @@ def evaluate(controller: Controller, env: BatchEnv, seeds: NDArray[np.int64] | l
                             env.episode_fitness(returns, lengths, success))
 
 
+def vote_output(flc: Controller, states: FloatArray) -> FloatArray:
+    """The action mode ``vote`` for ``states (B, N)`` -> outputs (B,): each command's firing
+    rules sum their activations (eq. 2), the strongest command's singleton is the output;
+    ties go to the command listed first.
+
+    Sums run left to right in rule order (a cumulative sum; the inactive rules add exact
+    zeros), the same operations as the learners' one-state path, so both agree bit for bit.
+    """
+    if flc.consequents is None:
+        raise EnvError("a vote needs the controller's rule consequents")
+    alpha = flc.activations(states)  # (B, M)
+    votes = np.zeros((alpha.shape[0], flc.n_commands))
+    for k in range(flc.n_commands):
+        mine = alpha[:, flc.consequents == k]
+        if mine.shape[1]:
+            votes[:, k] = np.cumsum(mine, axis=1)[:, -1]
+    chosen: FloatArray = flc.singletons[np.argmax(votes, axis=1)]
+    return chosen
+
+
+def _act(flc: Controller, env: BatchEnv, states: FloatArray) -> FloatArray:
+    """The actions (B,) for ``states (B, N)``: eq. 3's crisp output, or the vote."""
+    return vote_output(flc, states) if env.votes else flc.output(states)
+
+
 def _run_lockstep(flc: Controller, env: BatchEnv, seeds: NDArray[np.int64],
                   ) -> tuple[FloatArray, NDArray[np.int64], BoolArray]:
     """Returns, lengths and success of one episode per seed, stepped together."""
@@ -158,7 +183,7 @@ def _run_lockstep(flc: Controller, env: BatchEnv, seeds: NDArray[np.int64],
     for _ in range(env.max_steps):
         active = ~done
         # Finished episodes ignore their actions; only the running ones need inference.
-        actions[active] = flc.output(obs[active])
+        actions[active] = _act(flc, env, obs[active])
         step = env.step(actions)
         returns += np.where(active, step.rewards, 0.0)
         lengths += active
@@ -189,7 +214,7 @@ def trace_episode(controller: Controller, env: BatchEnv, seed: int,
                         "terminated": "", "truncated": ""})
             rows.append(row)
             return rows
-        output = float(flc.output(obs)[0])
+        output = float(_act(flc, env, obs)[0])
         nearest = int(np.argmin(np.abs(flc.singletons - output)))
         step = env.step(np.array([output]))
         row.update({flc.output_name: output, "command": flc.command_names[nearest],

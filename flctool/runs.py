@@ -41,6 +41,7 @@ from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
 from flctool.learners.base import population_problem
+from flctool.learners.selection import Candidate
 from flctool.spec import (
     Behaviour,
     behaviour_from_data,
@@ -123,11 +124,24 @@ def _append(path: Path, text: str) -> None:
 
 
 def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
+    validation = provenance.get("validation")
+    measured = (f"fitness {provenance['fitness']!r} in training, validated mean fitness "
+                f"{validation['value']!r} over {validation['n']} validation episodes"
+                if validation else f"fitness {provenance['fitness']!r}")
     return (f"Learned by flctool {__version__} with the {provenance['learner']} learner "
             f"(seed {provenance['seed']}) in run {run_name}:\n"
             f"generation {provenance['generation']}, individual {provenance['individual']}, "
-            f"fitness {provenance['fitness']!r}.\n"
+            f"{measured}.\n"
             "Deployable: flctool validate / evaluate / export take it as it is.")
+
+
+def _provenance(run: Run, generation: int, individual: int, fitness: float,
+                validation: Mapping[str, Any] | None) -> dict[str, Any]:
+    provenance = {"learner": run.learner, "seed": run.seed, "generation": generation,
+                  "individual": individual, "fitness": fitness}
+    if validation is not None:
+        provenance["validation"] = dict(validation)
+    return provenance
 
 
 @dataclass(frozen=True)
@@ -141,10 +155,17 @@ class RunSummary:
     status: str
     best: dict[str, Any]
     last: GenerationMetrics | None
+    selection: dict[str, Any] | None = None  # run.json's record of model selection
+
+    @property
+    def usage(self) -> dict[str, int]:
+        """Episodes and steps the run spent on training and on selection (validation)."""
+        return dict((self.selection or {}).get("usage") or {})
 
     def to_dict(self) -> dict[str, Any]:
         return {"run": str(self.path), "learner": self.learner, "seed": self.seed,
                 "generations": self.generations, "status": self.status, "best": self.best,
+                "usage": self.usage, "selection": self.selection,
                 "last": self.last.row() if self.last else None,
                 "best_file": str(self.path / BEST_FILE)}
 
@@ -241,15 +262,21 @@ class Run:
                       individual: int | None = None) -> tuple[Behaviour, dict[str, Any]]:
         """A deployable behaviour of this run, and its provenance.
 
-        By default the run's best controller (what best.yaml holds): the best individual of
-        the last generation. ``generation`` picks another generation (negative counts from
-        the end), ``individual`` an individual other than that generation's best. Provenance:
-        ``{learner, seed, generation, individual, fitness}``.
+        By default the run's best controller (what best.yaml holds): the best validated
+        candidate of model selection, as the last checkpoint records it (in runs without
+        selection, the best individual of the last generation). ``generation`` picks another
+        generation (negative counts from the end), ``individual`` an individual other than
+        that generation's best. Provenance: ``{learner, seed, generation, individual,
+        fitness}``, with ``validation`` ``{value, low, high, n}`` for a validated one.
         """
         done = self.checkpoint_generations()
         if not done:
             raise RunDirError(f"{self.path}: the run has no finished generation yet",
                               hint="wait for the first generation, or resume the run")
+        if generation is None and individual is None:
+            selected = self._selected(done[-1])
+            if selected is not None:
+                return selected
         if generation is None:
             generation = done[-1]
         elif generation < 0:
@@ -266,9 +293,26 @@ class Run:
             raise RunDirError(f"{self.path}: generation {generation} has individuals "
                               f"0..{len(population) - 1}, not {individual}",
                               hint="pick an individual in that range")
-        provenance = {"learner": self.learner, "seed": self.seed, "generation": generation,
-                      "individual": individual, "fitness": float(fitness[individual])}
+        provenance = _provenance(self, generation, individual, float(fitness[individual]),
+                                 None)
         return with_rules(self.behaviour, population[individual]), provenance
+
+    def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
+        """The best validated candidate recorded in checkpoint ``generation``, if any."""
+        record = self.checkpoint(generation).get("selection")
+        best = record.get("best") if isinstance(record, dict) else None
+        if best is None:
+            return None
+        try:
+            candidate = Candidate.from_dict(best)
+            consequents = candidate.consequents
+            behaviour = with_rules(self.behaviour, consequents)
+        except (KeyError, TypeError, ValueError, IndexError, FlcError) as exc:
+            raise self._damaged(generation, f"the checkpoint's selection record is damaged "
+                                f"({exc!r})") from None
+        validation = candidate.validation.to_dict() if candidate.validation else None
+        return behaviour, _provenance(self, candidate.generation, candidate.individual,
+                                      candidate.fitness, validation)
 
     # -- training ------------------------------------------------------------------------
     def train(self, callbacks: Iterable[Callback] = (), env: BatchEnv | None = None,
@@ -298,7 +342,7 @@ class Run:
         metrics = self.metrics()
         return RunSummary(self.path, self.learner, self.seed, len(metrics),
                           str(info.get("status", "unknown")), dict(info.get("best") or {}),
-                          metrics[-1] if metrics else None)
+                          metrics[-1] if metrics else None, info.get("selection"))
 
     def info(self) -> dict[str, Any]:
         try:
@@ -307,11 +351,17 @@ class Run:
             return {}
         return data
 
-    def write_info(self, status: str, best: Mapping[str, Any] | None) -> None:
+    def write_info(self, status: str, best: Mapping[str, Any] | None,
+                   selection: Mapping[str, Any] | None = None) -> None:
+        """Write run.json; ``selection`` is the model-selection record (every validated
+        candidate, the training and selection usage), kept from the last write if None."""
+        if selection is None:
+            selection = self.info().get("selection")
         info = {"format": RUN_FORMAT, "flctool": __version__, "behaviour": self.behaviour.name,
                 "learner": self.learner, "seed": self.seed,
                 "generations": self.behaviour.learning.generations, "status": status,
-                "best": dict(best) if best else None}
+                "best": dict(best) if best else None,
+                "selection": dict(selection) if selection else None}
         write_text_atomic(self.path / RUN_FILE, json.dumps(info, indent=2) + "\n")
 
     def extend(self, generations: int) -> None:
@@ -380,10 +430,13 @@ class RunRecorder(Callback):
             _append(run.path / STRENGTHS_FILE, _strengths_text(
                 [(metrics.generation, strengths.tolist())], learner.controller.command_names,
                 header=False))
-        individual, consequents, fitness = learner.best()  # as Run.behaviour_for picks it
-        self._write_best(with_rules(run.behaviour, consequents), {
-            "learner": run.learner, "seed": run.seed, "generation": metrics.generation,
-            "individual": individual, "fitness": fitness})
+        # as Run.behaviour_for picks it
+        generation, individual, consequents, fitness, candidate = learner.selected()
+        validation = (candidate.validation.to_dict()
+                      if candidate is not None and candidate.validation else None)
+        self._write_best(with_rules(run.behaviour, consequents),
+                         _provenance(run, generation, individual, fitness, validation))
+        run.write_info("running", self.best, learner.selection.record())
         return True
 
     def _write_best(self, behaviour: Behaviour, provenance: dict[str, Any]) -> None:
@@ -393,8 +446,7 @@ class RunRecorder(Callback):
 
     def on_end(self) -> None:
         learner = self.learner
-        finished = learner is not None and learner.generation + 1 >= (
-            learner.config.generations)
+        finished = learner is not None and learner.finished
         # The checkpoints are the record: a stop between a checkpoint and best.yaml (Ctrl-C,
         # an error) still leaves best.yaml and run.json naming the last checkpoint's best.
         if self.run.checkpoint_generations():

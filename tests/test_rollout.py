@@ -10,7 +10,14 @@ import pytest
 from flctool import compile_behaviour, load_behaviour
 from flctool.envs import make_env
 from flctool.errors import EnvError
-from flctool.rollout import evaluate, mean_interval, trace_episode, wilson_interval
+from flctool.rollout import (
+    evaluate,
+    evaluation_seeds,
+    mean_interval,
+    trace_episode,
+    vote_output,
+    wilson_interval,
+)
 
 from .conftest import BEHAVIOURS
 
@@ -83,3 +90,63 @@ def test_trace_episode_rows() -> None:
             "pan", "turn", "command"} <= set(first)
     assert first["command"] in controller.command_names and last["command"] == ""
     assert rows[-2]["terminated"] is True and rows[-2]["reward"] == 1.0
+
+
+# A bang-bang table on a discrete task (MountainCar-v0): push the way the car rolls. The two
+# velocity sets overlap widely, so near rest both rules fire and eq. 3 averages -1 and +1 to
+# about 0, whose nearest command is 'coast': a dead zone the car never leaves. A vote runs
+# the command with the larger summed activation instead.
+BANG_BANG = """\
+flctool: 1
+name: bang_bang
+inputs:
+  velocity:
+    range: [-0.07, 0.07]
+    sets:
+      backward: [-0.07, -0.07, -0.03, 0.03]
+      forward: [-0.03, 0.03, 0.07, 0.07]
+output:
+  name: push
+  commands: {push_left: -1, coast: 0, push_right: 1}
+rules:
+  - {if: {velocity: backward}, then: push_left}
+  - {if: {velocity: forward}, then: push_right}
+environment:
+  adapter: gymnasium
+  id: MountainCar-v0
+  observations: {velocity: 1}
+  actions: {push_left: 0, coast: 1, push_right: 2}
+  action: ACTION
+"""
+
+
+def bang_bang(action: str) -> tuple[float, float]:
+    from flctool import parse_behaviour
+
+    behaviour = parse_behaviour(BANG_BANG.replace("ACTION", action), "bang-bang.yaml")
+    env = make_env(behaviour, 20)
+    try:
+        result = evaluate(compile_behaviour(behaviour), env, evaluation_seeds(0, 20))
+    finally:
+        env.close()
+    return result.mean_return.value, result.success_rate.value
+
+
+def test_the_vote_action_has_no_dead_zone_on_a_discrete_task() -> None:
+    nearest_return, nearest_success = bang_bang("nearest")
+    vote_return, vote_success = bang_bang("vote")
+    assert nearest_return == -200.0 and nearest_success == 0.0  # coasts at the bottom
+    assert vote_success == 1.0 and vote_return > -150.0
+
+
+def test_vote_output_sums_each_command_s_activations() -> None:
+    controller = compile_behaviour(load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml"))
+    rng = np.random.default_rng(2)
+    states = np.column_stack([rng.uniform(0, 1, 300), rng.uniform(-90, 90, 300)])
+    alpha = controller.activations(states)
+    assert controller.consequents is not None
+    votes = np.stack([alpha[:, controller.consequents == k].sum(axis=1)
+                      for k in range(controller.n_commands)], axis=1)
+    expected = controller.singletons[np.argmax(votes, axis=1)]
+    np.testing.assert_array_equal(vote_output(controller, states), expected)
+    assert set(vote_output(controller, states)) <= set(controller.singletons)

@@ -59,7 +59,8 @@ def test_a_run_writes_every_record(tmp_path: Path) -> None:
     metrics = rows(run.path / METRICS_FILE)
     assert [int(r["generation"]) for r in metrics] == list(range(5))
     assert list(metrics[0]) == ["generation", "mean", "std", "best", "min", "episodes",
-                                "steps", "wall_time"]
+                                "steps", "wall_time", "selection_episodes", "selection_steps",
+                                "validated"]
     assert all(int(r["episodes"]) == 6 for r in metrics)
     strengths = rows(run.path / STRENGTHS_FILE)
     assert len(strengths) == 5 * 15 * 5 and strengths[0]["command"] == "turn_right"
@@ -73,7 +74,7 @@ def test_a_run_writes_every_record(tmp_path: Path) -> None:
     assert info["status"] == "finished" and info["best"] == summary.best
 
 
-def test_best_yaml_is_the_deployable_best_of_the_last_generation(tmp_path: Path) -> None:
+def test_best_yaml_is_the_deployable_best_validated_candidate(tmp_path: Path) -> None:
     run = create_run(ballchase(), tmp_path / "run")
     run.train()
     best = load_behaviour(run.path / BEST_FILE)
@@ -81,13 +82,27 @@ def test_best_yaml_is_the_deployable_best_of_the_last_generation(tmp_path: Path)
     assert (run.path / BEST_FILE).read_text().startswith("# Learned by flctool")
     behaviour, provenance = open_run(run.path).behaviour_for()
     assert behaviour == best
+    selection = json.loads((run.path / "run.json").read_text())["selection"]
+    validated = [c["validation"]["value"] for c in selection["validated"]]
+    assert provenance["validation"]["value"] == max(validated)
+    assert selection["best"]["validation"] == provenance["validation"]
+    state = run.checkpoint(provenance["generation"])
+    consequents = compile_behaviour(best).consequents
+    assert consequents is not None
+    assert consequents.tolist() == state["population"][provenance["individual"]]
+
+
+def test_without_selection_best_yaml_is_the_best_of_the_last_generation(
+        tmp_path: Path) -> None:
+    behaviour = resolve_behaviour(ballchase(), {"selection.candidates": 0})
+    run = create_run(behaviour, tmp_path / "run")
+    run.train()
+    behaviour, provenance = open_run(run.path).behaviour_for()
     state = run.checkpoint(4)
     assert provenance == {"learner": "hybrid", "seed": 0, "generation": 4,
                           "individual": int(np.argmax(state["fitness"])),
                           "fitness": max(state["fitness"])}
-    consequents = compile_behaviour(best).consequents
-    assert consequents is not None
-    assert consequents.tolist() == state["population"][provenance["individual"]]
+    assert all(int(r["selection_episodes"]) == 0 for r in rows(run.path / METRICS_FILE))
 
 
 def test_behaviour_for_picks_any_generation_and_individual(tmp_path: Path) -> None:

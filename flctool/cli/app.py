@@ -129,8 +129,22 @@ def main(
     version: Annotated[bool, typer.Option(
         "--version", callback=_version, is_eager=True, help="Print the version and exit.")]
     = False,
+    import_module: Annotated[list[str] | None, typer.Option(
+        "--import-module", metavar="MODULE", help="Import this Python module first (it "
+        "registers Gymnasium environments); an environment id 'MODULE:Env-v0' may then name "
+        "it. A behaviour file never imports modules by itself.")] = None,
 ) -> None:
     _state["debug"] = debug
+    if import_module:
+        from flctool.envs.gym_adapter import import_user_modules
+
+        with user_errors():
+            import_user_modules(import_module)
+
+
+def debug_enabled() -> bool:
+    """Whether --debug was given (tracebacks are wanted)."""
+    return _state["debug"]
 
 
 # -- messages --------------------------------------------------------------------------------
@@ -427,6 +441,7 @@ def output_format(path: Path | None, given: str | None, suffixes: Mapping[str, s
 # them; `flctool --help` shows them in this order. A new command: its module, one line here.
 from flctool.cli import (  # noqa: E402
     evaluate,  # noqa: F401  (evaluate)
+    experiment,  # noqa: F401  (experiment)
     export_commands,  # noqa: F401  (export, import)
     infer,  # noqa: F401  (infer)
     learn,  # noqa: F401  (learn)

@@ -51,6 +51,9 @@ def export_controller(
         "--float", help="c only: float instead of double arithmetic.")] = False,
     prefix: Annotated[str | None, typer.Option(
         help="c only: prefix of the C names (default flc_, giving flc_output).")] = None,
+    dialect: Annotated[str | None, typer.Option(
+        help="fcl only: iec (IEC 61131-7, the default) or fuzzylite (what fuzzylite 6 "
+        "reads).")] = None,
 ) -> None:
     """Export a controller so that it runs elsewhere, with the same outputs."""
     from flctool.export import EXPORTERS, ExportOptions, load_source
@@ -61,10 +64,13 @@ def export_controller(
         if name != "c" and (single or prefix is not None):
             raise FlcError("--float and --prefix apply to the c format only",
                            hint="leave them out, or write C (--format c, or -o NAME.c)")
+        if name != "fcl" and dialect is not None:
+            raise FlcError("--dialect applies to the fcl format only",
+                           hint="leave it out, or write FCL (--format fcl, or -o NAME.fcl)")
         behaviour, provenance = load_source(source, generation, individual)
         exporter = exporter_class(ExportOptions(provenance=provenance,
                                                 prefix="flc_" if prefix is None else prefix,
-                                                single=single))
+                                                single=single, dialect=dialect or "iec"))
         if output is None:
             sys.stdout.write(exporter.to_string(behaviour))
             return

@@ -203,8 +203,10 @@ def _train(run: Run, learner: Learner, show_progress: bool) -> RunSummary:
                   terminal=show_progress) as progress:
 
         def advance(metrics: GenerationMetrics) -> None:
-            progress.update(metrics.generation + 1, best=f"{metrics.best:.3f}",
-                            mean=f"{metrics.mean:.3f}")
+            validated = ("-" if metrics.validated != metrics.validated
+                         else f"{metrics.validated:.3f}")
+            progress.update(metrics.generation + 1, **{"validated best": validated,
+                                                       "training mean": f"{metrics.mean:.3f}"})
 
         return run.train([FunctionCallback(advance)], learner=learner)
 
@@ -217,8 +219,18 @@ def _report(summary: RunSummary) -> None:
         last = summary.last
         console.print(f"last generation: mean fitness {last.mean:.3f} (std {last.std:.3f}), "
                       f"best {last.best:.3f}; {last.wall_time:.2f} s of training")
+    usage = summary.usage
+    if usage:
+        console.print(f"used {usage['training_episodes']} training episodes "
+                      f"({usage['training_steps']} steps) and {usage['selection_episodes']} "
+                      f"selection episodes ({usage['selection_steps']} steps)")
     if best:
+        validation = best.get("validation")
+        score = (f"validated mean fitness {validation['value']:.3f} [{validation['low']:.3f}, "
+                 f"{validation['high']:.3f}] over {validation['n']} episodes"
+                 if validation and validation.get("low") is not None
+                 else f"fitness {best['fitness']:.3f} in training")
         console.print(f"best controller: generation {best['generation']}, individual "
-                      f"{best['individual']}, fitness {best['fitness']:.3f} -> "
+                      f"{best['individual']}, {score} -> "
                       f"{escape(str(summary.path / 'best.yaml'))}")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

@@ -12,6 +12,7 @@ from flctool.cli.app import (
     app,
     console,
     controller_file,
+    debug_enabled,
     escape,
     example,
     print_error,
@@ -25,6 +26,7 @@ from flctool.errors import FlcError
 if TYPE_CHECKING:
     from rich.table import Table
 
+    from flctool.envs.preflight import FileReport
     from flctool.spec import Behaviour
 
 ControllerArgument = Annotated[Path, typer.Argument(
@@ -37,22 +39,42 @@ def validate(
     files: Annotated[list[Path], typer.Argument(
         metavar="FILE...", help="Behaviour files to check (a run directory: its best.yaml).")],
 ) -> None:
-    """Check behaviour files and report every problem in each (exit 1 if any is invalid)."""
-    from flctool.spec import load_behaviour
+    """Check behaviour files and report every problem in each (exit 1 if any is invalid).
 
+    Runs the environment adapter's checks too, when the adapter can be built here."""
     failed = 0
     for path in files:
         try:
-            behaviour = load_behaviour(controller_file(path))
+            report = validate_file(controller_file(path))
         except FlcError as error:
             failed += 1
             print_error(error)
             continue
+        except Exception as error:  # a bug on one file must not stop the check of the others
+            if debug_enabled():
+                raise
+            failed += 1
+            print_error(FlcError(f"{path}: internal error while checking it: "
+                                 f"{type(error).__name__}: {error}",
+                                 hint="run with --debug for the traceback, and report it"))
+            continue
+        behaviour = report.behaviour
+        for warning in report.warnings:
+            say(str(warning), "warning:", "yellow", err=True)
+        if report.adapter_note:
+            say(f"{path}: {report.adapter_note}", "note:", "yellow")
         state = ("deployable" if behaviour.is_deployable
                  else f"{len(behaviour.missing_rules())} of {behaviour.rule_count} rules to learn")
         say(f"{path}: {behaviour.name} ({state})", "ok")
     if failed:
         raise typer.Exit(1)
+
+
+def validate_file(path: Path) -> FileReport:
+    """:func:`flctool.envs.preflight.validate_file`, imported when a file is checked."""
+    from flctool.envs.preflight import validate_file as check
+
+    return check(path)
 
 
 @app.command(epilog=example("flctool show behaviours/ballchase-handmade.yaml",

@@ -95,7 +95,9 @@ class BallchaseSim(BatchEnv):
         self._std_list: list[list[float]] = self._std.tolist()
         # Constants of the scalar path, looked up once rather than through the config every step
         # (the same values, so the same arithmetic).
-        self._nearest = config.action == "nearest" or len(order) == 1
+        # A vote's output is a singleton, so it executes as the nearest command does.
+        self.votes = config.action == "vote"
+        self._nearest = config.action in ("nearest", "vote") or len(order) == 1
         self._offset = config.robot.neck_offset
         self._size_noise = config.sensor_noise.ball_size
         self._pan_noise = config.sensor_noise.pan
@@ -203,7 +205,7 @@ class BallchaseSim(BatchEnv):
         """Mean and std (B, 3) of the commanded displacement for crisp outputs (B,)."""
         values = self._values
         a = np.clip(actions, values[0], values[-1])
-        if self.config.action == "nearest" or values.shape[0] == 1:
+        if self._nearest:
             k = np.argmin(np.abs(a[:, None] - values[None, :]), axis=1)
             return self._mean[k], self._std[k]
         j = np.clip(np.searchsorted(values, a, side="right") - 1, 0, values.shape[0] - 2)

@@ -50,6 +50,10 @@ class BatchEnv(ABC):
     max_batch: int | None = None
     #: [low, high] of the crisp output ``a`` the adapter expects (the commands' singletons).
     action_bounds: tuple[float, float]
+    #: Whether the controller acts by vote (the action mode ``vote``): each command's firing
+    #: rules sum their activations and the strongest command's singleton is ``a``, in place
+    #: of eq. 3's weighted average (see docs/learning.md).
+    votes: bool = False
 
     @abstractmethod
     def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:

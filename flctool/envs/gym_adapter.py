@@ -7,6 +7,9 @@ a Discrete or one-component Box action space, as a :class:`~flctool.envs.base.Ba
   ``a`` (eq. 3) executes the action of the command whose singleton is nearest ``a``.
 * Box actions: the singletons are action values and ``a`` itself is the action (clipped to
   the space's bounds).
+* ``environment.action: vote``: the controller's output is the singleton of the command
+  whose firing rules have the largest summed activation (see docs/learning.md), so a
+  Discrete space executes exactly that command.
 
 Episode ``b`` runs in its own Gymnasium environment, reset with ``seed=seeds[b]``, so batched
 and one-at-a-time runs agree. gymnasium is an optional extra: ``pip install 'flctool[gym]'``.
@@ -14,7 +17,9 @@ and one-at-a-time runs agree. gymnasium is an optional extra: ``pip install 'flc
 
 from __future__ import annotations
 
+import importlib
 import re
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -38,6 +43,35 @@ def import_gymnasium() -> Any:
 
 _GYM_SUGGESTION = re.compile(r"\s*Did you mean: `[^`]*`\?")
 
+#: Modules the user imported on the command line (``--import-module``). Gymnasium imports the
+#: module of an id ``module:Env-v0`` itself; a behaviour file alone must not run code, so such
+#: an id is refused unless its module is one of these.
+_USER_MODULES: set[str] = set()
+
+
+def import_user_modules(names: Iterable[str]) -> None:
+    """Import the modules the user named (they register their Gymnasium environments) and
+    allow ids ``module:Env-v0`` to name them. Raises :class:`EnvError` if one fails."""
+    for name in names:
+        try:
+            importlib.import_module(name)
+        except Exception as error:  # any failure of the user's module is theirs to fix
+            raise EnvError(f"cannot import the module '{name}' (--import-module): "
+                           f"{type(error).__name__}: {error}",
+                           hint="check the module name and that it is importable") from None
+        _USER_MODULES.add(name)
+
+
+def id_module_problem(env_id: str) -> Problem | None:
+    """A Gymnasium id that would import a module the user did not name, or None."""
+    module, colon, _ = env_id.rpartition(":")
+    if not colon or module in _USER_MODULES:
+        return None
+    return Problem(("environment", "id"), f"the id '{env_id}' names the Python module "
+                   f"'{module}' to import, and reading a behaviour file never runs code",
+                   f"if you trust the module, pass --import-module {module} on the command "
+                   "line, or use the id without the module")
+
 
 def _spec_error(path: tuple[str | int, ...], message: str, hint: str = "") -> SpecError:
     return SpecError([Problem(path, message, hint)])
@@ -52,6 +86,7 @@ class GymnasiumEnv(BatchEnv):
         self.config = config
         self.observation_names = input_names
         self._commands = commands
+        self.votes = config.action == "vote"
         self._envs: list[Any] = [self._make()]
         try:
             first = self._envs[0]
@@ -84,6 +119,9 @@ class GymnasiumEnv(BatchEnv):
     # -- building ------------------------------------------------------------------------
     def _make(self) -> Any:
         gym, config = self.gym, self.config
+        problem = id_module_problem(config.id)
+        if problem is not None:
+            raise SpecError([problem])
         try:
             return gym.make(config.id, disable_env_checker=True, **config.options)
         except gym.error.Error as error:

@@ -8,6 +8,7 @@ format name in :mod:`flctool.export`.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import secrets
@@ -34,12 +35,14 @@ class ExportOptions:
     ``provenance`` (source, learner, seed, generation, individual, fitness; any may be absent)
     becomes a header comment where the format has comments. ``prefix`` and ``single`` only
     concern the C exporter: the prefix of its public names, and ``float`` instead of
-    ``double`` arithmetic.
+    ``double`` arithmetic. ``dialect`` concerns FCL only.
     """
 
     provenance: Mapping[str, object] = field(default_factory=dict)
     prefix: str = "flc_"
     single: bool = False
+    #: FCL only: ``iec`` (IEC 61131-7 point lists) or ``fuzzylite`` (what fuzzylite 6 reads).
+    dialect: str = "iec"
 
 
 class Exporter(ABC):
@@ -69,19 +72,38 @@ class Exporter(ABC):
         return write_files(self.texts(behaviour, Path(path)), force=force)
 
 
+#: The largest file an importer reads, in characters: far above any controller written by
+#: hand or by a tool (a 4-input, 10-set grid of 10,000 rules is about 1 MB of FCL), and small
+#: enough that every importer, linear in the text, reads it in seconds.
+MAX_IMPORT_CHARS = 8_000_000
+
+
 class Importer(ABC):
-    """Reads the subset of one format that flctool can express."""
+    """Reads the subset of one format that flctool can express.
+
+    Every importer reads its text in time linear in its length (no backtracking regular
+    expression), and refuses a text longer than :data:`MAX_IMPORT_CHARS`.
+    """
 
     format: ClassVar[str]
 
-    @abstractmethod
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
         """The controller in ``text`` as a behaviour (``file`` names it in messages)."""
+        if len(text) > MAX_IMPORT_CHARS:
+            raise ExportError(f"{file}:1: the file holds {len(text):,} characters, more than "
+                              f"the {MAX_IMPORT_CHARS:,} an import reads",
+                              hint="is it really a controller? split it or shorten it")
+        return self.parse(text, file)
+
+    @abstractmethod
+    def parse(self, text: str, file: str) -> Behaviour:
+        """The controller in ``text`` (at most MAX_IMPORT_CHARS long) as a behaviour."""
 
     def from_file(self, path: str | Path) -> Behaviour:
         path = Path(path)
         try:
-            text = path.read_text(encoding="utf-8")
+            with path.open(encoding="utf-8") as handle:
+                text = handle.read(MAX_IMPORT_CHARS + 1)
         except FileNotFoundError:
             raise ExportError(f"{path}: no such file", hint="check the path") from None
         except (OSError, UnicodeDecodeError) as exc:
@@ -209,3 +231,43 @@ def header_lines(behaviour: Behaviour, provenance: Mapping[str, object]) -> list
 def number(value: float) -> str:
     """The shortest text that reads back to the same double (never rounded)."""
     return repr(float(value))
+
+
+Quad = tuple[float, float, float, float]
+
+
+def beyond(lo: float, hi: float, side: int, widths: int) -> float:
+    """A point ``widths`` range widths beyond the range's low (``side`` -1) or high (+1)
+    end, or ``widths`` ulps beyond it where that would overflow."""
+    end = lo if side < 0 else hi
+    point = end + side * widths * (hi - lo)
+    if math.isfinite(point) and point != end:
+        return point
+    for _ in range(widths):
+        end = math.nextafter(end, side * math.inf)
+    return end
+
+
+def sloped_quad(quad: Quad, span: tuple[float, float], *, interior: bool = True) -> Quad:
+    """The same set with no vertical edge, for readers that refuse (or misread) one.
+
+    A shoulder at the range's end keeps membership 1 for a range width past it, and its foot
+    lies two widths past it: inputs are clipped to the range, so inside the range nothing
+    changes, and a reader that does not clip still gets 1 up to a width past the end.
+    With ``interior``, a vertical edge inside the range gets its foot one ulp away, so no
+    double lies on the ramp and the membership at every double is the same as flctool's
+    (0 at the foot, 1 at the edge).
+    """
+    pa, pb, pc, pd = quad
+    lo, hi = span
+    if pa == pb:
+        if pa <= lo:
+            pa, pb = beyond(lo, hi, -1, 2), beyond(lo, hi, -1, 1)
+        elif interior:
+            pa = math.nextafter(pb, -math.inf)
+    if pc == pd:
+        if pd >= hi:
+            pc, pd = beyond(lo, hi, +1, 1), beyond(lo, hi, +1, 2)
+        elif interior:
+            pd = math.nextafter(pc, math.inf)
+    return pa, pb, pc, pd

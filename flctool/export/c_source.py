@@ -18,6 +18,7 @@ import numpy as np
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, header_lines, number, require_deployable
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 from flctool.spec.checks import uncovered_gap
 
 _PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -77,7 +78,7 @@ class CExporter(Exporter):
         require_deployable(behaviour)
         prefix, macro = self.names()
         real = self.real
-        guard = f"{macro}{behaviour.name.upper()}_H"
+        guard = f"{macro}{identifier(behaviour.name).upper()}_H"
         enums = [f"{macro}IN_{name.upper()}" for name in behaviour.inputs]
         if len(set(enums)) != len(enums):
             raise ExportError("two inputs differ only in case, so their C names collide",

@@ -13,11 +13,18 @@ vertical (``pa == pb``) is two points at the same x.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, Importer, header_lines, require_deployable
+from flctool.export.base import (
+    Exporter,
+    Importer,
+    header_lines,
+    require_deployable,
+    sloped_quad,
+)
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
@@ -26,13 +33,16 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
+    check_term_arity,
     check_unique,
+    fuzzylite_quad,
     parse_number,
     quad_from_points,
     span,
     unsupported,
 )
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.
@@ -62,13 +72,18 @@ def set_points(quad: tuple[float, float, float, float],
     lo, hi = span
     points: list[tuple[float, int]] = []
     if not pa == pb == lo:  # a vertical edge at the range's end needs no foot: inputs clip
-        points.append((pa, 0))
+        # an edge inside the range gets its foot one ulp away: no double lies between
+        points.append((math.nextafter(pb, -math.inf) if pa == pb else pa, 0))
     points.append((pb, 1))
     if pc != pb:
         points.append((pc, 1))
     if not pc == pd == hi:
-        points.append((pd, 0))
+        points.append((math.nextafter(pc, math.inf) if pc == pd else pd, 0))
     return points
+
+
+#: The dialects the exporter writes.
+DIALECTS = ("iec", "fuzzylite")
 
 
 class FclExporter(Exporter):
@@ -77,34 +92,61 @@ class FclExporter(Exporter):
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)
         _check_names(behaviour)
+        dialect = self.options.dialect
+        if dialect not in DIALECTS:
+            raise ExportError(f"unknown FCL dialect '{dialect}'",
+                              hint=f"use one of {', '.join(DIALECTS)}")
+        fuzzylite = dialect == "fuzzylite"
         output = behaviour.output
-        lines = [f"(* {line} *)" for line in header_lines(behaviour, self.options.provenance)]
-        lines += [f"FUNCTION_BLOCK {behaviour.name}", "", "VAR_INPUT"]
+        about = header_lines(behaviour, self.options.provenance)
+        # fuzzylite 6 skips lines starting with '//' (and refuses '(* ... *)')
+        lines = [f"// {line}" if fuzzylite else f"(* {line} *)" for line in about]
+        lines += [f"FUNCTION_BLOCK {identifier(behaviour.name)}", "", "VAR_INPUT"]
         lines += [f"{INDENT}{name} : REAL;" for name in behaviour.inputs]
         lines += ["END_VAR", "", "VAR_OUTPUT", f"{INDENT}{output.name} : REAL;", "END_VAR", ""]
         for name, variable in behaviour.inputs.items():
             lines.append(f"FUZZIFY {name}")
-            for set_name, quad in variable.sets.items():
-                points = " ".join(f"({fcl_number(x)}, {mu})"
-                                  for x, mu in set_points(quad, variable.range))
-                lines.append(f"{INDENT}TERM {set_name} := {points};")
             lo, hi = variable.range
+            for set_name, quad in variable.sets.items():
+                lines.append(f"{INDENT}TERM {set_name} := "
+                             f"{_term(quad, variable.range, fuzzylite=fuzzylite)};")
             lines += [f"{INDENT}RANGE := ({fcl_number(lo)} .. {fcl_number(hi)});",
                       "END_FUZZIFY", ""]
         values = list(output.commands.values())
         lines.append(f"DEFUZZIFY {output.name}")
         lines += [f"{INDENT}TERM {command} := {fcl_number(value)};"
                   for command, value in output.commands.items()]
-        lines += [f"{INDENT}METHOD : COGS;", f"{INDENT}DEFAULT := 0.0;",
+        lines += [f"{INDENT}METHOD : COGS;"]
+        if fuzzylite:  # fuzzylite 6 reads ACCU here, and refuses it in the RULEBLOCK
+            lines.append(f"{INDENT}ACCU : NSUM;")
+        lines += [f"{INDENT}DEFAULT := 0.0;",
                   f"{INDENT}RANGE := ({fcl_number(min(values))} .. {fcl_number(max(values))});",
                   "END_DEFUZZIFY", "", "RULEBLOCK rules", f"{INDENT}AND : MIN;",
-                  f"{INDENT}ACT : MIN;", f"{INDENT}ACCU : NSUM;"]
+                  f"{INDENT}ACT : MIN;"]
+        if not fuzzylite:
+            lines.append(f"{INDENT}ACCU : NSUM;")
+        # fuzzylite 6 parses rules with lower-case keywords only (and silently drops others)
+        if_, is_, and_, then = ("if", "is", "and", "then") if fuzzylite else (
+            "IF", "IS", "AND", "THEN")
         for index, rule in enumerate(behaviour.rules, start=1):
-            condition = " AND ".join(f"{n} IS {rule.if_[n]}" for n in behaviour.input_names)
-            lines.append(f"{INDENT}RULE {index} : IF {condition} THEN {output.name} IS "
-                         f"{rule.then};")
+            condition = f" {and_} ".join(f"{n} {is_} {rule.if_[n]}"
+                                         for n in behaviour.input_names)
+            lines.append(f"{INDENT}RULE {index} : {if_} {condition} {then} {output.name} "
+                         f"{is_} {rule.then};")
         lines += ["END_RULEBLOCK", "", "END_FUNCTION_BLOCK"]
         return "\n".join(lines) + "\n"
+
+
+def _term(quad: tuple[float, float, float, float], span: tuple[float, float], *,
+          fuzzylite: bool) -> str:
+    """A set as IEC points, or as fuzzylite's Trapezoid / Triangle with shoulders' feet
+    outside the range (fuzzylite does not clip FCL inputs; see sloped_quad)."""
+    if not fuzzylite:
+        return " ".join(f"({fcl_number(x)}, {mu})" for x, mu in set_points(quad, span))
+    pa, pb, pc, pd = sloped_quad(quad, span, interior=False)
+    if pb == pc:
+        return f"Triangle {fcl_number(pa)} {fcl_number(pb)} {fcl_number(pd)}"
+    return "Trapezoid " + " ".join(fcl_number(x) for x in (pa, pb, pc, pd))
 
 
 def _check_names(behaviour: Behaviour) -> None:
@@ -157,7 +199,7 @@ class FclImporter(Importer):
 
     format = "fcl"
 
-    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+    def parse(self, text: str, file: str) -> Behaviour:
         return build_behaviour(_FclParser(tokenize(text, file), file).parse())
 
 
@@ -280,7 +322,11 @@ class _FclParser:
             if key.word == "TERM":
                 term = self.name()
                 self.expect(":=")
-                terms.append((term, self.points(term)))
+                if self.peek().kind == "name":  # fuzzylite's syntax: Trapezoid a b c d
+                    quad = self.fuzzylite_term(term)
+                    variable.sets.append(ImportedSet(term.text, quad, term.line))
+                else:
+                    terms.append((term, self.points(term)))
                 self.expect(";")
             elif key.word == "RANGE":
                 variable.range = self.range_()
@@ -293,6 +339,26 @@ class _FclParser:
             quad = quad_from_points(points, extent, (self.file, term.line), term.text)
             variable.sets.append(ImportedSet(term.text, quad, term.line))
         return token.text
+
+    def fuzzylite_term(self, term: Token) -> tuple[float, float, float, float]:
+        """fuzzylite's term syntax, ``Trapezoid a b c d`` (see FUZZYLITE_TERMS), to ';'."""
+        kind = self.take()
+        values: list[float] = []
+        while self.peek().word != ";":
+            token = self.take()
+            if token.kind == "name" and token.text.lower() in ("inf", "-inf"):
+                values.append(float(token.text))
+            elif token.kind == "number":
+                values.append(parse_number(token.text, self.file, token.line, kind.text))
+            else:
+                raise self.fail(token, f"'{token.text}' in the {kind.text} term "
+                                f"'{term.text}'", "write the term's numbers, then ';'")
+            if len(values) > 5:
+                break
+        n = check_term_arity(kind.text, len(values), self.file, kind.line)
+        if len(values) > n and values[n] != 1.0:
+            raise self.fail(kind, f"a term of height {values[n]!r}: flctool's sets reach 1")
+        return fuzzylite_quad(kind.text, values[:n], self.file, kind.line)
 
     def points(self, term: Token) -> list[tuple[float, float]]:
         points = []

@@ -1,6 +1,8 @@
 """FIS, the text format of MATLAB's Fuzzy Logic Toolbox: a Sugeno system, constant outputs.
 
-Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``), commands are ``constant`` output MFs,
+Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``) with no vertical edge, as MATLAB and
+Octave require: a shoulder's plateau and foot lie outside the range, an edge inside it has its
+foot one ulp away (:func:`~flctool.export.base.sloped_quad`); commands are ``constant`` MFs,
 ``AndMethod='min'`` is eq. 2 and ``DefuzzMethod='wtaver'`` is eq. 3. A rule line lists the set
 index of every input, then the command index, the weight (1) and the connection (1 = AND).
 MATLAB does not clip inputs to their range: clip states before evaluating to match flctool.
@@ -10,7 +12,7 @@ from __future__ import annotations
 
 import re
 
-from flctool.export.base import Exporter, Importer, number, require_deployable
+from flctool.export.base import Exporter, Importer, number, require_deployable, sloped_quad
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
@@ -42,7 +44,10 @@ class FisExporter(Exporter):
         for index, (name, variable) in enumerate(behaviour.inputs.items(), start=1):
             lines += ["", f"[Input{index}]", f"Name='{name}'",
                       f"Range={_vector(list(variable.range))}", f"NumMFs={len(variable.sets)}"]
-            for k, (set_name, (pa, pb, pc, pd)) in enumerate(variable.sets.items(), start=1):
+            for k, (set_name, quad) in enumerate(variable.sets.items(), start=1):
+                # MATLAB and Octave refuse trapmf with a == b and trimf with a == b or
+                # b == c: no vertical edges (exact under clipping, see sloped_quad)
+                pa, pb, pc, pd = sloped_quad(quad, variable.range)
                 shape = (f"'trimf',{_vector([pa, pb, pd])}" if pb == pc
                          else f"'trapmf',{_vector([pa, pb, pc, pd])}")
                 lines.append(f"MF{k}='{set_name}':{shape}")
@@ -65,10 +70,12 @@ class FisExporter(Exporter):
         return "\n".join(lines) + "\n"
 
 
-_SECTION = re.compile(r"^\[(\w+?)(\d*)\]$")
-_KEY = re.compile(r"^(\w+)\s*=\s*(.*)$")
-_MF = re.compile(r"^'([^']*)'\s*:\s*'([^']*)'\s*,\s*\[([^\]]*)\]$")
-_RULE = re.compile(r"^([-\d\s.]+),([-\d\s.]+)\(\s*([^)]*?)\s*\)\s*:\s*(\d+)$")
+# Every pattern here matches in time linear in the line: no nested or adjacent quantifiers
+# over the same characters (a rule line is split by hand, see _FisReader.rule).
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_MF = re.compile(r"'([^']*)'\s*:\s*'([^']*)'\s*,\s*\[([^\]]*)\]")
+#: The most digits a count or an index may have.
+MAX_DIGITS = 6
 
 
 class FisImporter(Importer):
@@ -76,7 +83,7 @@ class FisImporter(Importer):
 
     format = "fis"
 
-    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+    def parse(self, text: str, file: str) -> Behaviour:
         return build_behaviour(_FisReader(file).read(text))
 
 
@@ -97,22 +104,34 @@ class _FisReader:
             line = raw.strip()
             if not line or line.startswith(("%", "#")):
                 continue
-            section = _SECTION.match(line)
-            if section is not None:
-                self.begin(section.group(1), section.group(2), line_number)
+            if line.startswith("[") and line.endswith("]"):
+                self.section_line(line, line_number)
             elif self.section[0] == "Rules":
                 self.rule_lines.append((line, line_number))
             else:
-                key = _KEY.match(line)
-                if key is None:
-                    raise self.fail(line_number, f"'{line}' is not a 'Key=value' line")
-                self.entry(key.group(1), key.group(2).strip(), line_number)
+                key, equals, value = line.partition("=")
+                key = key.strip()
+                if not equals or _WORD.fullmatch(key) is None:
+                    raise self.fail(line_number, f"'{_excerpt(line)}' is not a 'Key=value' line")
+                self.entry(key, value.strip(), line_number)
         self.check_system()
         self.check_counts()
         for line, line_number in self.rule_lines:
             self.result.rules.append(self.rule(line, line_number))
         self.methods()
         return self.result
+
+    def section_line(self, text: str, line: int) -> None:
+        """``[Name]`` or ``[NameK]``: a word, then an optional index of at most MAX_DIGITS."""
+        inner = text[1:-1].strip()
+        name = inner.rstrip("0123456789")
+        index = inner[len(name):]
+        if _WORD.fullmatch(name) is None:
+            raise self.fail(line, f"'{_excerpt(text)}' is not a section header like [Input1]")
+        if len(index) > MAX_DIGITS:
+            raise self.fail(line, f"the section index of [{name}...] has {len(index)} digits",
+                            "number the sections 1, 2, ... in order")
+        self.begin(name, index, line)
 
     def begin(self, name: str, index: str, line: int) -> None:
         if name == "Input" and index:
@@ -150,8 +169,10 @@ class _FisReader:
                             "number the MFs of a section 1, 2, ... in order")
 
     def count(self, value: str, line: int, key: str) -> int:
-        if not value.isdigit():
-            raise self.fail(line, f"{key}={value} is not a whole number")
+        # isdigit alone accepts '²' and other digits int() refuses
+        if not (value.isascii() and value.isdigit()) or len(value) > MAX_DIGITS:
+            raise self.fail(line, f"{key}={_excerpt(value)} is not a whole number of at most "
+                            f"{MAX_DIGITS} digits", f"write the count, e.g. {key}=3")
         return int(value)
 
     def input_entry(self, variable: ImportedInput, key: str, value: str, line: int) -> None:
@@ -196,9 +217,9 @@ class _FisReader:
             raise self.fail(line, f"'{key}' in the output section")
 
     def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
-        match = _MF.match(value)
+        match = _MF.fullmatch(value)
         if match is None:
-            raise self.fail(line, f"'{value}' is not 'name':'type',[parameters]")
+            raise self.fail(line, f"'{_excerpt(value)}' is not 'name':'type',[parameters]")
         return match.group(1), match.group(2), self.vector(f"[{match.group(3)}]", line, "MF")
 
     def vector(self, value: str, line: int, what: str) -> list[float]:
@@ -250,16 +271,30 @@ class _FisReader:
             self.result.accumulation = Method(f"AggMethod='{method}'", line,
                                               "use AggMethod='sum'")
 
+    def split_rule(self, text: str, line: int) -> tuple[list[str], list[str], str, str]:
+        """``sets, outputs (weight) : connection`` as its four parts; MATLAB also writes
+        rules without the comma, the output indices after the inputs'."""
+        head, colon, connection = text.rpartition(":")
+        opening, closing = head.find("("), head.rfind(")")
+        connection = connection.strip()
+        if (not colon or opening < 0 or closing < opening or head[closing + 1:].strip()
+                or connection not in ("1", "2")):
+            raise self.fail(line, f"rule '{_excerpt(text)}' is not 'sets, command (weight) : "
+                            "connection'", "write e.g. 1 2, 1 (1) : 1")
+        indices, comma, outputs = head[:opening].partition(",")
+        if comma:
+            return indices.split(), outputs.split(), head[opening + 1:closing], connection
+        words = indices.split()
+        n = len(self.result.inputs)
+        return words[:n], words[n:], head[opening + 1:closing], connection
+
     def rule(self, text: str, line: int) -> ImportedRule:
-        match = _RULE.match(text)
-        if match is None:
-            raise self.fail(line, f"rule '{text}' is not 'sets, command (weight) : connection'")
-        sets, outputs = match.group(1).split(), match.group(2).split()
-        weight = parse_number(match.group(3), self.file, line, "rule weight")
+        sets, outputs, weight_text, connection = self.split_rule(text, line)
+        weight = parse_number(weight_text.strip(), self.file, line, "rule weight")
         if weight != 1.0:
-            raise self.fail(line, f"a rule weight of {match.group(3)}: flctool's rules all "
-                            "weigh 1")
-        if match.group(4) != "1" and len(sets) > 1:
+            raise self.fail(line, f"a rule weight of {_excerpt(weight_text.strip())}: "
+                            "flctool's rules all weigh 1")
+        if connection != "1" and len(sets) > 1:
             raise self.fail(line, "an OR rule (connection 2): flctool's rules are one AND chain "
                             "(eq. 1)")
         if len(sets) != len(self.result.inputs) or len(outputs) != 1:
@@ -284,8 +319,16 @@ class _FisReader:
         return ImportedRule(antecedent, self.result.commands[k - 1].name, line)
 
     def index(self, text: str, line: int, what: str) -> int:
+        if len(text) > MAX_DIGITS + 3:
+            raise self.fail(line, f"the index of {what} has {len(text)} characters",
+                            "write the MF's number, 1, 2, ...")
         value = parse_number(text, self.file, line, what)
         if value != int(value):
             raise self.fail(line, f"the index {text} of {what} is not a whole number "
                             "(a hedge)")
         return int(value)
+
+
+def _excerpt(text: str, width: int = 60) -> str:
+    """``text`` cut to ``width`` characters for a message."""
+    return text if len(text) <= width else text[:width] + "..."

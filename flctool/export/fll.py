@@ -10,7 +10,6 @@ Numbers are written with repr (full precision), never fuzzylite's default 3 deci
 
 from __future__ import annotations
 
-import math
 import re
 
 from flctool.errors import ExportError
@@ -23,9 +22,12 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
+    check_term_arity,
+    fuzzylite_quad,
     parse_number,
 )
 from flctool.spec import Behaviour
+from flctool.spec.base import identifier
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.
 RESERVED = frozenset({"if", "is", "then", "and", "or", "with", "not", "any", "extremely",
@@ -41,7 +43,7 @@ class FllExporter(Exporter):
         require_deployable(behaviour)
         _check_names(behaviour)
         lines = [f"# {line}" for line in header_lines(behaviour, self.options.provenance)]
-        lines.append(f"Engine: {behaviour.name}")
+        lines.append(f"Engine: {identifier(behaviour.name)}")
         if behaviour.description:
             # FLL values are one line long and '#' starts a comment.
             description = " ".join(behaviour.description.split()).partition("#")[0].strip()
@@ -86,7 +88,7 @@ def _check_names(behaviour: Behaviour) -> None:
                               "would misread the rules", hint="rename it in the behaviour file")
 
 
-_LINE = re.compile(r"^\s*([A-Za-z-]+)\s*:\s*(.*?)\s*$")
+_KEY = re.compile(r"[A-Za-z-]+")
 
 
 class FllImporter(Importer):
@@ -94,7 +96,7 @@ class FllImporter(Importer):
 
     format = "fll"
 
-    def from_string(self, text: str, file: str = "<string>") -> Behaviour:
+    def parse(self, text: str, file: str) -> Behaviour:
         return build_behaviour(_FllReader(file).read(text))
 
 
@@ -114,10 +116,12 @@ class _FllReader:
             line = raw.partition("#")[0]
             if not line.strip():
                 continue
-            match = _LINE.match(line)
-            if match is None:
-                raise self.fail(number_, f"'{line.strip()}' is not a 'key: value' line")
-            self.entry(match.group(1), match.group(2), number_)
+            key, colon, value = line.partition(":")
+            key = key.strip()
+            if not colon or _KEY.fullmatch(key) is None:
+                raise self.fail(number_, f"'{_excerpt(line.strip())}' is not a 'key: value' "
+                                "line")
+            self.entry(key, value.strip(), number_)
         if not self.result.output_declared:
             raise self.fail(1, "the engine has no OutputVariable")
         if self.blocks == 0:
@@ -167,11 +171,13 @@ class _FllReader:
 
     def input_entry(self, key: str, value: str, line: int) -> None:
         assert self.current is not None  # set by begin() before any input key
-        if self.common_entry(key, value, line) or key == "lock-range":
+        if self.common_entry(key, value, line):
+            return
+        if key == "lock-range":
             # flctool always clips inputs to their range; lock-range false differs only
             # outside the range.
-            return
-        if key == "range":
+            self.boolean(key, value, line)
+        elif key == "range":
             self.current.range = self.pair(value, line)
         elif key == "term":
             name, kind, params = self.term(value, line)
@@ -180,10 +186,18 @@ class _FllReader:
             raise self.fail(line, f"'{key}' in an InputVariable")
 
     def output_entry(self, key: str, value: str, line: int) -> None:
-        if self.common_entry(key, value, line) or key in ("range", "lock-range", "default",
-                                                          "lock-previous"):
-            return  # the output's range and default never matter: every state fires a rule
-        if key == "aggregation":
+        # The output's range, lock-range and default never matter (every state fires a rule
+        # and eq. 3 lies between the commands), but they must still say something valid.
+        if self.common_entry(key, value, line):
+            return
+        if key in ("lock-range", "lock-previous"):
+            self.boolean(key, value, line)
+        elif key == "range":
+            self.pair(value, line)
+        elif key == "default":
+            if value.lower() not in ("nan", "-nan"):
+                parse_number(value, self.file, line, "default")
+        elif key == "aggregation":
             self.result.accumulation = (None if value.lower() == "none" else
                                         Method(f"aggregation {value}", line,
                                                "use aggregation: none"))
@@ -220,10 +234,15 @@ class _FllReader:
         else:
             raise self.fail(line, f"'{key}' in a RuleBlock")
 
+    def boolean(self, key: str, value: str, line: int) -> bool:
+        if value not in ("true", "false"):
+            raise self.fail(line, f"{key}: '{_excerpt(value)}' is neither true nor false")
+        return value == "true"
+
     def pair(self, value: str, line: int) -> tuple[float, float]:
         parts = value.split()
         if len(parts) != 2:
-            raise self.fail(line, f"range '{value}' is not two numbers")
+            raise self.fail(line, f"range '{_excerpt(value)}' is not two numbers")
         lo, hi = (parse_number(p, self.file, line, "range") for p in parts)
         return lo, hi
 
@@ -234,34 +253,11 @@ class _FllReader:
         return parts[0], parts[1], parts[2:]
 
     def quad(self, kind: str, params: list[str], line: int) -> tuple[float, float, float, float]:
-        arity = {"Trapezoid": 4, "Triangle": 3, "Rectangle": 2}
-        if kind not in arity:
-            raise self.fail(line, f"a {kind} term: flctool's sets are trapezoids",
-                            "use Trapezoid, Triangle or Rectangle terms")
-        n = arity[kind]
-        if len(params) not in (n, n + 1):
-            raise self.fail(line, f"a {kind} takes {n} numbers (and an optional height)")
+        n = check_term_arity(kind, len(params), self.file, line)
         if len(params) > n and parse_number(params[n], self.file, line, "height") != 1.0:
             raise self.fail(line, f"a term of height {params[n]}: flctool's sets reach 1")
         values = [self.point(p, line, kind) for p in params[:n]]
-        if kind == "Triangle":
-            pa, pb, pc, pd = values[0], values[1], values[1], values[2]
-        elif kind == "Rectangle":  # membership 1 on [a, b], 0 elsewhere
-            pa, pb, pc, pd = values[0], values[0], values[1], values[1]
-        else:
-            pa, pb, pc, pd = values
-        # fuzzylite gives membership 1 up to an infinite foot: a shoulder whatever the
-        # neighbouring point, which build_behaviour brings to the range's end.
-        if pa == -math.inf:
-            pa = pb = -math.inf
-        if pd == math.inf:
-            pc = pd = math.inf
-        left = pa == pb == -math.inf or (math.isfinite(pa) and math.isfinite(pb))
-        right = pc == pd == math.inf or (math.isfinite(pc) and math.isfinite(pd))
-        if not (left and right):
-            raise self.fail(line, f"a {kind} with an infinite point that is not a shoulder's "
-                            "foot", "only the outer feet may be -inf (first) or inf (last)")
-        return pa, pb, pc, pd
+        return fuzzylite_quad(kind, values, self.file, line)
 
     def point(self, text: str, line: int, kind: str) -> float:
         """A term's point: a number, or -inf / inf for a shoulder's foot."""
@@ -310,6 +306,11 @@ class _FllReader:
                             "flctool's rules use plain terms")
         raise self.fail(line, f"'{' '.join(words)}' in a rule's {part} is not "
                         "'variable is term'")
+
+
+def _excerpt(text: str, width: int = 60) -> str:
+    """``text`` cut to ``width`` characters for a message."""
+    return text if len(text) <= width else text[:width] + "..."
 
 
 def _split(words: list[str], separator: str) -> list[list[str]]:

@@ -55,14 +55,50 @@ class ImportedInput:
             return self.range
         return span(v for s in self.sets for v in (s.quad[0], s.quad[3]))
 
-    def resolved_quads(self) -> dict[str, Quad]:
-        """Every set's quadruple, infinite shoulder points moved to the range's ends: inputs
-        are clipped to the range, so the membership inside it is unchanged."""
+    def resolved_quads(self, file: str) -> dict[str, Quad]:
+        """Every set's quadruple inside the range (see :func:`inside_range`)."""
         lo, hi = self.resolved_range()
-        return {s.name: (lo if s.quad[0] == -math.inf else s.quad[0],
-                         lo if s.quad[1] == -math.inf else s.quad[1],
-                         hi if s.quad[2] == math.inf else s.quad[2],
-                         hi if s.quad[3] == math.inf else s.quad[3]) for s in self.sets}
+        return {s.name: inside_range(s, (lo, hi), file) for s in self.sets}
+
+
+def inside_range(item: ImportedSet, span: tuple[float, float], file: str) -> Quad:
+    """A set's quadruple with the same membership inside the range and no point outside it.
+
+    Inputs are clipped to the range, so a shoulder whose plateau reaches the range's end (an
+    infinite foot, or MATLAB's foot just outside the range: ``[-1 0 90 110]`` on ``[0, 300]``)
+    is the shoulder ``[0, 0, 90, 110]``, exactly. A foot one ulp from its top (how flctool
+    writes a vertical edge for readers that refuse one) is that vertical edge, exactly: no
+    double lies between them. A ramp that the range's end cuts, or a set that does not reach
+    into the range, is refused: no trapezoid inside the range has that membership.
+    """
+    lo, hi = span
+    pa, pb, pc, pd = item.quad
+    if pa < pb and math.nextafter(pa, math.inf) == pb:
+        pa = pb
+    if pc < pd and math.nextafter(pc, math.inf) == pd:
+        pd = pc
+    where = f"set '{item.name}' {list(item.quad)}"
+    if pd < lo or pa > hi or (pd == lo and pc < lo) or (pa == hi and pb > hi):
+        raise unsupported(file, item.line, f"{where} does not reach into the range "
+                          f"[{lo!r}, {hi!r}], so it never fires",
+                          "remove the set, or widen the range")
+    if pa < lo:
+        if pb > lo or pc < lo:
+            raise unsupported(file, item.line, f"{where} has a ramp that the range's low end "
+                              f"{lo!r} cuts, so its membership there is neither 0 nor 1; "
+                              "flctool's sets are trapezoids inside the range",
+                              f"move its first two points to {lo!r} (a shoulder) or inside "
+                              "the range")
+        pa = pb = lo
+    if pd > hi:
+        if pc < hi or pb > hi:
+            raise unsupported(file, item.line, f"{where} has a ramp that the range's high "
+                              f"end {hi!r} cuts, so its membership there is neither 0 nor 1; "
+                              "flctool's sets are trapezoids inside the range",
+                              f"move its last two points to {hi!r} (a shoulder) or inside "
+                              "the range")
+        pc = pd = hi
+    return pa, pb, pc, pd
 
 
 @dataclass
@@ -183,6 +219,59 @@ def _clamp_shoulders(points: list[tuple[float, float]], span: tuple[float, float
     return moved
 
 
+#: fuzzylite's linear terms and their numbers of points.
+FUZZYLITE_TERMS = {"Trapezoid": 4, "Triangle": 3, "Rectangle": 2, "Ramp": 2}
+
+
+def check_term_arity(kind: str, count: int, file: str, line: int) -> int:
+    """How many points a fuzzylite term ``kind`` takes (it may add a height); refuses the
+    kinds and counts flctool cannot read."""
+    if kind not in FUZZYLITE_TERMS:
+        raise unsupported(file, line, f"a {kind} term: flctool's sets are trapezoids",
+                          "use Trapezoid, Triangle, Rectangle or Ramp terms")
+    n = FUZZYLITE_TERMS[kind]
+    if count not in (n, n + 1):
+        raise unsupported(file, line, f"a {kind} takes {n} numbers (and an optional height)",
+                          f"write {kind} followed by {n} numbers")
+    return n
+
+
+def fuzzylite_quad(kind: str, values: list[float], file: str, line: int) -> Quad:
+    """The quadruple of fuzzylite's Trapezoid, Triangle, Rectangle or Ramp term.
+
+    A Ramp is a shoulder: rising from its start to its end (then 1 on), or falling. An
+    infinite foot gives membership 1 up to it, whatever the neighbouring point: a shoulder,
+    which :func:`inside_range` brings to the range's end.
+    """
+    if kind == "Triangle":
+        pa, pb, pc, pd = values[0], values[1], values[1], values[2]
+    elif kind == "Rectangle":  # membership 1 on [a, b], 0 elsewhere
+        pa, pb, pc, pd = values[0], values[0], values[1], values[1]
+    elif kind == "Ramp":
+        start, end = values
+        if start == end or not (math.isfinite(start) and math.isfinite(end)):
+            raise unsupported(file, line, f"a Ramp from {start!r} to {end!r} has no slope",
+                              "give a Ramp two different finite points")
+        pa, pb, pc, pd = ((start, end, math.inf, math.inf) if start < end else
+                          (-math.inf, -math.inf, end, start))
+    else:
+        pa, pb, pc, pd = values
+    if pa == -math.inf:
+        pa = pb = -math.inf
+    if pd == math.inf:
+        pc = pd = math.inf
+    left = pa == pb == -math.inf or (math.isfinite(pa) and math.isfinite(pb))
+    right = pc == pd == math.inf or (math.isfinite(pc) and math.isfinite(pd))
+    if not (left and right):
+        raise unsupported(file, line, f"a {kind} with an infinite point that is not a "
+                          "shoulder's foot", "only the outer feet may be -inf (first) or inf "
+                          "(last)")
+    if any(b < a for a, b in itertools.pairwise((pa, pb, pc, pd))):
+        raise unsupported(file, line, f"a {kind} whose points {values} are not in "
+                          "increasing order", "write the points from left to right")
+    return pa, pb, pc, pd
+
+
 def check_unique(file: str, items: Iterable[tuple[str, int]], kind: str, of: str = "") -> None:
     """Refuse a name given twice (``items`` are (name, line)), naming both lines."""
     first: dict[str, int] = {}
@@ -218,7 +307,7 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         marks[("inputs", variable.name)] = (variable.line, 1)
         for item in variable.sets:
             marks[("inputs", variable.name, "sets", item.name)] = (item.line, 1)
-        sets = {name: list(quad) for name, quad in variable.resolved_quads().items()}
+        sets = {name: list(quad) for name, quad in variable.resolved_quads(file).items()}
         data["inputs"][variable.name] = {"range": list(variable.resolved_range()), "sets": sets}
     for command in imported.commands:
         marks[("output", "commands", command.name)] = (command.line, 1)

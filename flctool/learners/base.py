@@ -30,6 +30,7 @@ from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.callbacks import Callback, CallbackList
 from flctool.learners.metrics import GenerationMetrics
+from flctool.learners.selection import Candidate, Selection
 from flctool.learners.trial import SparseRules
 from flctool.spec.models import Behaviour
 
@@ -64,6 +65,8 @@ class Learner(ABC):
     name: ClassVar[str]
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
     fuzzy_q: FuzzyQ | None = None
+    #: How the hall of fame ranks candidates (see :class:`Selection`).
+    rank_by: ClassVar[str] = "fitness"
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         self.behaviour = behaviour
@@ -78,6 +81,9 @@ class Learner(ABC):
         self.elapsed = 0.0
         self.population: IntArray = np.zeros((1, self.controller.n_rules), dtype=np.intp)
         self.fitness: FloatArray = np.zeros(1)
+        self.fixed_rules, self.fixed_commands = fixed_consequents(behaviour)
+        self.selection = Selection(self.config.selection, self.config.stop, self.config.seed,
+                                   self.rank_by)
 
     # -- what each learner supplies ----------------------------------------------------
     @abstractmethod
@@ -108,6 +114,38 @@ class Learner(ABC):
             self.fuzzy_q.load_state_dict(state)
 
     # -- shared helpers ------------------------------------------------------------------
+    def keep_fixed(self, population: IntArray) -> IntArray:
+        """``population (P, M)`` with the rules the file gives set to their commands (in
+        place, and returned): given rules are fixed, never learned."""
+        population[:, self.fixed_rules] = self.fixed_commands
+        return population
+
+    @property
+    def finished(self) -> bool:
+        """Whether the run has ended: all its generations done, or a budget or target met."""
+        return (self.selection.stop_reason is not None
+                or self.generation + 1 >= self.config.generations)
+
+    def selected(self) -> tuple[int, int, IntArray, float, Candidate | None]:
+        """The controller the run returns: (generation, individual, consequents (M,),
+        training fitness, its validated candidate or None).
+
+        The best validated candidate; before any validation (or with selection off) the
+        last evaluated generation's best individual by its training trials.
+        """
+        best = self.selection.best
+        if best is not None:
+            return best.generation, best.individual, best.consequents.copy(), best.fitness, best
+        index, consequents, fitness = self.best()
+        return self.generation, index, consequents, fitness, None
+
+    def elite_candidates(self) -> list[Candidate]:
+        """The last generation's elites (at least its best) as hall-of-fame candidates."""
+        count = max(1, self.config.elites) if self.population.shape[0] > 1 else 1
+        order = np.argsort(-self.fitness, kind="stable")[:count]
+        found = [self.selection.candidate_for(self.population[i]) for i in order]
+        return [c for c in found if c is not None]
+
     def best(self) -> tuple[int, IntArray, float]:
         """The last evaluated generation's best individual: (index, consequents (M,), fitness).
 
@@ -138,6 +176,7 @@ class Learner(ABC):
             "population": self.population.tolist(),
             "fitness": self.fitness.tolist(),
             "rng": {name: rng.bit_generator.state for name, rng in self.rngs.items()},
+            "selection": self.selection.state_dict(),
             **self.extra_state(),
         }
 
@@ -194,6 +233,8 @@ class Learner(ABC):
                 generator.bit_generator.state = saved[name]
             raise LearnError(f"the checkpoint's random generator states are damaged ({exc!r})",
                              hint=_DAMAGED) from None
+        self.selection.load_state_dict(state.get("selection"), controller.n_rules,
+                                       controller.n_commands)
         self.generation, self.elapsed = generation, elapsed
         self.population, self.fitness = population, fitness
         self.load_extra_state(state)
@@ -217,30 +258,70 @@ def population_problem(population: IntArray, fitness: FloatArray, n_rules: int,
     return None
 
 
+def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:
+    """The rules the file gives: their grid indices (F,) and command indices (F,)."""
+    names = behaviour.input_names
+    sets = [tuple(variable.sets) for variable in behaviour.inputs.values()]
+    shape = tuple(len(s) for s in sets)
+    commands = tuple(behaviour.output.commands)
+    rules, chosen = [], []
+    for rule in behaviour.rules:
+        index = [sets[i].index(rule.if_[name]) for i, name in enumerate(names)]
+        rules.append(int(np.ravel_multi_index(index, shape)))
+        chosen.append(commands.index(rule.then))
+    return np.array(rules, dtype=np.intp), np.array(chosen, dtype=np.intp)
+
+
 def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[GenerationMetrics]:
-    """Run generations from the learner's current one to ``learning.generations``.
+    """Run generations from the learner's current one until the run ends: at
+    ``learning.generations``, or when a ``learning.stop`` budget or target is met.
 
     A fresh learner starts at generation 0; one restored from a checkpoint continues after
-    it. Returns this session's metrics, one per generation.
+    it. After every generation the hall of fame's leader is validated; after the last one
+    every remaining candidate is (see :mod:`flctool.learners.selection`), so the
+    generation's metrics -- and the checkpoint a run directory writes of it -- already hold
+    the run's final choice. Returns this session's metrics, one per generation.
     """
     callback = CallbackList(callbacks)
     history: list[GenerationMetrics] = []
+    config = learner.config
+    selection = learner.selection
+    per_generation = config.population * config.trials
     # on_end runs however training ends -- finished, stopped early, an error or Ctrl-C -- so
     # that a run directory never claims to be running after its process has gone.
     try:
         callback.on_start(learner)
         started = time.perf_counter()
         before = learner.elapsed
-        for generation in range(learner.generation + 1, learner.config.generations):
+        generation = learner.generation + 1
+        while not learner.finished:
+            validation_before = (selection.usage.selection_episodes,
+                                 selection.usage.selection_steps)
             if generation > 0:
                 learner.advance()
             result = learner.evaluate(generation)
             learner.generation = generation
+            selection.usage.training_episodes += result.episodes
+            selection.usage.training_steps += result.steps
+            selection.offer(learner.population, learner.fitness, generation)
+            selection.validate_leader(learner.controller, learner.env, generation)
             learner.elapsed = before + time.perf_counter() - started
-            metrics = GenerationMetrics.from_fitness(generation, result.fitness,
-                                                     result.episodes, result.steps,
-                                                     learner.elapsed)
+            if selection.reached_target():
+                selection.stop_reason = "target"
+            elif generation + 1 < config.generations:
+                selection.stop_reason = selection.budget_exhausted(per_generation,
+                                                                   learner.elapsed)
+            if learner.finished and selection.stop_reason != "target":
+                selection.finalize(learner.controller, learner.env, generation,
+                                   learner.elite_candidates())
+                learner.elapsed = before + time.perf_counter() - started
+            metrics = GenerationMetrics.from_fitness(
+                generation, result.fitness, result.episodes, result.steps, learner.elapsed,
+                selection.usage.selection_episodes - validation_before[0],
+                selection.usage.selection_steps - validation_before[1],
+                selection.best.validation_value() if selection.best else float("nan"))
             history.append(metrics)
+            generation += 1
             if not callback.on_generation(metrics):
                 break
     finally:

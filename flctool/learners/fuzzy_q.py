@@ -155,6 +155,21 @@ class BoltzmannChooser:
         return choices
 
 
+class FixedChooser:
+    """Another chooser, except that rules the file gives always fire their given command
+    (they are never explored)."""
+
+    def __init__(self, chooser: BoltzmannChooser | EpsilonGreedyChooser,
+                 fixed: dict[int, int]) -> None:
+        self.chooser = chooser
+        self.fixed = fixed
+
+    def choose(self, rules: list[int]) -> list[int]:
+        choices = self.chooser.choose(rules)
+        fixed = self.fixed
+        return [fixed.get(m, k) for m, k in zip(rules, choices, strict=True)]
+
+
 class EpsilonGreedyChooser:
     """Each firing rule explores (a uniform command) with probability epsilon, otherwise takes
     its strongest command (ties broken uniformly)."""
@@ -201,17 +216,26 @@ class FuzzyQLearner(Learner):
     (Boltzmann temperature ``q.temperature`` or ``exploration.epsilon``) is multiplied by
     ``exploration.decay``, down to ``exploration.minimum``. The learned controller is the
     greedy one (each rule's strongest command); its fitness in the run records is the
-    generation's mean episode fitness, measured while exploring.
+    generation's mean episode fitness, measured while exploring, so the hall of fame ranks
+    the greedy controllers by recency and model selection validates them. Rules the file
+    gives always fire their given command: they are never explored.
     """
 
     name: ClassVar[str] = "fuzzy_q"
+    rank_by: ClassVar[str] = "recency"  # exploring fitness says little of the greedy one
     fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
         self.fuzzy_q = new_fuzzy_q(behaviour, self.controller.n_rules,
                                    self.controller.n_commands)
-        self.population = greedy_consequents(self.fuzzy_q.table())[None, :]
+        self.fixed = dict(zip(self.fixed_rules.tolist(), self.fixed_commands.tolist(),
+                              strict=True))
+        self.population = self.greedy()
+
+    def greedy(self) -> NDArray[np.intp]:
+        """The greedy controller (1, M): each rule's strongest command, given rules as given."""
+        return self.keep_fixed(greedy_consequents(self.fuzzy_q.table())[None, :])
 
     def exploration(self, generation: int) -> float:
         """The temperature or epsilon used in ``generation``."""
@@ -227,12 +251,14 @@ class FuzzyQLearner(Learner):
             int(self.rngs["explore"].integers(2**63))))
         level = self.exploration(generation)
         policy = self.config.exploration.policy
-        chooser: BoltzmannChooser | EpsilonGreedyChooser
+        chooser: BoltzmannChooser | EpsilonGreedyChooser | FixedChooser
         if policy == "boltzmann" and level > 0.0:
             chooser = BoltzmannChooser(self.fuzzy_q, level, uniform)
         else:  # epsilon-greedy; a temperature decayed to zero is plain greedy
             epsilon = min(level, 1.0) if policy == "epsilon_greedy" else 0.0
             chooser = EpsilonGreedyChooser(self.fuzzy_q, epsilon, uniform)
+        if self.fixed:
+            chooser = FixedChooser(chooser, self.fixed)
         returns = np.empty(episodes)
         lengths = np.empty(episodes, dtype=np.int64)
         success = np.empty(episodes, dtype=np.bool_)
@@ -240,7 +266,7 @@ class FuzzyQLearner(Learner):
             trial = run_trial(self.env, self.rules, seed, None, chooser=chooser, td=self.fuzzy_q)
             returns[i], lengths[i], success[i] = trial.ret, trial.length, trial.success
         fitness = self.env.episode_fitness(returns, lengths, success)
-        self.population = greedy_consequents(self.fuzzy_q.table())[None, :]
+        self.population = self.greedy()
         self.fitness = np.array([float(np.mean(fitness))])
         return GenerationResult(fitness, episodes, int(lengths.sum()))
 

@@ -41,8 +41,8 @@ class HybridLearner(Learner):
         n_rules, n_commands = self.controller.n_rules, self.controller.n_commands
         self.ga = GeneticAlgorithm(config.crossover, config.elites)
         self.fuzzy_q = new_fuzzy_q(behaviour, n_rules, n_commands)
-        self.population = random_population(self.rngs["ga"], config.population, n_rules,
-                                            n_commands)
+        self.population = self.keep_fixed(random_population(
+            self.rngs["ga"], config.population, n_rules, n_commands))
         self.fitness = np.zeros(config.population)
 
     def evaluate(self, generation: int) -> GenerationResult:
@@ -54,8 +54,9 @@ class HybridLearner(Learner):
 
     def advance(self) -> None:
         strengths = self.fuzzy_q.table()
-        self.population = self.ga.breed(
+        # Given rules are fixed: whatever crossover and mutation did to them is undone.
+        self.population = self.keep_fixed(self.ga.breed(
             self.rngs["ga"], self.population, self.fitness,
             partial(strength_crossover, strengths=strengths),
             partial(boltzmann_mutation, rate=self.config.mutation, strengths=strengths,
-                    temperature=self.config.q.temperature))
+                    temperature=self.config.q.temperature)))

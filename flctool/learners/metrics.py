@@ -1,7 +1,13 @@
-"""What one generation of training measured: one row of a run's metrics.csv."""
+"""What one generation of training measured: one row of a run's metrics.csv.
+
+Training and validation (model selection) are counted apart: ``episodes`` and ``steps`` are
+the generation's training trials, ``selection_episodes`` and ``selection_steps`` the
+validation episodes run after it; the run used the sum of both.
+"""
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, fields
 from typing import Any
 
@@ -20,16 +26,20 @@ class GenerationMetrics:
     std: float
     best: float
     min: float
-    episodes: int  # episodes run in this generation
-    steps: int  # environment steps taken in this generation
+    episodes: int  # training episodes run in this generation
+    steps: int  # environment steps of those training episodes
     wall_time: float  # seconds since the run started, summed over resumed sessions
+    selection_episodes: int = 0  # validation episodes run after this generation
+    selection_steps: int = 0  # environment steps of those validation episodes
+    validated: float = math.nan  # validated mean fitness of the run's best so far (NaN: none)
 
     @classmethod
     def from_fitness(cls, generation: int, fitness: FloatArray, episodes: int, steps: int,
-                     wall_time: float) -> GenerationMetrics:
+                     wall_time: float, selection_episodes: int = 0, selection_steps: int = 0,
+                     validated: float = math.nan) -> GenerationMetrics:
         f = np.asarray(fitness, dtype=np.float64)
         return cls(generation, float(f.mean()), float(f.std()), float(f.max()), float(f.min()),
-                   episodes, steps, wall_time)
+                   episodes, steps, wall_time, selection_episodes, selection_steps, validated)
 
     @classmethod
     def columns(cls) -> tuple[str, ...]:
@@ -42,4 +52,7 @@ class GenerationMetrics:
     def from_row(cls, row: dict[str, Any]) -> GenerationMetrics:
         return cls(int(row["generation"]), float(row["mean"]), float(row["std"]),
                    float(row["best"]), float(row["min"]), int(row["episodes"]),
-                   int(row["steps"]), float(row["wall_time"]))
+                   int(row["steps"]), float(row["wall_time"]),
+                   # absent from the records of runs made before model selection
+                   int(row.get("selection_episodes", 0)), int(row.get("selection_steps", 0)),
+                   float(row.get("validated", math.nan)))

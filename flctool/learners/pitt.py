@@ -38,8 +38,9 @@ class PittLearner(Learner):
                           else one_point_crossover)
         self.mutation = partial(uniform_mutation, rate=config.mutation,
                                 n_commands=self.controller.n_commands)
-        self.population = random_population(self.rngs["ga"], config.population,
-                                            self.controller.n_rules, self.controller.n_commands)
+        self.population = self.keep_fixed(random_population(
+            self.rngs["ga"], config.population, self.controller.n_rules,
+            self.controller.n_commands))
         self.fitness = np.zeros(config.population)
 
     def evaluate(self, generation: int) -> GenerationResult:
@@ -49,5 +50,6 @@ class PittLearner(Learner):
         return GenerationResult(self.fitness, seeds.size, steps)
 
     def advance(self) -> None:
-        self.population = self.ga.breed(self.rngs["ga"], self.population, self.fitness,
-                                        self.crossover, self.mutation)
+        # Given rules are fixed: whatever crossover and mutation did to them is undone.
+        self.population = self.keep_fixed(self.ga.breed(
+            self.rngs["ga"], self.population, self.fitness, self.crossover, self.mutation))

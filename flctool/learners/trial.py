@@ -82,6 +82,19 @@ class SparseRules:
         # within the commands, as Controller.output keeps it (rounding may step an ulp past)
         return self._low if value < self._low else self._high if value > self._high else value
 
+    def vote(self, alphas: list[float], commands: list[int]) -> float:
+        """The action mode ``vote``: each command's firing rules sum their activations (in
+        rule order) and the singleton of the strongest command is the output; ties go to
+        the command listed first. Exactly what :func:`flctool.rollout.vote_output` gives."""
+        totals = [0.0] * self.n_commands
+        for a, k in zip(alphas, commands, strict=True):
+            totals[k] += a
+        best = 0
+        for k in range(1, self.n_commands):
+            if totals[k] > totals[best]:
+                best = k
+        return self.singletons[best]
+
 
 def _accumulate(values: list[float]) -> float:
     # Plain left-to-right addition, as the compiled kernels do (Python >= 3.12's sum() of
@@ -130,6 +143,7 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
     # The B = 1 fast path of the adapter protocol: the same results as reset/step on arrays
     # of one, without building them every step.
     active, alphas, phi = rules.fire(env.reset_one(seed).tolist())
+    act = rules.vote if env.votes else rules.output  # eq. 3, or the vote
     total = 0.0
     steps = 0
     while True:
@@ -139,8 +153,7 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
             commands = [consequents[m] for m in active]
         else:
             raise ValueError("run_trial needs consequents or a chooser")
-        observation, reward, terminal, truncated = env.step_one(
-            rules.output(alphas, commands))  # eq. 3
+        observation, reward, terminal, truncated = env.step_one(act(alphas, commands))
         done = terminal or truncated
         total += reward
         steps += 1

@@ -5,23 +5,41 @@ Each returns :class:`Problem` objects with the field path, so the loader can att
 
 from __future__ import annotations
 
+import math
+from collections.abc import Collection, Iterable, Mapping
 from typing import TYPE_CHECKING
 
 from flctool.errors import Problem
 from flctool.registry import did_you_mean
 
 if TYPE_CHECKING:
-    from flctool.spec.models import Behaviour, InputVariable
+    from flctool.spec.models import Behaviour, InputVariable, Rule
+
+# Resource limits (docs/behaviour-files.md): past them a run would need more memory or time
+# than any robot behaviour does, so the file is refused up front instead of hanging.
+MAX_RULES = 1_000_000  # M = prod(L_i), the rule grid
+MAX_POPULATION = 10_000
+MAX_TRIALS = 1_000
+MAX_GENERATIONS = 1_000_000
+MAX_EPISODE_STEPS = 1_000_000  # an environment's max_steps
+#: Controllers held at once: population x M rule consequents (8 bytes each, plus q tables).
+MAX_POPULATION_RULES = 20_000_000
+#: Steps of one generation run side by side: population x trials x max_steps.
+MAX_GENERATION_STEPS = 20_000_000
 
 
 def find_problems(behaviour: Behaviour) -> list[Problem]:
-    problems: list[Problem] = []
+    problems = limit_problems([len(v.sets) for v in behaviour.inputs.values()],
+                              behaviour.learning.population, behaviour.learning.trials,
+                              behaviour.learning.generations,
+                              getattr(behaviour.environment, "max_steps", None))
     for name, variable in behaviour.inputs.items():
-        problems += _check_input(name, variable)
+        problems += check_input(name, variable)
     if behaviour.output.name in behaviour.inputs:
         problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
                                 ", like an input", "give the output a name of its own"))
-    problems += _check_rules(behaviour)
+    problems += check_rules({name: tuple(v.sets) for name, v in behaviour.inputs.items()},
+                            behaviour.output.commands, enumerate(behaviour.rules))
     environment = behaviour.environment
     if environment is not None and hasattr(environment, "fit_problems"):
         problems += environment.fit_problems(behaviour.input_names,
@@ -29,7 +47,62 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
     return problems
 
 
-def _check_input(name: str, variable: InputVariable) -> list[Problem]:
+def limit_problems(set_counts: list[int], population: int | None, trials: int | None,
+                   generations: int | None, max_steps: int | None) -> list[Problem]:
+    """Sizes past the resource limits; a None is a size the file does not (validly) give."""
+    problems = []
+    rules = math.prod(set_counts) if set_counts else 1
+    if rules > MAX_RULES:
+        problems.append(Problem(
+            ("inputs",), f"the rule grid has M = {' x '.join(map(str, set_counts))} = {rules:,} "
+            f"rules, more than flctool's limit of {MAX_RULES:,}",
+            "use fewer inputs or fewer sets per input (M is the product of the set counts)"))
+    for path, value, limit in ((("learning", "population"), population, MAX_POPULATION),
+                               (("learning", "trials"), trials, MAX_TRIALS),
+                               (("learning", "generations"), generations, MAX_GENERATIONS),
+                               (("environment", "max_steps"), max_steps, MAX_EPISODE_STEPS)):
+        if value is not None and value > limit:
+            problems.append(Problem(path, f"{path[-1]} {value:,} is more than flctool's limit "
+                                    f"of {limit:,}", f"use at most {limit:,}"))
+    if problems:
+        return problems
+    if population is not None and rules <= MAX_RULES and population * rules > \
+            MAX_POPULATION_RULES:
+        problems.append(Problem(
+            ("learning", "population"), f"a population of {population:,} controllers of "
+            f"{rules:,} rules holds {population * rules:,} consequents, more than flctool's "
+            f"limit of {MAX_POPULATION_RULES:,}", "use a smaller population or fewer rules"))
+    if population is not None and trials is not None and max_steps is not None and \
+            population * trials * max_steps > MAX_GENERATION_STEPS:
+        problems.append(Problem(
+            ("environment", "max_steps"), f"a generation runs population x trials x max_steps "
+            f"= {population * trials * max_steps:,} steps side by side, more than flctool's "
+            f"limit of {MAX_GENERATION_STEPS:,}",
+            "use fewer steps per episode, trials or individuals"))
+    return problems
+
+
+def find_warnings(behaviour: Behaviour) -> list[Problem]:
+    """What is allowed but probably a mistake; `flctool validate` shows these as warnings."""
+    return command_warnings(behaviour.output.commands)
+
+
+def command_warnings(commands: Mapping[str, float]) -> list[Problem]:
+    """Two commands on one singleton: the controller's output cannot tell them apart (eq. 3),
+    and an adapter executing the nearest command always picks the first."""
+    seen: dict[float, str] = {}
+    problems = []
+    for name, value in commands.items():
+        if value in seen:
+            problems.append(Problem(("output", "commands", name),
+                                    f"commands '{seen[value]}' and '{name}' have the same value "
+                                    f"{value:g}", "give each command its own value"))
+        else:
+            seen[value] = name
+    return problems
+
+
+def check_input(name: str, variable: InputVariable) -> list[Problem]:
     lo, hi = variable.range
     problems = []
     for set_name, (pa, _, _, pd) in variable.sets.items():
@@ -77,12 +150,12 @@ def uncovered_gap(variable: InputVariable) -> tuple[float, float] | None:
     return None
 
 
-def _check_rules(behaviour: Behaviour) -> list[Problem]:
+def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str],
+                rules: Iterable[tuple[int, Rule]]) -> list[Problem]:
+    """Rule references against ``inputs`` (input name -> its set names) and ``commands``."""
     problems = []
-    inputs = behaviour.inputs
-    commands = behaviour.output.commands
     seen: dict[tuple[str, ...], int] = {}
-    for index, rule in enumerate(behaviour.rules):
+    for index, rule in rules:
         path = ("rules", index)
         complete = True
         for input_name, set_name in rule.if_.items():
@@ -92,9 +165,9 @@ def _check_rules(behaviour: Behaviour) -> list[Problem]:
                     (*path, "if", input_name), f"rule names an unknown input '{input_name}'."
                     f"{did_you_mean(input_name, tuple(inputs))}",
                     f"use one of the inputs: {', '.join(inputs)}"))
-            elif set_name not in inputs[input_name].sets:
+            elif set_name not in inputs[input_name]:
                 complete = False
-                sets = tuple(inputs[input_name].sets)
+                sets = tuple(inputs[input_name])
                 problems.append(Problem(
                     (*path, "if", input_name), f"input '{input_name}' has no set '{set_name}'."
                     f"{did_you_mean(set_name, sets)}", f"use one of: {', '.join(sets)}"))

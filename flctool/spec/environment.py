@@ -6,11 +6,12 @@ in ROS), times in steps. docs/environments.md gives the rationale of every defau
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator
 
 from flctool.errors import Problem
+from flctool.registry import did_you_mean
 from flctool.spec.base import Name, Section
 
 #: What the ballchase simulator observes; a behaviour's inputs are named after these.
@@ -112,6 +113,40 @@ DEFAULT_NOISE: dict[str, MotionNoise] = {
 }
 
 
+def _extend_defaults(table: Any, defaults: dict[str, Any]) -> Any:
+    """A command table as written, over the defaults: entries given replace or add to them."""
+    if not isinstance(table, dict):
+        return table  # pydantic reports the wrong type
+    return {**defaults, **table}
+
+
+def command_table_problems(motion: dict[str, Motion], noise: dict[str, MotionNoise],
+                           commands: tuple[str, ...]) -> list[Problem]:
+    """Output commands without a motion, and table entries that name no command (a typo)."""
+    problems = [
+        Problem(("environment", "motion"), f"output command '{name}' has no motion",
+                f"add '{name}: {{forward: mm, sideways: mm, rotation: deg}}' to "
+                "environment.motion and its standard deviations to environment.noise "
+                f"(the table has: {', '.join(motion)})")
+        for name in commands if name not in motion]
+    missing = [name for name in commands if name in motion and name not in noise]
+    if missing:
+        problems.append(Problem(
+            ("environment", "noise"),
+            f"no noise for command{'s' if len(missing) > 1 else ''} {', '.join(missing)}",
+            f"add e.g. '{missing[0]}: {{forward: 0, sideways: 0, rotation: 0}}' to "
+            "environment.noise for a noiseless command"))
+    # Entries the defaults bring are harmless when unused; one the file adds that names no
+    # output command is almost always a misspelt command, which would otherwise be ignored.
+    for table_name, table in (("motion", motion), ("noise", noise)):
+        problems += [
+            Problem(("environment", table_name, name),
+                    f"'{name}' is not an output command.{did_you_mean(name, commands)}",
+                    f"name one of the output commands: {', '.join(commands)}")
+            for name in table if name not in commands and name not in DEFAULT_MOTION]
+    return problems
+
+
 class BallchaseSimConfig(Section):
     """The ballchase simulator of paper Sec. IV (see docs/environments.md)."""
 
@@ -119,9 +154,11 @@ class BallchaseSimConfig(Section):
     max_steps: int = Field(200, ge=1, description="steps before an episode is truncated")
     step_period: float = Field(0.25, gt=0, description=(
         "s per step; documents the units of the motion table (a step is one command)"))
-    action: Literal["crisp", "nearest"] = Field("crisp", description=(
+    action: Literal["crisp", "nearest", "vote"] = Field("crisp", description=(
         "crisp: blend the two commands around the output a (piecewise linear over the "
-        "sorted singletons); nearest: execute the command whose singleton is nearest a"))
+        "sorted singletons); nearest: execute the command whose singleton is nearest a; "
+        "vote: each command's firing rules sum their activations, the strongest command "
+        "runs"))
     robot: Robot = Robot()
     ball: Ball = Ball()
     start: Start = Start()
@@ -129,11 +166,23 @@ class BallchaseSimConfig(Section):
     pitch: Pitch = Pitch()
     sensor_noise: SensorNoise = SensorNoise()
     motion: dict[Name, Motion] = Field(default_factory=lambda: dict(DEFAULT_MOTION), description=(
-        "command name -> mean displacement per step; every output command needs one"))
+        "command name -> mean displacement per step; every output command needs one. Extends "
+        "the default table (turn_right, forward_right, forward, forward_left, turn_left): "
+        "an entry given replaces the default of that name or adds a command"))
     noise: dict[Name, MotionNoise] = Field(
         default_factory=lambda: dict(DEFAULT_NOISE), validate_default=True, description=(
-            "command name -> standard deviation of the displacement per step; every command "
-            "in motion needs one (entries for other commands are unused)"))
+            "command name -> standard deviation of the displacement per step; every output "
+            "command needs one. Extends the default table like motion"))
+
+    @field_validator("motion", mode="before")
+    @classmethod
+    def _motion_over_defaults(cls, motion: Any) -> Any:
+        return _extend_defaults(motion, DEFAULT_MOTION)
+
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise_over_defaults(cls, noise: Any) -> Any:
+        return _extend_defaults(noise, DEFAULT_NOISE)
 
     @field_validator("start")
     @classmethod
@@ -173,21 +222,6 @@ class BallchaseSimConfig(Section):
                 f"{need:g} mm")
         return pitch
 
-    @field_validator("noise")
-    @classmethod
-    def _noise_for_every_motion(cls, noise: dict[str, MotionNoise],
-                                info: ValidationInfo) -> dict[str, MotionNoise]:
-        motion = info.data.get("motion")
-        if motion is None:
-            return noise
-        missing = [name for name in motion if name not in noise]
-        if missing:
-            raise ValueError(
-                f"no noise for command{'s' if len(missing) > 1 else ''} "
-                f"{', '.join(missing)}; add e.g. '{missing[0]}: {{forward: 0, sideways: 0, "
-                "rotation: 0}' for a noiseless command")
-        return noise
-
     def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
         """What keeps this simulator from running a behaviour with these inputs and commands.
 
@@ -198,13 +232,7 @@ class BallchaseSimConfig(Section):
                     "name the inputs after its observations: "
                     + ", ".join(BALLCHASE_OBSERVATIONS))
             for name in inputs if name not in BALLCHASE_OBSERVATIONS]
-        problems += [
-            Problem(("environment", "motion"), f"output command '{name}' has no motion",
-                    f"add '{name}: {{forward: mm, sideways: mm, rotation: deg}}' to "
-                    "environment.motion and its standard deviations to environment.noise "
-                    f"(the table has: {', '.join(self.motion)})")
-            for name in commands if name not in self.motion]
-        return problems
+        return problems + command_table_problems(self.motion, self.noise, commands)
 
 
 class GymnasiumConfig(Section):
@@ -221,6 +249,10 @@ class GymnasiumConfig(Section):
         "Discrete action spaces: command name -> action index; the crisp output executes "
         "the action of the command with the nearest singleton. Box action spaces: leave "
         "empty, the crisp output is the action"))
+    action: Literal["nearest", "vote"] = Field("nearest", description=(
+        "nearest: the command whose singleton is nearest the crisp output (eq. 3) runs; "
+        "vote: each command's firing rules sum their activations and the strongest command "
+        "runs (no dead zone between opposite commands)"))
     success: Literal["terminated", "truncated", "never"] = Field("terminated", description=(
         "which episode end counts as success: terminated (reached a goal, e.g. "
         "MountainCar), truncated (survived to the time limit, e.g. CartPole), or never"))

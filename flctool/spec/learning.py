@@ -34,6 +34,37 @@ class ExplorationConfig(Section):
     minimum: float = Field(0.0, ge=0, description="floor of the decayed temperature or epsilon")
 
 
+class SelectionConfig(Section):
+    """Model selection: which controller of the run becomes ``best.yaml`` (docs/learning.md).
+
+    Candidates (the best distinct controllers seen, by training fitness; for ``fuzzy_q`` the
+    greedy controller of the latest generations) are re-run on validation episodes whose seeds
+    no training episode and no ``flctool evaluate`` uses; the best validated one is returned.
+    Validation episodes count in the run's budget.
+    """
+
+    candidates: int = Field(5, ge=0, description=(
+        "controllers kept for validation (0: no selection, best.yaml is the last "
+        "generation's best by its training trials)"))
+    episodes: int = Field(20, ge=1, description="validation episodes per candidate")
+
+
+class StopConfig(Section):
+    """Budgets that end a run before ``generations``; every one counts training and
+    validation episodes alike, and is checked between generations."""
+
+    episodes: int | None = Field(None, ge=1, description=(
+        "at most this many episodes in all (never exceeded)"))
+    steps: int | None = Field(None, ge=1, description=(
+        "environment steps in all; the run stops when the next generation would likely "
+        "exceed it"))
+    seconds: float | None = Field(None, gt=0, description=(
+        "training time; the run stops after the generation that used it up (not "
+        "reproducible: resumed runs may stop elsewhere)"))
+    target: float | None = Field(None, description=(
+        "stop once a controller's validated mean fitness reaches this"))
+
+
 class LearningConfig(Section):
     """Defaults are the paper's protocol: population 10, pc 0.2, pm 0.1, 30 generations."""
 
@@ -51,6 +82,8 @@ class LearningConfig(Section):
         "every individual of a generation gets the same start states"))
     q: QConfig = QConfig()
     exploration: ExplorationConfig = ExplorationConfig()
+    selection: SelectionConfig = SelectionConfig()
+    stop: StopConfig = StopConfig()
 
     @field_validator("elites")
     @classmethod

@@ -11,12 +11,13 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.registry import did_you_mean
-from flctool.spec.environment import ADAPTER_NAMES
-from flctool.spec.models import FORMAT_VERSION, Behaviour
+from flctool.spec.checks import check_input, check_rules, limit_problems
+from flctool.spec.environment import ADAPTER_NAMES, EnvironmentConfig
+from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
 
@@ -51,16 +52,131 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None) -> Behaviour
     version_problem = _version_problem(data, source)
     if version_problem is not None:  # other errors in a file of another version are noise
         raise SpecError([version_problem], source.file)
+    # Numbers first: pydantic would quietly turn `true` into 1 and "1.5" into 1.5.
+    problems = _number_problems(data, source)
     semantic: list[Problem] = []
     try:
         behaviour = Behaviour.model_validate(data, context={"problems": semantic})
     except ValidationError as exc:
-        problems = [_translate(error, source) for error in exc.errors()]
-        raise SpecError(problems, source.file) from None
-    if semantic:
-        raise SpecError([source.problem(p.path, p.message, p.hint) for p in semantic],
-                        source.file)
+        reported = {p.path for p in problems}
+        problems += [p for p in (_translate(error, source) for error in exc.errors())
+                     if p.path not in reported]
+        # Report the cross-field problems of the parts that did validate too, in one pass.
+        semantic = [p for p in _partial_problems(data)
+                    if not any(_within(p.path, q.path) for q in problems)]
+        problems += [source.problem(p.path, p.message, p.hint) for p in semantic]
+        raise SpecError(_in_file_order(problems), source.file) from None
+    problems += [source.problem(p.path, p.message, p.hint) for p in semantic]
+    if problems:
+        raise SpecError(_in_file_order(problems), source.file)
     return behaviour
+
+
+def _in_file_order(problems: list[Problem]) -> list[Problem]:
+    return sorted(problems, key=lambda p: (p.line or 0, p.column or 0))
+
+
+def _within(path: tuple[PathPart, ...], reported: tuple[PathPart, ...]) -> bool:
+    """Whether ``path`` is ``reported`` or inside it, or contains it."""
+    shorter = min(len(path), len(reported))
+    return path[:shorter] == reported[:shorter]
+
+
+def _partial_problems(data: dict[str, Any]) -> list[Problem]:
+    """The cross-field checks of :mod:`flctool.spec.checks`, run on the sections of a file
+    that validate on their own (the file as a whole did not)."""
+    problems: list[Problem] = []
+    inputs = data.get("inputs")
+    sets: dict[str, list[str]] = {}
+    if isinstance(inputs, dict):
+        for name, raw in inputs.items():
+            raw_sets = raw.get("sets") if isinstance(raw, dict) else None
+            if isinstance(raw_sets, dict):
+                sets[name] = list(raw_sets)
+            try:
+                variable = InputVariable.model_validate(raw)
+            except ValidationError:
+                continue
+            problems += check_input(name, variable)
+    output = data.get("output")
+    commands = output.get("commands") if isinstance(output, dict) else None
+    rules = data.get("rules")
+    if isinstance(inputs, dict) and len(sets) == len(inputs) and isinstance(commands, dict) \
+            and isinstance(rules, list):
+        valid: list[tuple[int, Rule]] = []
+        for index, raw in enumerate(rules):
+            try:
+                valid.append((index, Rule.model_validate(raw)))
+            except ValidationError:
+                continue
+        problems += check_rules(sets, list(commands), valid)
+    learning: dict[str, Any] = data.get("learning") or {}
+    if not isinstance(learning, dict):
+        learning = {}
+    environment = data.get("environment")
+    max_steps = environment.get("max_steps") if isinstance(environment, dict) else None
+    problems += limit_problems([len(s) for s in sets.values()], *(
+        value if isinstance(value, int) and not isinstance(value, bool) else None
+        for value in (learning.get("population"), learning.get("trials"),
+                      learning.get("generations"), max_steps)))
+    if isinstance(environment, dict) and isinstance(inputs, dict) and \
+            isinstance(commands, dict):
+        try:
+            config = _ENVIRONMENT.validate_python(environment)
+        except ValidationError:
+            return problems
+        if hasattr(config, "fit_problems"):
+            problems += config.fit_problems(tuple(inputs), tuple(commands))
+    return problems
+
+
+_ENVIRONMENT: TypeAdapter[Any] = TypeAdapter(EnvironmentConfig)
+
+
+def _number_problems(data: Any, source: SourceMap) -> list[Problem]:
+    """Booleans and text given where the model wants a number, which pydantic would convert
+    (``true`` -> 1, ``"2"`` -> 2.0) without a word."""
+    problems: list[Problem] = []
+
+    def walk(value: Any, annotation: Any, path: tuple[PathPart, ...]) -> None:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                inner = _step(annotation, key, value)
+                if inner is not None:
+                    walk(item, inner, (*path, key))
+        elif isinstance(value, list):
+            for index, item in enumerate(value):
+                inner = _step(annotation, index, value)
+                if inner is not None:
+                    walk(item, inner, (*path, index))
+        elif isinstance(value, (bool, str)) and _numeric(annotation):
+            problems.append(_not_a_number(value, source.raw.get(path), source, path))
+
+    walk(data, Behaviour, ())
+    return problems
+
+
+def _numeric(annotation: Any) -> bool:
+    members = [m for m in _members(annotation) if m is not type(None)]
+    return bool(members) and all(m in (int, float) for m in members)
+
+
+def _not_a_number(value: bool | str, raw: str | None, source: SourceMap,
+                  path: tuple[PathPart, ...]) -> Problem:
+    written = raw if raw is not None else str(value)
+    if isinstance(value, bool):
+        return source.problem(path, f"'{written}' is a boolean, not a number",
+                              "write a number here")
+    if raw is None:
+        return source.problem(path, f"'{value}' is not a number",
+                              "write a number, without quotes")
+    if ":" in value:
+        hint = "write the number itself (YAML 1.1 read 1:00 as 60; flctool reads YAML 1.2)"
+    elif "_" in value:
+        hint = f"write it without _, e.g. {value.replace('_', '')}"
+    else:
+        hint = "write a number (yes/no/on/off are not numbers in YAML 1.2)"
+    return source.problem(path, f"'{value}' is not a number", hint)
 
 
 def _version_problem(data: dict[str, Any], source: SourceMap) -> Problem | None:
@@ -90,9 +206,14 @@ def _translate(error: Any, source: SourceMap) -> Problem:
         message = (f"'{loc[-1]}' is not a valid name: use letters, digits and _ only, "
                    "starting with a letter or _")
         hint = "rename it, e.g. far_left instead of far-left"
+    elif kind == "string_pattern_mismatch":
+        message = (f"'{error.get('input')}' is not a valid name: use letters, digits and _ "
+                   "only, starting with a letter or _")
+        hint = "rename it, e.g. far_left instead of far-left"
     elif raw is not None and kind in ("string_type", "float_type", "int_type"):
         if raw:
             reads = "null" if raw in ("~", "null", "Null", "NULL") else "a boolean"
+            reads = reads if isinstance(error.get("input"), (bool, type(None))) else "text"
             message = f"'{raw}' reads as {reads} in YAML"
             hint = f"write it in quotes, '{raw}', if it is a name"
         else:
@@ -143,7 +264,7 @@ def _allowed_keys(path: list[PathPart], error: Any) -> list[str]:
     """The keys the model at ``path`` accepts, found by walking the type annotations."""
     annotation: Any = Behaviour
     for part in path:
-        annotation = _step(annotation, part)
+        annotation = _step(annotation, part, None)
         if annotation is None:
             return []
     models = [m for m in _members(annotation) if isinstance(m, type) and issubclass(m, BaseModel)]
@@ -165,9 +286,22 @@ def _members(annotation: Any) -> list[Any]:
     return [annotation]
 
 
-def _step(annotation: Any, part: PathPart) -> Any:
-    for member in _members(annotation):
+def _step(annotation: Any, part: PathPart, container: Any) -> Any:
+    """The annotation of ``part`` inside ``annotation`` (None if it has none); ``container``,
+    the value holding ``part`` if known, picks the member of a union tagged by 'adapter'."""
+    members = _members(annotation)
+    if isinstance(container, dict) and isinstance(container.get("adapter"), str):
+        members = [m for m in members if not (isinstance(m, type) and issubclass(m, BaseModel))
+                   or container["adapter"] in typing.get_args(
+                       m.model_fields["adapter"].annotation if "adapter" in m.model_fields
+                       else None)]
+    for member in members:
         origin = typing.get_origin(member)
+        if origin is tuple and isinstance(part, int):
+            args = typing.get_args(member)
+            if len(args) == 2 and args[1] is Ellipsis:
+                return args[0]
+            return args[part] if part < len(args) else None
         if isinstance(member, type) and issubclass(member, BaseModel):
             for name, info in member.model_fields.items():
                 if part in (name, info.alias):

@@ -14,7 +14,7 @@ from typing import Annotated, Any
 
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
 
-from flctool.spec.base import Name, Section
+from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
 from flctool.spec.environment import EnvironmentConfig
 from flctool.spec.learning import LearningConfig
@@ -72,7 +72,8 @@ class Behaviour(Section):
 
     flctool: int = Field(strict=True, description=(
         f"file format version; this flctool writes {FORMAT_VERSION}"))
-    name: Name
+    name: BehaviourName = Field(description=(
+        "letters, digits, _ and -; formats that need an identifier write - as _"))
     description: str = ""
     inputs: dict[Name, InputVariable] = Field(min_length=1, description=(
         "input name -> variable; file order is the order of the state vector"))

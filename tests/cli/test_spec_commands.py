@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from flctool import compile_behaviour, load_behaviour
@@ -57,6 +58,44 @@ def test_validate_reports_every_problem_and_exits_1(tmp_path: Path) -> None:
     assert "bad.yaml:7:5: inputs.x.colour: unknown key 'colour'" in result.output
     assert "ok " in result.output  # the good file is still checked
     assert "Traceback" not in result.output
+
+
+def test_validate_goes_on_after_a_file_that_crashes(tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    from flctool.cli import spec_commands
+
+    real = spec_commands.validate_file
+
+    def crash_on_first(path: Path) -> object:
+        if path.name == "ballchase.yaml":
+            raise RecursionError("maximum recursion depth exceeded")
+        return real(path)
+
+    monkeypatch.setattr(spec_commands, "validate_file", crash_on_first)
+    result = runner.invoke(app, ["validate", str(BEHAVIOURS / "ballchase.yaml"),
+                                 str(BEHAVIOURS / "cartpole.yaml")])
+    assert result.exit_code == 1
+    assert "internal error while checking it: RecursionError" in result.output
+    assert "ok " in result.output and "cartpole" in result.output
+    assert "Traceback" not in result.output
+
+
+def test_validate_warns_and_notes_what_it_could_not_check(tmp_path: Path) -> None:
+    twin = tmp_path / "twin.yaml"
+    twin.write_text((BEHAVIOURS / "cartpole.yaml").read_text().replace(
+        "push_right: 1.0", "push_right: -1.0"))
+    result = runner.invoke(app, ["validate", str(twin),
+                                 str(BEHAVIOURS / "ballchase-robot.yaml")])
+    assert result.exit_code == 0, result.output
+    assert "warning:" in result.output and "the same value -1" in result.output
+    assert "note:" in result.output and "when learn connects to the robot" in result.output
+
+
+def test_import_module_is_the_only_way_to_run_a_module(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["--import-module", "no_such_module_x", "validate",
+                                 str(BEHAVIOURS / "cartpole.yaml")])
+    assert result.exit_code == 1
+    assert "cannot import the module 'no_such_module_x'" in result.output
 
 
 def test_missing_file_is_bad_input_and_unknown_option_bad_usage(tmp_path: Path) -> None:

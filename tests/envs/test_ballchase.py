@@ -10,7 +10,7 @@ from flctool.envs import check_env, make_env
 from flctool.envs.ballchase import BallchaseSim
 from flctool.errors import SpecError
 from flctool.rollout import evaluate
-from flctool.spec.environment import BallchaseSimConfig
+from flctool.spec.environment import DEFAULT_MOTION, DEFAULT_NOISE, BallchaseSimConfig
 
 from ..conftest import BEHAVIOURS
 
@@ -156,8 +156,12 @@ BAD_ENVIRONMENTS = [
      "below the nearest start distance"),
     ("environment:\n  adapter: ballchase-sim\n  start: {bearing: 120}\n", "environment.start",
      "beyond the neck range"),
-    ("environment:\n  adapter: ballchase-sim\n  noise: {forward: {forward: 6, sideways: 0, "
-     "rotation: 0}}\n", "environment.noise", "no noise for commands turn_right"),
+    ("environment:\n  adapter: ballchase-sim\n  motion:\n"
+     "    forwrd: {forward: 70, sideways: 0, rotation: 0}\n", "environment.motion.forwrd",
+     "'forwrd' is not an output command. Did you mean 'forward'"),
+    ("environment:\n  adapter: ballchase-sim\n  noise:\n"
+     "    turn_lft: {forward: 1, sideways: 1, rotation: 1}\n", "environment.noise.turn_lft",
+     "Did you mean 'turn_left'"),
 ]
 
 
@@ -179,8 +183,39 @@ def test_command_without_motion_names_the_field() -> None:
                         "b.yaml")
 
 
+def test_command_without_noise_names_the_field() -> None:
+    text = _with_environment("environment:\n  adapter: ballchase-sim\n  motion:\n"
+                             "    kick: {forward: 90, sideways: 0, rotation: 0}\n", rules=False)
+    with pytest.raises(SpecError, match=r"b.yaml:\d+:\d+: environment\.noise: no noise for "
+                                        r"command kick"):
+        parse_behaviour(text.replace("    turn_left: 1.0\n", "    turn_left: 1.0\n    kick: 2.0\n"),
+                        "b.yaml")
+
+
 def test_unknown_observation_names_the_input() -> None:
     text = _with_environment("environment: {adapter: ballchase-sim}\n", rules=False)
     with pytest.raises(SpecError, match=r"b.yaml:\d+:3: inputs\.tilt: the ballchase simulator "
                                         r"has no observation 'tilt'"):
         parse_behaviour(text.replace("  pan:\n", "  tilt:\n"), "b.yaml")
+
+
+def test_partial_motion_table_extends_the_defaults() -> None:
+    behaviour = parse_behaviour(_with_environment(
+        "environment:\n  adapter: ballchase-sim\n  motion:\n"
+        "    forward: {forward: 80, sideways: 0, rotation: 0}\n"
+        "  noise:\n    turn_left: {forward: 0, sideways: 0, rotation: 0}\n"))
+    config = behaviour.environment
+    assert isinstance(config, BallchaseSimConfig)
+    assert config.motion["forward"].forward == 80
+    assert config.motion["turn_left"] == DEFAULT_MOTION["turn_left"]  # kept, not replaced
+    assert config.noise["turn_left"].rotation == 0
+    assert config.noise["forward"] == DEFAULT_NOISE["forward"]
+    assert set(config.motion) == set(DEFAULT_MOTION)
+
+
+def test_misspelt_command_is_located_by_line() -> None:
+    text = _with_environment("environment:\n  adapter: ballchase-sim\n  motion:\n"
+                             "    forwrd: {forward: 70, sideways: 0, rotation: 0}\n")
+    line = text.splitlines().index("    forwrd: {forward: 70, sideways: 0, rotation: 0}") + 1
+    with pytest.raises(SpecError, match=rf"b.yaml:{line}:\d+: environment\.motion\.forwrd"):
+        parse_behaviour(text, "b.yaml")

@@ -2,19 +2,28 @@
 
 from __future__ import annotations
 
+import itertools
+from pathlib import Path
+
+import numpy as np
 import pytest
 
-from flctool import load_behaviour
+from flctool import compile_behaviour, load_behaviour
 from flctool.errors import ExportError
+from flctool.export.base import sloped_quad
 from flctool.export.fis import FisExporter, FisImporter
+from flctool.spec import Behaviour
 
+from .controllers import random_behaviour, random_states
+from .engines import assert_fuzzylite_agrees, octave_outputs
 from .roundtrip import SHIPPED
 
 
 def test_the_system_computes_eq_3() -> None:
     text = FisExporter().to_string(load_behaviour(SHIPPED[0]))
     for line in ("Type='sugeno'", "AndMethod='min'", "DefuzzMethod='wtaver'",
-                 "MF1='small':'trapmf',[0.0 0.0 0.1 0.3]", "MF2='right':'trimf',[-60.0 -30.0 0.0]",
+                 "MF1='small':'trapmf',[-2.0 -1.0 0.1 0.3]",
+                 "MF2='right':'trimf',[-60.0 -30.0 0.0]",
                  "MF1='turn_right':'constant',[-1.0]", "1 1, 1 (1) : 1"):
         assert line in text
 
@@ -130,3 +139,42 @@ def test_a_second_input_with_the_same_name_is_refused() -> None:
     with pytest.raises(ExportError, match=r"the input 'ball_size' is defined twice, at lines "
                        r"\d+ and \d+"):
         FisImporter().from_string(text, "x.fis")
+
+
+def _fis_quads(behaviour: Behaviour) -> list[list[tuple[float, ...]]]:
+    return [[sloped_quad(q, v.range) for q in v.sets.values()]
+            for v in behaviour.inputs.values()]
+
+
+@pytest.mark.parametrize("source", [*SHIPPED, 3, 11, 12, 21], ids=str)
+def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
+    """fuzzylite 6 reads the export and agrees within 1e-12 apart from its 1e-6 tolerance,
+    20 % past the range's ends too: shoulders' feet lie a range width outside it."""
+    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
+                 else load_behaviour(str(source)))
+    states = random_states(behaviour, 10_000, seed=5)
+    assert_fuzzylite_agrees(behaviour, FisExporter().to_string(behaviour), "fis", states,
+                            _fis_quads(behaviour), tmp_path)
+
+
+def test_no_mf_has_a_vertical_edge() -> None:
+    """Octave's toolkit refuses trapmf with a == b and trimf with a == b or b == c."""
+    for seed in range(20):
+        for line in FisExporter().to_string(random_behaviour(seed)).splitlines():
+            if "'trapmf'" in line or "'trimf'" in line:
+                values = [float(v) for v in line.split("[")[1].rstrip("]").split()]
+                assert all(a < b for a, b in itertools.pairwise(values)) or (
+                    len(values) == 4 and values[0] < values[1] <= values[2] < values[3])
+
+
+@pytest.mark.parametrize("source", [*SHIPPED, 12], ids=str)
+def test_octave_reads_and_agrees(source: object, tmp_path: Path) -> None:
+    """Optional: Octave's fuzzy-logic-toolkit (readfis / evalfis) reads the export and agrees
+    within 1e-12 on states clipped to the ranges (evalfis refuses others)."""
+    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
+                 else load_behaviour(str(source)))
+    controller = compile_behaviour(behaviour)
+    states = np.clip(random_states(behaviour, 300, seed=5), controller.ranges[:, 0],
+                     controller.ranges[:, 1])
+    got = octave_outputs(FisExporter().to_string(behaviour), states, tmp_path)
+    assert np.max(np.abs(got - controller.output(states))) <= 1e-12

@@ -60,6 +60,8 @@ class LineEnv(BatchEnv):
         self.t = np.zeros(len(seeds), dtype=np.int64)
         self.done = np.zeros(len(seeds), dtype=np.bool_)
         self.reached = np.zeros(len(seeds), dtype=np.bool_)
+        self.terminated = np.zeros(len(seeds), dtype=np.bool_)
+        self.truncated = np.zeros(len(seeds), dtype=np.bool_)
         return self.x[:, None].copy(), {}
 
     def step(self, actions: FloatArray) -> Step:
@@ -71,9 +73,12 @@ class LineEnv(BatchEnv):
         truncated = live & ~success & ~failure & (self.t >= self.max_steps)
         rewards = np.where(success, 1.0, np.where(failure, -1.0, 0.0))
         self.reached |= success
-        terminated = success | failure
-        self.done |= terminated | truncated
-        return Step(self.x[:, None].copy(), rewards, terminated, truncated)
+        self.terminated = self.terminated | success | failure
+        self.truncated = self.truncated | truncated
+        self.done |= self.terminated | self.truncated
+        # flags stay set once an episode has ended, as the adapter protocol asks
+        return Step(self.x[:, None].copy(), rewards, self.terminated.copy(),
+                    self.truncated.copy())
 
     def success(self) -> BoolArray:
         return self.reached.copy()

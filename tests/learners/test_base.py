@@ -187,3 +187,31 @@ def test_a_checkpoint_that_is_not_an_object_is_refused() -> None:
     learner = make_learner(line_behaviour(learner="pitt"), LineEnv())
     with pytest.raises(LearnError, match="a checkpoint is a JSON object, not list"):
         learner.load_state_dict([1, 2])  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_rules_the_file_gives_stay_fixed(name: str) -> None:
+    # 'up' is best in every rule, so a learner free to change rule 1 ('mid') would
+    behaviour = line_behaviour(learner=name, generations=8, mutation=0.5)
+    given = behaviour.model_validate({**behaviour.model_dump(by_alias=True),
+                                      "rules": [{"if": {"x": "mid"}, "then": "stay"}]})
+    learner = make_learner(given, LineEnv())
+    assert learner.fixed_rules.tolist() == [1] and learner.fixed_commands.tolist() == [1]
+    seen: list[np.ndarray] = []
+
+    class Watch(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            seen.append(learner.population.copy())
+            return True
+
+    q_before = learner.strengths()
+    train(learner, [Watch()])
+    assert all((population[:, 1] == 1).all() for population in seen)
+    assert learner.selected()[2][1] == 1
+    assert all(c["consequents"][1] == 1 for c in learner.selection.state_dict()["hall"])
+    # the other rules did learn: not every controller kept its start
+    assert any((population[:, [0, 2]] == 2).any() for population in seen)
+    if name == "fuzzy_q":  # never explored: only the given command's strength moved
+        assert q_before is not None
+        moved = learner.strengths() != q_before  # type: ignore[operator]
+        assert moved[1].tolist() == [False, True, False]

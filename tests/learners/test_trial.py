@@ -59,13 +59,16 @@ def test_a_trial_needs_consequents_or_a_chooser() -> None:
         run_trial(LineEnv(), rules, 0, None)
 
 
-def test_a_learned_controller_acts_as_it_will_when_deployed() -> None:
+@pytest.mark.parametrize("action", ["crisp", "vote"])
+def test_a_learned_controller_acts_as_it_will_when_deployed(action: str) -> None:
     # What learning measured for a controller (run_trial, one episode at a time) is what
     # flctool evaluate measures for it once deployed (batched rollout): the same episodes.
     from flctool.envs import make_env
     from flctool.rollout import evaluate
+    from flctool.runs import resolve_behaviour
 
-    behaviour = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml"),
+                                  {"environment.action": action})
     assert BALLCHASE.consequents is not None
     consequents = BALLCHASE.consequents.tolist()
     seeds = list(range(40))
@@ -75,6 +78,24 @@ def test_a_learned_controller_acts_as_it_will_when_deployed() -> None:
     assert [t.length for t in learned] == deployed.lengths.tolist()
     assert [t.ret for t in learned] == deployed.returns.tolist()
     assert [t.success for t in learned] == deployed.success.tolist()
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-0.2, 1.2), st.floats(-120.0, 120.0))
+def test_vote_equals_the_batched_vote(size: float, pan: float) -> None:
+    from flctool.rollout import vote_output
+
+    rules, alphas, _ = SPARSE.fire([size, pan])
+    assert BALLCHASE.consequents is not None
+    commands = [int(BALLCHASE.consequents[m]) for m in rules]
+    assert SPARSE.vote(alphas, commands) == vote_output(BALLCHASE, np.array([[size, pan]]))[0]
+
+
+def test_a_vote_ties_to_the_command_listed_first() -> None:
+    rules = SparseRules(compile_behaviour(line_behaviour()))
+    assert rules.vote([0.5, 0.5], [2, 0]) == -1.0  # down (listed first) over up
+    assert rules.vote([0.25, 0.25, 0.5], [2, 2, 0]) == -1.0
+    assert rules.vote([0.25, 0.3, 0.5], [2, 2, 0]) == 1.0
 
 
 def test_a_nan_observation_is_an_error_as_in_the_controller() -> None:

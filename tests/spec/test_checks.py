@@ -32,3 +32,13 @@ def _gap(sets: dict[str, list[float]], lo: float = 0.0, hi: float = 1.0) -> obje
 ])
 def test_uncovered_gap(sets: dict[str, list[float]], gap: object) -> None:
     assert _gap(sets) == gap
+
+
+def test_two_commands_with_the_same_value_are_a_warning() -> None:
+    from flctool.spec.checks import command_warnings
+
+    warnings = command_warnings({"left": 1.0, "ahead": 0.0, "also_left": 1.0})
+    assert [(w.path, w.message) for w in warnings] == [
+        (("output", "commands", "also_left"),
+         "commands 'left' and 'also_left' have the same value 1")]
+    assert command_warnings({"a": 0.0, "b": 1.0}) == []

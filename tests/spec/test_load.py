@@ -72,7 +72,7 @@ BAD = [
                                    "      large: [0.4, 0.8, 1, 1]\n      small: [0, 0, .1, .3]"),
      9, "inputs.size.sets.small", "duplicate key 'small' (first given on line 7)"),
     ("wrong type", GOOD.replace("range: [0, 1]", "range: [0, big]"), 5,
-     "inputs.size.range.1", "input should be a valid number"),
+     "inputs.size.range.1", "'big' is not a number"),
     ("unordered quadruple", GOOD.replace("[0.4, 0.8, 1, 1]", "[0.8, 0.4, 1, 1]"), 8,
      "inputs.size.sets.large", "must satisfy pa <= pb <= pc <= pd"),
     ("set outside the range", GOOD.replace("[0.4, 0.8, 1, 1]", "[0.4, 0.8, 1, 1.5]"), 8,
@@ -103,7 +103,7 @@ BAD = [
                                              "{size: large, pann: left, pan: left}"), 22,
      "rules.3.if.pann", "rule names an unknown input 'pann'. Did you mean 'pan'?"),
     ("object-building tag", GOOD.replace("name: chase", "name: !!python/object:os.system chase"),
-     2, "name", "the YAML tag 'tag:yaml.org,2002:python/object:os.system' is not allowed"),
+     2, "name", "the YAML tag '!!python/object:os.system' is not allowed"),
     ("empty range", GOOD.replace("range: [0, 1]", "range: [1, 1]"), 5,
      "inputs.size.range", "range [1, 1] must be [low, high] with low < high"),
     ("infinite number", GOOD.replace("range: [0, 1]", "range: [0, .inf]"), 5,
@@ -127,12 +127,14 @@ BAD = [
      "inputs.size.sets.large", "a set needs 4 numbers [pa, pb, pc, pd]; this one has more"),
     ("one number for a range", GOOD.replace("range: [0, 1]", "range: [0]"), 5,
      "inputs.size.range", "a range needs 2 numbers [low, high]; this one has fewer"),
-    ("a YAML boolean as a name", GOOD.replace("then: left}", "then: off}"), 20,
-     "rules.1.then", "'off' reads as a boolean in YAML"),
+    ("a YAML 1.1 boolean is a name in YAML 1.2", GOOD.replace("then: left}", "then: off}"), 20,
+     "rules.1.then", "unknown command 'off'"),
+    ("a YAML boolean as a name", GOOD.replace("then: left}", "then: true}"), 20,
+     "rules.1.then", "'true' reads as a boolean in YAML"),
     ("an empty value", GOOD.replace("name: chase", "name:"), 2,
      "name", "no value is given"),
     ("a version that is not a number", GOOD.replace("flctool: 1", "flctool: '1'"), 1,
-     "flctool", "input should be a valid integer"),
+     "flctool", "'1' is not a number"),
     ("elites fill the population", GOOD + "learning: {population: 4, elites: 4}\n", 23,
      "learning.elites", "4 elites in a population of 4 copy every individual unchanged"),
 ]
@@ -213,3 +215,74 @@ def test_model_validation_outside_the_loader_still_checks_consistency() -> None:
     data["rules"][0]["then"] = "nowhere"
     with pytest.raises(ValueError, match="unknown command 'nowhere'"):
         Behaviour.model_validate(data)
+
+
+# -- hostile and broken inputs ---------------------------------------------------------------
+@pytest.mark.parametrize(("written", "message"), [
+    ("yes", "'yes' is not a number"), ("off", "'off' is not a number"),
+    ("1:00", "'1:00' is not a number"), ("1_000", "'1_000' is not a number"),
+    ("true", "'true' is a boolean, not a number"), ("'2'", "'2' is not a number"),
+])
+def test_a_number_field_never_takes_a_boolean_or_text(written: str, message: str) -> None:
+    for old, line, path in (("right: -1,", 17, "output.commands.right"),
+                            ("range: [0, 1]", 5, "inputs.size.range.1")):
+        new = old.replace("-1", written) if "-1" in old else "range: [0, " + written + "]"
+        problems = _problems(GOOD.replace(old, new))
+        assert (line, path) in [(p[0], p[1]) for p in problems]
+        assert any(message in p[2] for p in problems), problems
+    seed = _problems(GOOD + f"learning: {{seed: {written}}}\n")
+    assert seed[0][:2] == (23, "learning.seed") and message in seed[0][2]
+
+
+def test_numbers_are_read_as_yaml_1_2_writes_them() -> None:
+    behaviour = parse_behaviour(GOOD + "learning: {seed: 010, population: 0x10}\n")
+    assert behaviour.learning.seed == 10 and behaviour.learning.population == 16
+
+
+def test_a_hyphenated_behaviour_name_is_accepted() -> None:
+    behaviour = parse_behaviour(GOOD.replace("name: chase", "name: chase-mine"))
+    assert behaviour.name == "chase-mine"
+
+
+def test_a_hyphenated_set_name_says_how_to_fix_it() -> None:
+    problems = _problems(GOOD.replace("name: turn", "name: my-turn"))
+    assert problems == [(16, "output.name", "'my-turn' is not a valid name: use letters, "
+                         "digits and _ only, starting with a letter or _")]
+
+
+def test_type_errors_do_not_hide_cross_field_problems() -> None:
+    text = (GOOD.replace("range: [-90, 90]", "range: [-90, x]")  # a type error
+            .replace("large: [0.4, 0.8, 1, 1]", "large: [0.7, 0.8, 1, 1]")  # a gap in size
+            .replace("then: right}\n  - {if: {size: small, pan: left}",
+                     "then: rigth}\n  - {if: {size: small, pan: left}"))  # an unknown command
+    problems = _problems(text)
+    assert [(p[0], p[1]) for p in problems] == [
+        (6, "inputs.size.sets"), (10, "inputs.pan.range.1"), (19, "rules.0.then")]
+    assert "unknown command 'rigth'" in problems[2][2]
+
+
+@pytest.mark.parametrize(("extra", "path", "message"), [
+    ("learning: {population: 100000000}", "learning.population",
+     "population 100,000,000 is more than flctool's limit of 10,000"),
+    ("learning: {trials: 100000000}", "learning.trials", "more than flctool's limit"),
+    ("learning: {generations: 100000000}", "learning.generations", "more than flctool's limit"),
+    ("environment: {adapter: ballchase-sim, max_steps: 100000000}", "environment.max_steps",
+     "max_steps 100,000,000 is more than flctool's limit of 1,000,000"),
+    ("learning: {population: 10000, trials: 1000}\n"
+     "environment: {adapter: gymnasium, id: CartPole-v1, max_steps: 10000}",
+     "environment.max_steps", "steps side by side"),
+])
+def test_sizes_past_the_limits_are_refused(extra: str, path: str, message: str) -> None:
+    problems = _problems(GOOD.replace("size:", "ball_size:").replace("{size:", "{ball_size:")
+                         + extra + "\n")
+    assert any(p[1] == path and message in p[2] for p in problems), problems
+
+
+def test_a_rule_grid_past_the_limit_is_refused_at_once() -> None:
+    inputs = "".join(f"  x{i}:\n    range: [0, 1]\n    sets: {{lo: [0, 0, 0, 1], "
+                     "hi: [0, 1, 1, 1]}\n" for i in range(30))
+    text = ("flctool: 1\nname: wide\ninputs:\n" + inputs
+            + "output:\n  name: a\n  commands: {x: 0}\n")
+    problems = _problems(text)
+    assert problems[0][:2] == (3, "inputs")
+    assert "M = 2 x 2" in problems[0][2] and "1,073,741,824 rules" in problems[0][2]

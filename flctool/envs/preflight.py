@@ -1,0 +1,68 @@
+"""Everything ``flctool validate`` checks in a behaviour file, before any run.
+
+Loading checks the file itself (:func:`flctool.spec.load_behaviour`). The environment adapter
+checks the rest when it is built (a Gymnasium id that does not exist, an observation index
+past the space, a singleton outside the action space, a command without an action), so it is
+built here too, whenever building it has no effect outside this process. A robot link is not
+built: connecting would talk to a robot; its checks run when ``learn`` connects.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from flctool.errors import MissingDependencyError, Problem, SpecError
+from flctool.spec import Behaviour, load_behaviour
+from flctool.spec.checks import find_warnings
+from flctool.spec.yaml_source import SourceMap, read_yaml
+
+#: Adapters whose checks need the world outside the process (a robot on the network).
+_NOT_BUILT = {"robot-link": "the robot-link adapter's checks run when learn connects to the "
+                            "robot (validate does not connect)"}
+
+
+@dataclass(frozen=True)
+class FileReport:
+    """A valid file: its behaviour, warnings (located), and why the adapter was not checked
+    (empty if it was, or if the file names no environment)."""
+
+    behaviour: Behaviour
+    warnings: list[Problem] = field(default_factory=list)
+    adapter_note: str = ""
+
+
+def validate_file(path: str | Path) -> FileReport:
+    """Load ``path`` and run its adapter's checks; raises :class:`SpecError` with every
+    problem located in the file."""
+    path = Path(path)
+    behaviour = load_behaviour(path)
+    source = _source(path)
+    warnings = [source.problem(w.path, w.message, w.hint) for w in find_warnings(behaviour)]
+    note = ""
+    environment = behaviour.environment
+    if environment is not None:
+        note = _NOT_BUILT.get(environment.adapter, "")
+        if not note:
+            try:
+                check_adapter(behaviour)
+            except SpecError as error:
+                raise SpecError([p if p.file else source.problem(p.path, p.message, p.hint)
+                                 for p in error.problems], str(path)) from None
+            except MissingDependencyError as error:
+                note = f"the {environment.adapter} adapter's checks did not run: {error}"
+    return FileReport(behaviour, warnings, note)
+
+
+def check_adapter(behaviour: Behaviour) -> None:
+    """Build the behaviour's adapter once and close it: raises what building raises."""
+    from flctool.envs import make_env
+
+    make_env(behaviour, 1).close()
+
+
+def _source(path: Path) -> SourceMap:
+    try:
+        return read_yaml(path.read_text(encoding="utf-8"), str(path))[1]
+    except (OSError, UnicodeDecodeError, SpecError):  # gone since it loaded: no lines
+        return SourceMap(str(path))

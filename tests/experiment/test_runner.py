@@ -1,0 +1,134 @@
+"""Experiment directories: plans, jobs, held-out tests, and resuming a killed experiment."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from flctool import load_behaviour
+from flctool.errors import RunDirError
+from flctool.experiment import ExperimentPlan, open_experiment, parse_learners, write_report
+from flctool.experiment.executors import LocalExecutor
+from flctool.experiment.runner import HELDOUT_FILE, JobOutcome, prepare_experiment, run_job
+from flctool.rollout import evaluation_seeds
+from flctool.runs import open_run
+
+from .helpers import tiny_experiment
+
+
+def test_every_learner_on_every_seed(tmp_path: Path) -> None:
+    experiment = tiny_experiment(tmp_path / "exp")
+    outcomes = experiment.run(LocalExecutor(1))
+    assert [(o.learner, o.seed) for o in outcomes] == [
+        (learner, seed) for learner in ("pitt", "hybrid", "fuzzy_q") for seed in (0, 1)]
+    assert not any(o.skipped for o in outcomes)
+    for learner, seed, directory in experiment.run_dirs():
+        run = open_run(directory)
+        assert (run.learner, run.seed) == (learner, seed)
+        assert run.info()["status"] == "finished"
+        assert len(run.metrics()) == 3
+        heldout = json.loads((directory / HELDOUT_FILE).read_text())
+        assert heldout["episodes"] == 20
+        assert heldout["successes"] == round(heldout["success_rate"] * 20)
+
+
+def test_heldout_episodes_are_the_ones_flctool_evaluate_runs(tmp_path: Path) -> None:
+    from flctool.compile import compile_behaviour
+    from flctool.envs import make_env
+    from flctool.rollout import evaluate
+
+    experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("hybrid",))
+    experiment.run(LocalExecutor(1))
+    directory = experiment.runs_dir / "hybrid-seed0"
+    best = load_behaviour(directory / "best.yaml")
+    result = evaluate(compile_behaviour(best), make_env(best, 20), evaluation_seeds(0, 20))
+    heldout = json.loads((directory / HELDOUT_FILE).read_text())
+    assert heldout["successes"] == int(result.success.sum())
+    assert heldout["steps"] == int(result.lengths.sum())
+    # never a training seed: training starts at 2**32
+    assert evaluation_seeds(0, 20).max() < 2**32
+
+
+def test_a_killed_experiment_continues_without_redoing_finished_runs(tmp_path: Path) -> None:
+    whole = tiny_experiment(tmp_path / "whole")
+    whole.run(LocalExecutor(1))
+    expected = write_report(whole)
+
+    killed = tiny_experiment(tmp_path / "killed")
+    killed.run(LocalExecutor(1))
+    # As a kill leaves it: one run stopped after its first generation, one run trained but
+    # not yet tested, the rest finished.
+    stopped = killed.runs_dir / "hybrid-seed1"
+    for name in ("gen-00001.json", "gen-00002.json"):
+        (stopped / "checkpoints" / name).unlink()
+    info = json.loads((stopped / "run.json").read_text())
+    (stopped / "run.json").write_text(json.dumps({**info, "status": "stopped"}))
+    (killed.runs_dir / "pitt-seed0" / HELDOUT_FILE).unlink()
+    finished = killed.runs_dir / "fuzzy_q-seed0" / "checkpoints" / "gen-00002.json"
+    stamp = finished.stat().st_mtime_ns
+
+    seen: list[JobOutcome] = []
+    reopened = open_experiment(tmp_path / "killed")
+    reopened.run(LocalExecutor(1), seen.append)
+    redone = {(o.learner, o.seed) for o in seen if not o.skipped}
+    assert redone == {("hybrid", 1), ("pitt", 0)}
+    assert finished.stat().st_mtime_ns == stamp
+    assert len(open_run(stopped).metrics()) == 3
+    assert write_report(reopened) == expected
+
+
+def test_the_same_plan_continues_and_another_is_refused(tmp_path: Path) -> None:
+    experiment = tiny_experiment(tmp_path / "exp")
+    again = tiny_experiment(tmp_path / "exp")
+    assert again.plan == experiment.plan
+    with pytest.raises(RunDirError, match=r"different plan.*seeds"):
+        tiny_experiment(tmp_path / "exp", seeds=3)
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "file.txt").write_text("x")
+    with pytest.raises(RunDirError, match="not an experiment directory"):
+        tiny_experiment(tmp_path / "other")
+    with pytest.raises(RunDirError, match=r"no experiment\.json"):
+        open_experiment(tmp_path)
+
+
+def test_plan_round_trips() -> None:
+    plan = ExperimentPlan("b", ("pitt", "hybrid"), 4, 100, 3, {"generations": 5})
+    assert ExperimentPlan.from_dict(json.loads(json.dumps(plan.to_dict()))) == plan
+
+
+def test_learner_lists() -> None:
+    assert parse_learners(" pitt, hybrid ") == ("pitt", "hybrid")
+    with pytest.raises(RunDirError, match=r"unknown learner.*pit"):
+        parse_learners("pit,hybrid")
+    with pytest.raises(RunDirError, match="twice"):
+        parse_learners("pitt,pitt")
+    with pytest.raises(RunDirError, match="no learner"):
+        parse_learners(",")
+
+
+def test_run_job_reads_a_finished_job_back(tmp_path: Path) -> None:
+    experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("pitt",))
+    job = experiment.jobs()[0]
+    first = run_job(job, tmp_path / "run")
+    second = run_job(job, tmp_path / "run")
+    assert not first.skipped and second.skipped
+    assert first.heldout_success == second.heldout_success
+
+
+def test_a_damaged_heldout_file_names_itself(tmp_path: Path) -> None:
+    experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("pitt",))
+    experiment.run(LocalExecutor(1))
+    (experiment.runs_dir / "pitt-seed0" / HELDOUT_FILE).write_text("{")
+    with pytest.raises(RunDirError, match=r"heldout\.json cannot be read") as info:
+        experiment.run(LocalExecutor(1))
+    assert "delete" in info.value.hint
+
+
+def test_prepare_refuses_an_unwritable_place(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    experiment = tiny_experiment(tmp_path / "exp", seeds=1)
+    with pytest.raises(RunDirError, match="not an experiment directory"):
+        prepare_experiment(experiment.behaviour, experiment.plan, blocker)

@@ -1,0 +1,114 @@
+"""The reference engines as the tests run them: the fuzzylite 6 command line (Debian package
+``fuzzylite``) and, where installed, Octave with its fuzzy-logic-toolkit.
+
+The fuzzylite tests skip only when the binary is absent *and* ``FLCTOOL_REQUIRE_FUZZYLITE``
+is unset; CI sets it, so there a missing binary fails the tests instead of skipping them.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flctool import compile_behaviour
+from flctool.spec import Behaviour
+
+#: fuzzylite 6 compares with an absolute tolerance of 1e-6 (fuzzylite::macheps, fixed in the
+#: command line): memberships within 1e-6 of a corner take the corner's value, and rules
+#: whose activation is within 1e-6 of 0 do not fire.
+FUZZYLITE_TOLERANCE = 1e-6
+
+
+def fuzzylite_binary() -> str:
+    """The fuzzylite command, or skip (fail if FLCTOOL_REQUIRE_FUZZYLITE is set)."""
+    found = shutil.which("fuzzylite")
+    if found is None:
+        if os.environ.get("FLCTOOL_REQUIRE_FUZZYLITE"):
+            pytest.fail("FLCTOOL_REQUIRE_FUZZYLITE is set but the fuzzylite command is missing "
+                        "(apt-get install fuzzylite)")
+        pytest.skip("the fuzzylite 6 command line is not installed (apt-get install fuzzylite)")
+    return found
+
+
+def fuzzylite_outputs(text: str, format: str, states: np.ndarray, folder: Path) -> np.ndarray:
+    """fuzzylite 6's outputs for (S, N) ``states`` of the engine in ``text`` (fll/fis/fcl)."""
+    engine = folder / f"engine.{format}"
+    engine.write_text(text, encoding="utf-8")
+    data = folder / "states.fld"
+    data.write_text("\n".join(" ".join(repr(float(x)) for x in row) for row in states) + "\n",
+                    encoding="utf-8")
+    result = subprocess.run(
+        [fuzzylite_binary(), "-i", str(engine), "-if", format, "-of", "fld", "-d", str(data),
+         "-dheader", "false", "-dinputs", "false", "-decimals", "17"],
+        capture_output=True, text=True, timeout=120, check=False)
+    assert result.returncode == 0, result.stderr + result.stdout
+    values = np.array([float(line) for line in result.stdout.split()])
+    assert values.shape == (len(states),), result.stdout[:500]
+    return values
+
+
+def outside_tolerance(behaviour: Behaviour, states: np.ndarray, corners: list[np.ndarray]
+                      ) -> np.ndarray:
+    """(S,) True where fuzzylite's 1e-6 tolerance cannot matter: every input lies on a corner
+    of its sets (``corners[i]``: as flctool and the export have them) or 1e-6 or more from
+    all of them, and no set's membership is within 1e-6 of 0 or 1 without being 0 or 1."""
+    keep = np.ones(len(states), dtype=bool)
+    controller = compile_behaviour(behaviour)
+    clipped = np.clip(states, controller.ranges[:, 0], controller.ranges[:, 1])
+    for i, points in enumerate(corners):
+        for column in (states[:, i], clipped[:, i]):
+            gap = np.min(np.abs(column[:, None] - points[None, :]), axis=1)
+            keep &= (gap == 0) | (gap >= FUZZYLITE_TOLERANCE)
+    for mu in controller.memberships(clipped):
+        near = (((mu > 0) & (mu <= FUZZYLITE_TOLERANCE))
+                | ((mu < 1) & (mu >= 1 - FUZZYLITE_TOLERANCE)))
+        keep &= ~np.any(near, axis=1)
+    return keep
+
+
+def corners_of(behaviour: Behaviour, quads: list[list[tuple[float, ...]]]) -> list[np.ndarray]:
+    """Each input's range ends and the points of its sets, as flctool has them and as an
+    export wrote them (``quads``)."""
+    return [np.array([*variable.range, *(x for q in variable.sets.values() for x in q),
+                      *(x for q in sets for x in q)])
+            for variable, sets in zip(behaviour.inputs.values(), quads, strict=True)]
+
+
+def assert_fuzzylite_agrees(behaviour: Behaviour, text: str, format: str, states: np.ndarray,
+                            quads: list[list[tuple[float, ...]]], folder: Path) -> float:
+    """fuzzylite 6 computes flctool's outputs within 1e-12 wherever its 1e-6 tolerance cannot
+    matter (see :func:`outside_tolerance`); returns the largest difference there.
+
+    At least 99 % of the states must be such states, so the check cannot pass vacuously.
+    """
+    got = fuzzylite_outputs(text, format, states, folder)
+    want = compile_behaviour(behaviour).output(states)
+    keep = outside_tolerance(behaviour, states, corners_of(behaviour, quads))
+    assert keep.mean() >= 0.99, f"only {keep.sum()} of {len(states)} states are comparable"
+    worst = float(np.max(np.abs(got[keep] - want[keep])))
+    assert worst <= 1e-12, f"fuzzylite 6 differs by {worst} ({format})"
+    return worst
+
+
+def octave_outputs(fis_text: str, states: np.ndarray, folder: Path) -> np.ndarray:
+    """Octave's fuzzy-logic-toolkit ``evalfis`` on (S, N) ``states`` (it refuses states
+    outside the ranges, so clip them first); skips when Octave or the toolkit is missing."""
+    octave = shutil.which("octave")
+    if octave is None:
+        pytest.skip("Octave is not installed (an optional check)")
+    (folder / "system.fis").write_text(fis_text, encoding="utf-8")
+    np.savetxt(folder / "states.txt", states, fmt="%.17g")
+    script = ("pkg load fuzzy-logic-toolkit; fis = readfis('system.fis'); "
+              "y = evalfis(load('states.txt'), fis); printf('%.17g\\n', y);")
+    result = subprocess.run([octave, "--no-gui", "--quiet", "--no-init-file", "--eval", script],
+                            cwd=folder, capture_output=True, text=True, timeout=300,
+                            check=False)
+    if "package" in result.stderr and "not installed" in result.stderr:
+        pytest.skip("Octave's fuzzy-logic-toolkit is not installed (an optional check)")
+    assert result.returncode == 0, result.stderr + result.stdout
+    return np.array([float(v) for v in result.stdout.split()])

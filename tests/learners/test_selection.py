@@ -1,0 +1,217 @@
+"""Model selection, budgets and stopping: seeds, the hall of fame, what a run returns."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from flctool import load_behaviour
+from flctool.errors import LearnError
+from flctool.learners import Callback, GenerationMetrics, make_learner, train
+from flctool.learners.base import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
+from flctool.learners.selection import (
+    VALIDATION_SEED_LOW,
+    Selection,
+    validation_seeds,
+)
+from flctool.rollout import evaluation_seeds
+from flctool.runs import BEST_FILE, METRICS_FILE, create_run, open_run, resolve_behaviour
+from flctool.spec import Behaviour
+from flctool.spec.learning import LEARNER_NAMES, SelectionConfig, StopConfig
+from tests.conftest import BEHAVIOURS
+from tests.learners.line_env import LineEnv, line_behaviour
+
+
+class SeedRecordingEnv(LineEnv):
+    """The line environment, recording the seeds of every reset: (batch size, seeds)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.seen: list[tuple[int, list[int]]] = []
+
+    def reset(self, seeds: Any) -> Any:
+        self.seen.append((len(seeds), [int(s) for s in seeds]))
+        return super().reset(seeds)
+
+
+def test_validation_seeds_are_fixed_distinct_and_in_their_own_range() -> None:
+    seeds = validation_seeds(7, 500)
+    assert seeds.shape == (500,) and len(set(seeds.tolist())) == 500
+    assert seeds.min() >= VALIDATION_SEED_LOW and seeds.min() >= TRAIN_SEED_HIGH
+    np.testing.assert_array_equal(seeds, validation_seeds(7, 500))
+    assert not set(seeds.tolist()) & set(validation_seeds(8, 500).tolist())
+    # a prefix: more validation episodes add seeds, they do not change the first ones
+    np.testing.assert_array_equal(validation_seeds(7, 20), seeds[:20])
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_selection_seeds_are_disjoint_from_training_and_evaluation(name: str) -> None:
+    env = SeedRecordingEnv()
+    behaviour = line_behaviour(learner=name, selection=SelectionConfig(candidates=3,
+                                                                       episodes=7))
+    learner = make_learner(behaviour, env)
+    train(learner)
+    validation = [seeds for size, seeds in env.seen if size == 7]
+    training = [seed for size, seeds in env.seen if size == 1 for seed in seeds]
+    assert validation and training
+    assert all(seeds == validation_seeds(3, 7).tolist() for seeds in validation)
+    assert all(TRAIN_SEED_LOW <= seed < TRAIN_SEED_HIGH for seed in training)
+    evaluation = set(evaluation_seeds(0, 1000).tolist()) | set(range(1000))
+    assert not set(validation[0]) & (set(training) | evaluation)
+    assert learner.selection.usage.selection_episodes == 7 * len(validation)
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_the_returned_controller_is_the_best_validated_candidate(name: str) -> None:
+    learner = make_learner(line_behaviour(learner=name), LineEnv())
+    history = train(learner)
+    selection = learner.selection
+    values = [c["validation"]["value"] for c in selection.validated]
+    assert selection.finalized and len(values) >= 1
+    generation, individual, consequents, _, candidate = learner.selected()
+    assert candidate is selection.best and candidate is not None
+    assert candidate.validation is not None
+    assert candidate.validation.value == max(values)
+    assert history[-1].validated == max(values)
+    assert sum(m.selection_episodes for m in history) == selection.usage.selection_episodes
+    assert sum(m.episodes for m in history) == selection.usage.training_episodes
+    assert 0 <= individual < learner.config.population and generation <= learner.generation
+    assert consequents.shape == (3,)
+
+
+def test_the_hall_of_fame_ranks_by_mean_training_fitness_and_keeps_the_best() -> None:
+    selection = Selection(SelectionConfig(candidates=2, episodes=3), StopConfig(), 0)
+    a, b, c = np.array([0, 0]), np.array([1, 1]), np.array([2, 2])
+    selection.offer(np.stack([a, b, c]), np.array([1.0, 3.0, 2.0]), 0)
+    assert [x.consequents.tolist() for x in selection.ranked()] == [[1, 1], [2, 2]]
+    selection.offer(np.stack([b, a]), np.array([0.0, 5.0]), 1)  # b's mean falls to 1.5
+    assert [(x.consequents.tolist(), x.fitness) for x in selection.ranked()] == [
+        ([0, 0], 5.0), ([2, 2], 2.0)]
+    recency = Selection(SelectionConfig(candidates=2), StopConfig(), 0, rank_by="recency")
+    for generation, genes in enumerate((a, b, c)):
+        recency.offer(genes[None, :], np.array([9.0 - generation]), generation)
+    assert [x.consequents.tolist() for x in recency.ranked()] == [[2, 2], [1, 1]]
+
+
+def test_no_selection_returns_the_last_generation_s_best_and_runs_no_validation() -> None:
+    env = SeedRecordingEnv()
+    learner = make_learner(line_behaviour(selection=SelectionConfig(candidates=0)), env)
+    train(learner)
+    assert all(size == 1 for size, _ in env.seen)
+    _, individual, consequents, fitness, candidate = learner.selected()
+    assert candidate is None and fitness == learner.fitness.max()
+    assert consequents.tolist() == learner.population[individual].tolist()
+
+
+@pytest.mark.parametrize("name", LEARNER_NAMES)
+def test_an_episode_budget_counts_selection_and_is_never_exceeded(name: str) -> None:
+    stop = StopConfig(episodes=80)
+    behaviour = line_behaviour(learner=name, generations=50, stop=stop,
+                               selection=SelectionConfig(candidates=2, episodes=5))
+    learner = make_learner(behaviour, LineEnv())
+    history = train(learner)
+    usage = learner.selection.usage
+    assert learner.selection.stop_reason == "episodes" and learner.finished
+    assert usage.episodes <= 80 and usage.selection_episodes > 0
+    assert usage.episodes == sum(m.episodes + m.selection_episodes for m in history)
+    assert learner.generation < 49  # without the budget it would have gone on
+
+
+def test_a_step_budget_and_a_time_budget_stop_the_run() -> None:
+    steps = make_learner(line_behaviour(generations=50, stop=StopConfig(steps=300)),
+                         LineEnv())
+    train(steps)
+    assert steps.selection.stop_reason == "steps" and steps.generation < 49
+    seconds = make_learner(line_behaviour(generations=50, stop=StopConfig(seconds=1e-9)),
+                           LineEnv())
+    assert len(train(seconds)) == 1 and seconds.selection.stop_reason == "seconds"
+
+
+def test_a_target_stops_the_run_once_a_validated_controller_reaches_it() -> None:
+    learner = make_learner(line_behaviour(generations=40, stop=StopConfig(target=0.5)),
+                           LineEnv())
+    history = train(learner)
+    best = learner.selection.best
+    assert learner.selection.stop_reason == "target"
+    assert best is not None and best.validation is not None
+    assert best.validation.value >= 0.5 and history[-1].validated == best.validation.value
+    assert len(history) < 40
+
+
+class StopAfter(Callback):
+    def __init__(self, generation: int) -> None:
+        self.generation = generation
+
+    def on_generation(self, metrics: GenerationMetrics) -> bool:
+        return metrics.generation < self.generation
+
+
+def ballchase(**learning: object) -> Behaviour:
+    return resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                             {"population": 6, **learning})
+
+
+def metrics_rows(path: Path) -> list[dict[str, str]]:
+    with path.open(encoding="utf-8") as handle:
+        return [{k: v for k, v in row.items() if k != "wall_time"}
+                for row in csv.DictReader(handle)]
+
+
+@pytest.mark.parametrize("learner", LEARNER_NAMES)
+@pytest.mark.parametrize("stop", [{"stop.episodes": 150}, {"stop.steps": 2500},
+                                  {"stop.target": 1.9}])
+def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
+        tmp_path: Path, learner: str, stop: dict[str, object]) -> None:
+    behaviour = ballchase(learner=learner, seed=5, generations=12, **stop,
+                          **{"selection.candidates": 3, "selection.episodes": 8})
+    whole = create_run(behaviour, tmp_path / "a")
+    whole_summary = whole.train()
+    part = create_run(behaviour, tmp_path / "b")
+    assert part.train([StopAfter(1)]).status == "stopped"
+    resumed = open_run(part.path).train()
+    assert resumed.status == whole_summary.status == "finished"
+    assert resumed.generations == whole_summary.generations
+    assert metrics_rows(part.path / METRICS_FILE) == metrics_rows(whole.path / METRICS_FILE)
+    assert (part.path / BEST_FILE).read_text().split("\n", 1)[1] == (
+        whole.path / BEST_FILE).read_text().split("\n", 1)[1]
+    last = whole.checkpoint_generations()[-1]
+    a, b = part.checkpoint(last), whole.checkpoint(last)
+    for state in (a, b):
+        state.pop("elapsed"), state["metrics"].pop("wall_time")
+    assert a == b
+    info = json.loads((whole.path / "run.json").read_text())
+    assert info["selection"] == json.loads((part.path / "run.json").read_text())["selection"]
+    assert resumed.usage == whole_summary.usage and resumed.usage["selection_episodes"] > 0
+
+
+def test_run_json_records_every_validated_candidate_and_the_usage(tmp_path: Path) -> None:
+    run = create_run(ballchase(generations=4), tmp_path / "run")
+    summary = run.train()
+    selection = json.loads((run.path / "run.json").read_text())["selection"]
+    assert selection["candidates"] == 5 and selection["episodes"] == 20
+    for candidate in selection["validated"]:
+        interval = candidate["validation"]
+        assert interval["n"] == 20 and interval["low"] <= interval["value"] <= interval["high"]
+    usage = selection["usage"]
+    assert usage == summary.usage == summary.to_dict()["usage"]
+    assert usage["training_episodes"] == 4 * 6
+    assert usage["selection_episodes"] == 20 * len(selection["validated"])
+    assert summary.best["validation"] == selection["best"]["validation"]
+
+
+def test_a_damaged_selection_record_is_refused() -> None:
+    learner = make_learner(line_behaviour(), LineEnv())
+    train(learner)
+    state = learner.state_dict()
+    state["selection"]["hall"][0]["consequents"] = [0, 9, 0]
+    fresh = make_learner(line_behaviour(), LineEnv())
+    with pytest.raises(LearnError, match="not one of this behaviour"):
+        fresh.load_state_dict(state)
+    state["selection"] = {"hall": "?"}
+    with pytest.raises(LearnError, match="selection record is damaged"):
+        fresh.load_state_dict(state)
