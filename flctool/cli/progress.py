@@ -108,29 +108,38 @@ class Progress:
 
 @contextmanager
 def compiling(enabled: bool = True) -> Iterator[None]:
-    """Around the first use of the compiled kernels in this process: if it takes longer than
-    :data:`COMPILE_NOTICE_AFTER` seconds, say that numba is compiling (first run on this
-    machine; the result is cached)."""
+    """Around the first use of the compiled kernels in this process. On a terminal, a status
+    line if that takes more than :data:`COMPILE_NOTICE_AFTER` seconds; in a log, a line after
+    it if numba compiled (a machine's first run), with how long it took. (In a log, a line
+    only because loading was slow would depend on the machine's load.)"""
     if _compiled["done"] or not enabled:
         yield
         return
-    shown = threading.Event()
-
-    def notice() -> None:
-        shown.set()
-        err_console.print("[dim]preparing the inference kernels (numba compiles them on a "
-                          "machine's first run and caches them for the next)...[/]",
-                          highlight=False)
-
-    timer = threading.Timer(COMPILE_NOTICE_AFTER, notice)
-    timer.daemon = True
+    terminal = on_terminal()
+    timer: threading.Timer | None = None
+    if terminal:
+        timer = threading.Timer(COMPILE_NOTICE_AFTER, err_console.print, args=(
+            "[dim]preparing the inference kernels (numba compiles them on a machine's first "
+            "run and caches them for the next)...[/]",), kwargs={"highlight": False})
+        timer.daemon = True
+        timer.start()
     start = time.monotonic()
-    timer.start()
     try:
         yield
     finally:
-        timer.cancel()
+        if timer is not None:
+            timer.cancel()
         _compiled["done"] = True
-    if shown.is_set():
-        err_console.print(f"[dim]kernels ready after {time.monotonic() - start:.1f} s[/]",
+    if not terminal and _numba_compiled():
+        err_console.print(f"compiled the inference kernels in {time.monotonic() - start:.1f} s "
+                          "(numba, first run on this machine; cached for the next runs)",
                           highlight=False)
+
+
+def _numba_compiled() -> bool:
+    """Whether any inference kernel was compiled in this process (not loaded from numba's
+    cache)."""
+    kernels = sys.modules.get("flctool.compile.kernels")
+    return kernels is not None and any(
+        getattr(getattr(value, "stats", None), "cache_misses", None)
+        for value in vars(kernels).values())
