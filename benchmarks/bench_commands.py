@@ -5,8 +5,8 @@ evaluation memory.
 
 Each command runs as its own process, ``--repeats`` times after one warm-up; its CPU time
 (user + system) and peak resident memory come from the operating system's accounting of that
-one child (``os.wait4``), and the median is quoted. Wall time is not quoted: the machine is
-shared.
+one process (GNU time's, or ``os.wait4``), and the median is quoted. Wall time is not
+quoted: the machine is shared.
 
 Goals (CPU seconds, peak MB):
 
@@ -47,18 +47,32 @@ class Figure:
     peak_mb: float  # resident, MB (10^6 bytes)
 
 
+GNU_TIME = Path("/usr/bin/time")
+
+
 def run_once(command: list[str], env: dict[str, str] | None = None,
              stdin: Path | None = None) -> Figure:
-    """One run of ``command``; its own CPU time and peak memory (not its siblings')."""
-    with open(stdin or os.devnull, "rb") as source:
-        process = subprocess.Popen(command, stdin=source, stdout=subprocess.DEVNULL,
+    """One run of ``command``; its own CPU time and peak memory (not its siblings').
+
+    Through GNU time when the system has it: a child forked from this (large) Python process
+    would count this process's memory in its peak until it execs. Without it, ``os.wait4``
+    of the child, whose peak then has this process's size as a floor.
+    """
+    with tempfile.NamedTemporaryFile("r") as report, open(stdin or os.devnull, "rb") as source:
+        timed = ([str(GNU_TIME), "-f", "%U %S %M", "-o", report.name, *command]
+                 if GNU_TIME.exists() else command)
+        process = subprocess.Popen(timed, stdin=source, stdout=subprocess.DEVNULL,
                                    stderr=subprocess.PIPE, env=env, cwd=ROOT)
         assert process.stderr is not None
         errors = process.stderr.read()
         _, status, usage = os.wait4(process.pid, 0)
         process.returncode = os.waitstatus_to_exitcode(status)
-    if process.returncode != 0:
-        raise SystemExit(f"{' '.join(command)} failed:\n{errors.decode(errors='replace')}")
+        if process.returncode != 0:
+            raise SystemExit(f"{' '.join(command)} failed:\n"
+                             f"{errors.decode(errors='replace')}")
+        if GNU_TIME.exists():
+            user, system, peak_kib = report.read().split()[-3:]
+            return Figure(float(user) + float(system), int(peak_kib) * 1024 / 1e6)
     # ru_maxrss is in KiB on Linux
     return Figure(usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024 / 1e6)
 
