@@ -85,6 +85,13 @@ class FlctoolGroup(TyperGroup):
             return _interrupted()
         except KeyboardInterrupt:
             return _interrupted()
+        except OSError as error:
+            if error.errno != errno.ENOSPC or _state["debug"]:
+                raise
+            _silence_stdout()  # e.g. stdout on a full device, while printing a table
+            print_message("cannot write the output: no space left on device",
+                          "free some space, or write elsewhere")
+            return EXIT_INPUT
         except BaseException:
             if _state["interrupted"] and not _state["debug"]:
                 # Ctrl-C inside a library that turned it into another exception (numba does,

@@ -205,11 +205,15 @@ def test_ctrl_c_turned_into_another_error_is_still_an_interruption() -> None:
     assert result.stderr == "interrupted\n"
 
 
-def test_stdout_to_a_full_device_is_a_clear_error() -> None:
+@pytest.mark.parametrize("command", ["export", "infer", "show"])
+def test_stdout_to_a_full_device_is_a_clear_error(command: str, tmp_path: Path) -> None:
     if not Path("/dev/full").exists():
         pytest.skip("no /dev/full on this system")
+    states = tmp_path / "states.csv"
+    states.write_text("ball_size,pan\n" + "0.25,12.5\n" * 5000)
+    extra = ["-i", str(states)] if command == "infer" else []
     with open("/dev/full", "w") as full:
-        result = subprocess.run([sys.executable, "-m", "flctool", "export", HANDMADE],
+        result = subprocess.run([sys.executable, "-m", "flctool", command, HANDMADE, *extra],
                                 stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
     assert result.returncode == 1, result.stderr
     assert "no space left on device" in result.stderr and "Traceback" not in result.stderr
