@@ -27,7 +27,10 @@ def regular_target(path: str | Path) -> Path:
     return target
 
 
-def write_bytes_atomic(path: str | Path, data: bytes) -> None:
+def write_bytes_atomic(path: str | Path, data: bytes, *, durable: bool = True) -> None:
+    """Replace ``path`` with ``data`` at once. ``durable`` also waits for the data to reach
+    the disk (fsync) before the rename: without it a killed process still leaves the old file
+    or the new one (the kernel holds the written data), but a power loss may not."""
     target = regular_target(path)
     tmp = target.with_name(f".{target.name}.{secrets.token_hex(4)}.tmp")
     # Created like open(path, "w") creates a file: 0o666 less the umask (the kernel applies it).
@@ -38,12 +41,13 @@ def write_bytes_atomic(path: str | Path, data: bytes) -> None:
             handle.flush()
             if target.exists():  # keep the replaced file's permissions
                 os.fchmod(handle.fileno(), stat.S_IMODE(target.stat().st_mode))
-            os.fsync(handle.fileno())
+            if durable:
+                os.fsync(handle.fileno())
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
 
 
-def write_text_atomic(path: str | Path, text: str) -> None:
-    write_bytes_atomic(path, text.encode("utf-8"))
+def write_text_atomic(path: str | Path, text: str, *, durable: bool = True) -> None:
+    write_bytes_atomic(path, text.encode("utf-8"), durable=durable)

@@ -1,5 +1,13 @@
-"""Figures of a run, as in the paper: learning curves (Fig. 5-6, 9-10), the strengths of one
-rule over time (Fig. 7) and a chase's trajectory (Fig. 8, 11).
+"""Figures of a run or an experiment, as in the paper, each written as PNG and SVG.
+
+* learning curves (Fig. 5-6, 9-10): a run's mean fitness with the range of its generation's
+  trials and its population std; an experiment's median and inter-quartile range across seeds
+  per learner. Bands are made of measured values (min..max, quartiles), never mean +- std, so
+  they stay inside the range fitness can take.
+* the strengths of one rule over the trials (Fig. 7);
+* a controller: its trajectory in the simulator on the pitch outline (Fig. 8, 11), each
+  input's membership functions, the rule table as a grid, and for two inputs the control
+  surface (the output over the input plane).
 
 matplotlib is an optional extra (``pip install 'flctool[plot]'``); it is imported only here,
 with the Agg backend, so plotting works on a robot's headless computer too.
@@ -9,6 +17,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -17,10 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
-from flctool.errors import MissingDependencyError, Problem, RunDirError, SpecError
+from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
 from flctool.runs import Run
+from flctool.spec import Behaviour
 
 FloatArray = NDArray[np.float64]
+FORMATS = ("png", "svg")
 
 
 def _pyplot() -> Any:
@@ -31,43 +42,76 @@ def _pyplot() -> Any:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    # Text stays text in SVG (small files, searchable); PNG metadata carries no date, so the
+    # same figure gives the same bytes.
+    matplotlib.rcParams.update({"svg.fonttype": "none", "svg.hashsalt": "flctool"})
     return plt
 
 
-def _save(figure: Any, path: Path) -> None:
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format="png", dpi=120, bbox_inches="tight")
+def _save(figure: Any, path: Path) -> list[Path]:
+    """Write ``figure`` as ``path`` with the suffixes .png and .svg; returns both paths."""
+    written = []
+    for suffix in FORMATS:
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format=suffix, dpi=110, bbox_inches="tight",
+                       metadata={"Software": None} if suffix == "png" else {"Date": None})
+        data = _palette_png(buffer.getvalue()) if suffix == "png" else buffer.getvalue()
+        target = path.with_suffix(f".{suffix}")
+        write_bytes_atomic(target, data)
+        written.append(target)
     _pyplot().close(figure)
-    write_bytes_atomic(path, buffer.getvalue())
+    return written
+
+
+def _palette_png(data: bytes) -> bytes:
+    """The PNG with a 256-colour palette: line plots look the same at a quarter of the size.
+    (Pillow comes with matplotlib.)"""
+    from PIL import Image
+
+    image = Image.open(io.BytesIO(data)).convert("RGBA")
+    buffer = io.BytesIO()
+    image.quantize(colors=256, method=Image.Quantize.FASTOCTREE).save(
+        buffer, format="PNG", optimize=True)
+    return buffer.getvalue()
 
 
 def _label(run: Run) -> str:
-    return f"{run.path.name} ({run.learner}, seed {run.seed})"
+    return f"{run.learner}, seed {run.seed}"
 
 
-def plot_fitness(runs: Sequence[Run], path: Path) -> None:
-    """Mean fitness per generation with a +-1 std band and the best individual (dashed), one
-    colour per run: the paper's Fig. 5-6 (and a comparison when several runs are given)."""
+def _episodes(run: Run) -> tuple[FloatArray, list[Any]]:
+    metrics = run.metrics()
+    if not metrics:
+        raise RunDirError(f"{run.path}: the run has no finished generation to plot",
+                          hint="let it run at least one generation")
+    return np.cumsum([m.episodes for m in metrics]).astype(np.float64), metrics
+
+
+def plot_fitness(runs: Sequence[Run], path: Path) -> list[Path]:
+    """Learning curves of runs (the paper's Fig. 5-6): top, each generation's mean fitness
+    with a band from its worst to its best trial and the best dashed; bottom, the
+    population's std. One colour per run, over training episodes."""
     plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(7, 4))
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True,
+                                         height_ratios=(2, 1))
     for run in runs:
-        metrics = run.metrics()
-        if not metrics:
-            raise RunDirError(f"{run.path}: the run has no finished generation to plot",
-                              hint="let it run at least one generation")
-        generation = np.array([m.generation for m in metrics])
+        episodes, metrics = _episodes(run)
         mean = np.array([m.mean for m in metrics])
-        std = np.array([m.std for m in metrics])
-        line = axes.plot(generation, mean, label=f"{_label(run)}: mean")[0]
-        axes.fill_between(generation, mean - std, mean + std, color=line.get_color(), alpha=0.2)
-        axes.plot(generation, [m.best for m in metrics], "--", color=line.get_color(),
-                  label=f"{_label(run)}: best")
-    axes.set_xlabel("generation")
-    axes.set_ylabel("fitness")
-    axes.set_title(f"{runs[0].behaviour.name}: fitness per generation (band: ±1 std)")
-    axes.legend(fontsize="small")
-    axes.grid(alpha=0.3)
-    _save(figure, path)
+        line = top.plot(episodes, mean, label=f"{_label(run)}: mean")[0]
+        top.fill_between(episodes, [m.min for m in metrics], [m.best for m in metrics],
+                         color=line.get_color(), alpha=0.15, linewidth=0)
+        top.plot(episodes, [m.best for m in metrics], "--", color=line.get_color(),
+                 linewidth=1, label=f"{_label(run)}: best")
+        bottom.plot(episodes, [m.std for m in metrics], color=line.get_color())
+    top.set_ylabel("trial fitness")
+    top.set_title(f"{runs[0].behaviour.name}: fitness per generation "
+                  "(band: worst to best trial)", fontsize="medium")
+    top.legend(fontsize="small")
+    bottom.set_ylabel("population std")
+    bottom.set_xlabel("training episodes (trials)")
+    for axes in (top, bottom):
+        axes.grid(alpha=0.3)
+    return _save(figure, path)
 
 
 def strength_history(run: Run) -> tuple[NDArray[np.int64], FloatArray]:
@@ -86,69 +130,317 @@ def most_contested_rule(q: FloatArray) -> int:
     return int(np.argmax(q.var(axis=0).sum(axis=1)))
 
 
-def plot_strengths(run: Run, path: Path, rule: int | None = None) -> int:
-    """The strength q_m^k of every command k of one rule m over the generations (Fig. 7).
+def rule_text(behaviour: Behaviour, rule: int) -> str:
+    return " AND ".join(f"{name} is {set_name}" for name, set_name
+                        in zip(behaviour.input_names, behaviour.antecedents()[rule],
+                               strict=True))
 
-    ``rule`` is 0-based in the documented rule order; by default the most contested rule.
-    Returns the rule plotted.
-    """
+
+def plot_strengths(run: Run, path: Path, rule: int | None = None) -> int:
+    """The strength q_m^k of every command k of one rule m after each generation, over the
+    trials (Fig. 7). ``rule`` is 0-based in the documented rule order; by default the most
+    contested rule. Returns the rule plotted."""
     generations, q = strength_history(run)
     rule = most_contested_rule(q) if rule is None else rule
     if not 0 <= rule < q.shape[1]:
         raise RunDirError(f"rule {rule} does not exist: the behaviour has rules "
                           f"0..{q.shape[1] - 1}",
                           hint="rules are numbered from 0, last input varying fastest")
+    episodes, _ = _episodes(run)
+    episodes = episodes[: len(generations)]
     behaviour = run.behaviour
-    antecedent = " AND ".join(f"{name} is {set_name}" for name, set_name
-                              in zip(behaviour.input_names, behaviour.antecedents()[rule],
-                                     strict=True))
     plt = _pyplot()
     figure, axes = plt.subplots(figsize=(7, 4))
     for k, command in enumerate(behaviour.output.commands):
-        axes.plot(generations, q[:, rule, k], marker=".", label=command)
-    axes.set_xlabel("generation")
-    axes.set_ylabel("strength q")
-    axes.set_title(f"rule {rule}: IF {antecedent}", fontsize="medium")
-    axes.legend(fontsize="small")
+        axes.plot(episodes, q[:, rule, k], marker=".", label=command)
+    axes.set_xlabel("training episodes (trials)")
+    axes.set_ylabel("strength q (expected discounted reward)")
+    axes.set_title(f"{_label(run)}: rule {rule}: IF {rule_text(behaviour, rule)}",
+                   fontsize="medium")
+    axes.legend(fontsize="small", title="THEN")
     axes.grid(alpha=0.3)
     _save(figure, path)
     return rule
 
 
+# -- experiments ----------------------------------------------------------------------------
+def plot_experiment_learning(summary: dict[str, Any], path: Path) -> list[Path]:
+    """Per learner, the median across seeds of each generation's mean fitness (top) and
+    population std (bottom) with the inter-quartile range, over training episodes: the
+    paper's Fig. 5-6 over many seeds."""
+    plt = _pyplot()
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for name in summary["plan"]["learners"]:
+        curve = summary["curves"][name]
+        episodes = np.array(curve["episodes"])
+        for axes, key in ((top, "mean"), (bottom, "std")):
+            band = curve[key]
+            line = axes.plot(episodes, band["median"], label=name)[0]
+            axes.fill_between(episodes, band["q25"], band["q75"], color=line.get_color(),
+                              alpha=0.2, linewidth=0)
+    seeds = summary["plan"]["seeds"]
+    top.set_title(f"{summary['behaviour']}: {seeds} seeds per learner "
+                  "(line: median, band: 25-75 %)", fontsize="medium")
+    top.set_ylabel("mean fitness of a generation")
+    bottom.set_ylabel("population std")
+    bottom.set_xlabel("training episodes (trials)")
+    top.legend(fontsize="small")
+    for axes in (top, bottom):
+        axes.grid(alpha=0.3)
+    return _save(figure, path)
+
+
+def plot_heldout(summary: dict[str, Any], path: Path) -> list[Path]:
+    """Held-out success rate of every run's best.yaml, one column of points per learner with
+    its quartiles."""
+    plt = _pyplot()
+    learners = summary["plan"]["learners"]
+    figure, axes = plt.subplots(figsize=(1.6 + 1.4 * len(learners), 4))
+    for i, name in enumerate(learners):
+        entry = summary["learners"][name]["heldout_success"]
+        values = np.array(entry["values"], dtype=np.float64)
+        # a deterministic spread so that equal rates stay visible
+        offsets = (np.arange(len(values)) % 7 - 3) * 0.04
+        axes.plot(i + offsets, values, "o", alpha=0.6, markersize=4)
+        axes.plot([i - 0.3, i + 0.3], [entry["median"]] * 2, color="black")
+        axes.fill_between([i - 0.3, i + 0.3], entry["q25"], entry["q75"], color="grey",
+                          alpha=0.25, linewidth=0)
+    axes.set_xticks(range(len(learners)), learners)
+    axes.set_ylim(-0.02, 1.02)
+    episodes = summary["plan"]["heldout_episodes"]
+    axes.set_ylabel(f"held-out success rate ({episodes} episodes)")
+    axes.set_title("best.yaml of each run (bar: median, grey: 25-75 %)", fontsize="medium")
+    axes.grid(alpha=0.3, axis="y")
+    return _save(figure, path)
+
+
+# -- a controller -----------------------------------------------------------------------
+def _axis_label(behaviour: Behaviour, name: str) -> str:
+    unit = behaviour.inputs[name].unit
+    return f"{name} ({unit})" if unit else name
+
+
+def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
+    """Each input's fuzzy sets (paper Fig. 1): membership over the input's range."""
+    plt = _pyplot()
+    names = behaviour.input_names
+    figure, axes_list = plt.subplots(len(names), 1, figsize=(7, 2.2 * len(names)),
+                                     squeeze=False)
+    for axes, name in zip(axes_list[:, 0], names, strict=True):
+        variable = behaviour.inputs[name]
+        low, high = variable.range
+        for set_name, quad in variable.sets.items():
+            pa, pb, pc, pd = (float(v) for v in quad)
+            xs = np.clip([pa, pb, pc, pd], low, high)
+            axes.plot(xs, [0.0 if pa < pb else 1.0, 1, 1, 0.0 if pc < pd else 1.0],
+                      label=set_name)
+        axes.set_xlim(low, high)
+        axes.set_ylim(-0.05, 1.1)
+        axes.set_xlabel(_axis_label(behaviour, name))
+        axes.set_ylabel("membership")
+        axes.legend(fontsize="x-small", ncol=min(5, len(variable.sets)), loc="upper center",
+                    bbox_to_anchor=(0.5, 1.3), frameon=False)
+        axes.grid(alpha=0.3)
+    figure.suptitle(f"{behaviour.name}: fuzzy sets of each input", y=1.0)
+    figure.tight_layout()
+    return _save(figure, path)
+
+
+def _rule_grid(behaviour: Behaviour) -> tuple[list[str], list[str], list[list[str]]]:
+    """Row labels, column labels (the last input's sets) and the command of each cell."""
+    names = behaviour.input_names
+    by_antecedent = {tuple(rule.if_[n] for n in names): rule.then for rule in behaviour.rules}
+    columns = list(behaviour.inputs[names[-1]].sets)
+    leading = [list(behaviour.inputs[n].sets) for n in names[:-1]]
+    rows = [tuple(r) for r in itertools.product(*leading)] if leading else [()]
+    cells = [[by_antecedent.get((*row, column), "") for column in columns] for row in rows]
+    labels = [", ".join(f"{n}={s}" for n, s in zip(names[:-1], row, strict=True)) or "any"
+              for row in rows]
+    return labels, columns, cells
+
+
+def plot_rule_table(behaviour: Behaviour, path: Path) -> list[Path]:
+    """The rule table as a grid: rows are the sets of all inputs but the last, columns the
+    last input's sets (the rule order of eq. 1 reads row by row); each cell names its command,
+    coloured by the command's singleton value."""
+    plt = _pyplot()
+    labels, columns, cells = _rule_grid(behaviour)
+    commands = behaviour.output.commands
+    values = np.array([[commands[c] if c else np.nan for c in row] for row in cells])
+    figure, axes = plt.subplots(figsize=(1.5 + 1.3 * len(columns), 1.2 + 0.5 * len(labels)))
+    low, high = min(commands.values()), max(commands.values())
+    image = axes.imshow(np.ma.masked_invalid(values), cmap="coolwarm", vmin=low,
+                        vmax=high if high > low else low + 1, aspect="auto")
+    for r, row in enumerate(cells):
+        for c, command in enumerate(row):
+            axes.text(c, r, command or "(none)", ha="center", va="center", fontsize="small")
+    names = behaviour.input_names
+    axes.set_xticks(range(len(columns)), columns, fontsize="small")
+    axes.set_yticks(range(len(labels)), labels, fontsize="small")
+    axes.set_xlabel(names[-1])
+    if len(names) > 1:
+        axes.set_ylabel(", ".join(names[:-1]))
+    unit = f" ({behaviour.output.unit})" if behaviour.output.unit else ""
+    figure.colorbar(image, ax=axes, label=f"{behaviour.output.name}{unit}")
+    axes.set_title(f"{behaviour.name}: rule table", fontsize="medium")
+    return _save(figure, path)
+
+
+def plot_surface(behaviour: Behaviour, path: Path, resolution: int = 121) -> list[Path]:
+    """The control surface of a two-input controller: its crisp output (eq. 3) over a
+    ``resolution x resolution`` grid of the input plane."""
+    from flctool.compile import compile_behaviour
+
+    names = behaviour.input_names
+    if len(names) != 2:
+        raise FlcError(f"a control surface needs two inputs; {behaviour.name} has "
+                       f"{len(names)}", hint="plot its rule table and membership functions")
+    controller = compile_behaviour(behaviour)
+    (x_low, x_high), (y_low, y_high) = controller.ranges.tolist()
+    xs = np.linspace(x_low, x_high, resolution)
+    ys = np.linspace(y_low, y_high, resolution)
+    grid_x, grid_y = np.meshgrid(xs, ys)
+    states = np.column_stack([grid_x.ravel(), grid_y.ravel()])
+    output = controller.output(states).reshape(grid_x.shape)
+    plt = _pyplot()
+    figure, axes = plt.subplots(figsize=(6, 4.5))
+    mesh = axes.pcolormesh(grid_x, grid_y, output, cmap="coolwarm", shading="auto",
+                           rasterized=True)
+    unit = f" ({behaviour.output.unit})" if behaviour.output.unit else ""
+    figure.colorbar(mesh, ax=axes, label=f"{behaviour.output.name}{unit}")
+    axes.set_xlabel(_axis_label(behaviour, names[0]))
+    axes.set_ylabel(_axis_label(behaviour, names[1]))
+    axes.set_title(f"{behaviour.name}: control surface", fontsize="medium")
+    return _save(figure, path)
+
+
+# -- trajectories (Fig. 8) ------------------------------------------------------------------
+_TRACE_COLUMNS = ("robot_x", "robot_y", "ball_x", "ball_y")
+_OPTIONAL_COLUMNS = ("robot_heading", "reward", "terminated", "truncated")
+
+
 def read_trace(path: Path) -> dict[str, FloatArray]:
-    """The numeric columns of a trace CSV written by ``flctool evaluate --trace``."""
+    """The numeric columns of a trace CSV written by ``flctool evaluate --trace``: positions
+    (mm), and where present heading (deg), reward and the end flags (the final row, which
+    has none, reads as NaN)."""
     try:
         with path.open(encoding="utf-8", newline="") as handle:
             rows = list(csv.DictReader(handle))
     except OSError as exc:
         raise SpecError([Problem((), f"cannot read the trace: {exc.strerror}", file=str(path))],
                         str(path)) from None
-    needed = ("robot_x", "robot_y", "ball_x", "ball_y")
-    missing = [c for c in needed if not rows or c not in rows[0]]
+    missing = [c for c in _TRACE_COLUMNS if not rows or c not in rows[0]]
     if missing:
         raise SpecError([Problem((), f"not a ballchase trace: no column(s) {', '.join(missing)}",
                                  "write one with flctool evaluate FILE --trace trace.csv",
                                  file=str(path), line=1)], str(path))
+
+    def number(text: str) -> float:
+        flags = {"True": 1.0, "False": 0.0, "": float("nan")}
+        return flags[text] if text in flags else float(text)
+
+    present = [c for c in _OPTIONAL_COLUMNS if c in rows[0]]
     try:
-        return {c: np.array([float(row[c]) for row in rows]) for c in needed}
+        return {c: np.array([number(row[c]) for row in rows])
+                for c in (*_TRACE_COLUMNS, *present)}
     except ValueError as exc:
-        raise SpecError([Problem((), f"a position is not a number ({exc})", file=str(path))],
+        raise SpecError([Problem((), f"a value is not a number ({exc})", file=str(path))],
                         str(path)) from None
 
 
-def plot_trajectory(trace: dict[str, FloatArray], path: Path, title: str) -> None:
-    """The robot's path to the ball, seen from above (the paper's Fig. 8)."""
+def trace_columns(rows: list[dict[str, Any]]) -> dict[str, FloatArray]:
+    """Rows of :func:`flctool.rollout.trace_episode` as the columns :func:`read_trace` gives."""
+    def number(value: Any) -> float:
+        return float("nan") if value == "" else float(value)
+
+    present = [c for c in (*_TRACE_COLUMNS, *_OPTIONAL_COLUMNS) if c in rows[0]]
+    return {c: np.array([number(row[c]) for row in rows]) for c in present}
+
+
+def outcome(trace: dict[str, FloatArray]) -> str:
+    """How the traced episode ended: reached the ball, lost it, or timed out."""
+    reward = trace.get("reward")
+    if reward is None or len(reward) < 2:
+        return "outcome not recorded"
+    steps = len(reward) - 1  # the last row is the final state
+    if reward[-2] > 0:
+        return f"reached the ball in {steps} steps"
+    if reward[-2] < 0:
+        return f"lost the ball after {steps} steps"
+    return f"timed out after {steps} steps"
+
+
+def plot_trajectory(trace: dict[str, FloatArray], path: Path, title: str,
+                    pitch: tuple[float, float] | None = None) -> list[Path]:
+    """The robot's path to the ball seen from above (the paper's Fig. 8): start, heading
+    arrows along the way, the ball, the outcome, and the pitch outline (``pitch`` = length,
+    width in mm, centred on the origin) when known."""
     plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(6, 5))
-    axes.plot(trace["robot_x"], trace["robot_y"], "-", marker=".", markersize=3,
-              label="robot")
-    axes.plot(trace["robot_x"][:1], trace["robot_y"][:1], "s", color="black", label="start")
+    figure, axes = plt.subplots(figsize=(7, 5))
+    if pitch is not None:
+        length, width = pitch
+        axes.add_patch(plt.Rectangle((-length / 2, -width / 2), length, width, fill=False,
+                                     edgecolor="green", linewidth=1.5, label="pitch"))
+        axes.plot([0, 0], [-width / 2, width / 2], color="green", linewidth=0.8)
+    x, y = trace["robot_x"], trace["robot_y"]
+    axes.plot(x, y, "-", color="tab:blue", linewidth=1.2, label="robot centre")
+    if "robot_heading" in trace:
+        every = max(1, len(x) // 10)
+        heading = np.radians(trace["robot_heading"][::every])
+        # arrows of a fixed length in mm, a few per path
+        span = max(float(np.ptp(x)), float(np.ptp(y)), *(pitch or (0.0,)))
+        size = 0.04 * span if span > 0 else 1.0
+        axes.quiver(x[::every], y[::every], size * np.cos(heading), size * np.sin(heading),
+                    angles="xy", scale_units="xy", scale=1, color="tab:blue", width=0.004,
+                    alpha=0.8, label="heading")
+    axes.plot(x[:1], y[:1], "s", color="black", markersize=7, label="start")
+    axes.plot(x[-1:], y[-1:], "x", color="tab:red", markersize=9, mew=2,
+              label=f"end: {outcome(trace)}")
     axes.plot(trace["ball_x"][-1:], trace["ball_y"][-1:], "o", color="tab:orange",
               markersize=10, label="ball")
     axes.set_aspect("equal", adjustable="datalim")
-    axes.set_xlabel("x (mm)")
-    axes.set_ylabel("y (mm)")
-    axes.set_title(title)
-    axes.legend(fontsize="small")
+    axes.set_xlabel("x along the pitch (mm)")
+    axes.set_ylabel("y across the pitch (mm)")
+    axes.set_title(title, fontsize="medium")
+    axes.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes.grid(alpha=0.3)
-    _save(figure, path)
+    return _save(figure, path)
+
+
+def trace_controller(behaviour: Behaviour, seed: int) -> dict[str, FloatArray] | None:
+    """One episode of a deployable controller as trajectory columns; None when the
+    environment records no robot and ball positions (only the ballchase simulator does)."""
+    from flctool.compile import compile_behaviour
+    from flctool.envs import make_env
+    from flctool.rollout import trace_episode
+
+    env = make_env(behaviour, 1)
+    try:
+        rows = trace_episode(compile_behaviour(behaviour), env, seed)
+    finally:
+        env.close()
+    columns = trace_columns(rows)
+    return columns if all(c in columns for c in _TRACE_COLUMNS) else None
+
+
+def pitch_of(behaviour: Behaviour) -> tuple[float, float] | None:
+    """(length, width) of the behaviour's pitch in mm, if its environment has one."""
+    pitch = getattr(behaviour.environment, "pitch", None)
+    if pitch is None:
+        return None
+    return float(pitch.length), float(pitch.width)
+
+
+def plot_controller(behaviour: Behaviour, folder: Path, seed: int, title: str) -> list[Path]:
+    """Every figure of a deployable controller into ``folder``: memberships, rule table,
+    control surface (two inputs) and trajectory (environments with a robot and a ball)."""
+    written = plot_memberships(behaviour, folder / "memberships.png")
+    written += plot_rule_table(behaviour, folder / "rules.png")
+    if len(behaviour.input_names) == 2:
+        written += plot_surface(behaviour, folder / "surface.png")
+    trace = trace_controller(behaviour, seed)
+    if trace is None:
+        return written
+    written += plot_trajectory(trace, folder / "trajectory.png",
+                               f"{title}: episode seed {seed}", pitch_of(behaviour))
+    return written

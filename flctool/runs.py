@@ -25,7 +25,9 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import re
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from datetime import datetime
@@ -352,7 +354,8 @@ class Run:
         return data
 
     def write_info(self, status: str, best: Mapping[str, Any] | None,
-                   selection: Mapping[str, Any] | None = None) -> None:
+                   selection: Mapping[str, Any] | None = None, *,
+                   durable: bool = True) -> None:
         """Write run.json; ``selection`` is the model-selection record (every validated
         candidate, the training and selection usage), kept from the last write if None."""
         if selection is None:
@@ -362,7 +365,8 @@ class Run:
                 "generations": self.behaviour.learning.generations, "status": status,
                 "best": dict(best) if best else None,
                 "selection": dict(selection) if selection else None}
-        write_text_atomic(self.path / RUN_FILE, json.dumps(info, indent=2) + "\n")
+        write_text_atomic(self.path / RUN_FILE, json.dumps(info, indent=2) + "\n",
+                          durable=durable)
 
     def extend(self, generations: int) -> None:
         """Raise the run's generation budget (resume then continues to it)."""
@@ -389,12 +393,38 @@ def _behaviour_text(behaviour: Behaviour) -> str:
         "command-line overrides.\nflctool learn --resume continues from it."))
 
 
+# How often best.yaml and run.json are rewritten during a run, and the data reaches the disk.
+SNAPSHOT_SECONDS = 1.0
+
+
+def _fsync(path: Path) -> None:
+    descriptor = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(descriptor)
+    finally:
+        os.close(descriptor)
+
+
 class RunRecorder(Callback):
-    """Writes checkpoints, metrics, strengths and best.yaml as training goes."""
+    """Writes checkpoints, metrics, strengths and best.yaml as training goes.
+
+    The bookkeeping policy (docs/performance.md, "Run directories"): every generation's
+    checkpoint is written atomically as soon as the generation ends, and its rows appended
+    to metrics.csv / strengths.csv, so a killed process loses at most the generation in
+    progress (the kernel keeps what was written; resume rebuilds the tables from the
+    checkpoints). best.yaml and run.json, which the checkpoints determine, are rewritten at
+    most every ``SNAPSHOT_SECONDS`` (wall clock) and when training ends, however it ends;
+    only then are the checkpoint, best.yaml and run.json fsync'd, so a power loss or an
+    operating-system crash loses at most the generations of the last
+    ``SNAPSHOT_SECONDS``.
+    """
 
     def __init__(self, run: Run) -> None:
         self.run = run
         self.best: dict[str, Any] | None = None
+        self._snapshot_at = time.monotonic()
+        self._unsynced: Path | None = None  # the last checkpoint, if written without fsync
+        self._recorded = False  # whether this session recorded a generation
 
     def on_start(self, learner: Learner) -> None:
         super().on_start(learner)
@@ -403,8 +433,9 @@ class RunRecorder(Callback):
         # Rebuild the tables from the checkpoints: a kill may have left rows of a generation
         # whose checkpoint never made it, or missed rows whose checkpoint did.
         states = [run.checkpoint(g) for g in done]
+        # Derived from the checkpoints (and rebuilt from them here), so never fsync'd.
         write_text_atomic(run.path / METRICS_FILE, _metrics_text(
-            GenerationMetrics.from_row(s["metrics"]) for s in states))
+            GenerationMetrics.from_row(s["metrics"]) for s in states), durable=False)
         if learner.uses_strengths:
             shape = (learner.controller.n_rules, learner.controller.n_commands)
             for state in states:
@@ -413,8 +444,9 @@ class RunRecorder(Callback):
                                        f"shape (rules, commands) = {shape}")
             write_text_atomic(run.path / STRENGTHS_FILE, _strengths_text(
                 ((s["generation"], s["q"]) for s in states),
-                learner.controller.command_names))
-        run.write_info("running", run.info().get("best"))
+                learner.controller.command_names), durable=False)
+        run.write_info("running", run.info().get("best"), durable=False)
+        self._snapshot_at = time.monotonic()
 
     def on_generation(self, metrics: GenerationMetrics) -> bool:
         learner = self.learner
@@ -423,20 +455,27 @@ class RunRecorder(Callback):
         run = self.run
         state = learner.state_dict()
         state["metrics"] = metrics.row()
-        write_text_atomic(run.checkpoint_path(metrics.generation), json.dumps(state) + "\n")
+        now = time.monotonic()
+        snapshot = now - self._snapshot_at >= SNAPSHOT_SECONDS
+        checkpoint = run.checkpoint_path(metrics.generation)
+        write_text_atomic(checkpoint, json.dumps(state) + "\n", durable=snapshot)
+        self._unsynced = None if snapshot else checkpoint
+        self._recorded = True
         _append(run.path / METRICS_FILE, _metrics_text([metrics], header=False))
         strengths = learner.strengths()
         if strengths is not None:
             _append(run.path / STRENGTHS_FILE, _strengths_text(
                 [(metrics.generation, strengths.tolist())], learner.controller.command_names,
                 header=False))
-        # as Run.behaviour_for picks it
-        generation, individual, consequents, fitness, candidate = learner.selected()
-        validation = (candidate.validation.to_dict()
-                      if candidate is not None and candidate.validation else None)
-        self._write_best(with_rules(run.behaviour, consequents),
-                         _provenance(run, generation, individual, fitness, validation))
-        run.write_info("running", self.best, learner.selection.record())
+        if snapshot:  # else on_end or a later generation writes them (SNAPSHOT_SECONDS)
+            self._snapshot_at = now
+            # as Run.behaviour_for picks it
+            generation, individual, consequents, fitness, candidate = learner.selected()
+            validation = (candidate.validation.to_dict()
+                          if candidate is not None and candidate.validation else None)
+            self._write_best(with_rules(run.behaviour, consequents),
+                             _provenance(run, generation, individual, fitness, validation))
+            run.write_info("running", self.best, learner.selection.record())
         return True
 
     def _write_best(self, behaviour: Behaviour, provenance: dict[str, Any]) -> None:
@@ -457,8 +496,13 @@ class RunRecorder(Callback):
             else:
                 if provenance != self.best:
                     self._write_best(behaviour, provenance)
+        selection = None  # kept from run.json, unless this session recorded generations
+        if learner is not None and self._recorded:
+            selection = learner.selection.record()
+        if self._unsynced is not None:
+            _fsync(self._unsynced)  # the last checkpoint (see the policy above)
         self.run.write_info("finished" if finished else "stopped",
-                            self.best or self.run.info().get("best"))
+                            self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------
@@ -494,7 +538,7 @@ def create_run(behaviour: Behaviour, out: Path | None = None) -> Run:
                           hint="choose another --out") from None
     run = Run(path, behaviour)
     write_text_atomic(path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
-    run.write_info("created", None)
+    run.write_info("created", None, durable=False)
     return run
 
 

@@ -48,3 +48,14 @@ def test_special_files_and_directories_are_refused(tmp_path: Path) -> None:
         write_text_atomic(fifo, "x")
     assert stat.S_ISFIFO(fifo.stat().st_mode)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]  # no temporary left behind
+
+
+def test_only_durable_writes_wait_for_the_disk(tmp_path: Path,
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
+    synced: list[int] = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: synced.append(fd) or real_fsync(fd))
+    write_text_atomic(tmp_path / "quick.txt", "a", durable=False)
+    assert synced == [] and (tmp_path / "quick.txt").read_text() == "a"
+    write_text_atomic(tmp_path / "durable.txt", "b")
+    assert len(synced) == 1 and (tmp_path / "durable.txt").read_text() == "b"

@@ -11,11 +11,16 @@ from typer.testing import CliRunner
 
 from flctool import load_behaviour
 from flctool.cli import app
-from flctool.errors import MissingDependencyError, RunDirError, SpecError
+from flctool.errors import FlcError, MissingDependencyError, RunDirError, SpecError
 from flctool.plots import (
     most_contested_rule,
+    outcome,
+    plot_controller,
     plot_fitness,
+    plot_memberships,
+    plot_rule_table,
     plot_strengths,
+    plot_surface,
     plot_trajectory,
     read_trace,
     strength_history,
@@ -25,6 +30,7 @@ from flctool.runs import Run, create_run, resolve_behaviour
 from .conftest import BEHAVIOURS
 
 PNG = b"\x89PNG\r\n\x1a\n"
+SVG = b"<svg"
 runner = CliRunner()
 
 
@@ -38,8 +44,10 @@ def _run(tmp_path: Path, learner: str, name: str) -> Run:
 
 def test_fitness_and_strengths_of_a_run(tmp_path: Path) -> None:
     run = _run(tmp_path, "hybrid", "hybrid")
-    plot_fitness([run], tmp_path / "fitness.png")
+    written = plot_fitness([run], tmp_path / "fitness.png")
+    assert written == [tmp_path / "fitness.png", tmp_path / "fitness.svg"]
     assert (tmp_path / "fitness.png").read_bytes().startswith(PNG)
+    assert SVG in (tmp_path / "fitness.svg").read_bytes()
     generations, q = strength_history(run)
     assert generations.tolist() == [0, 1, 2] and q.shape == (3, 15, 5)
     plotted = plot_strengths(run, tmp_path / "strengths.png")
@@ -69,8 +77,13 @@ def test_trajectory_from_an_evaluate_trace(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     columns = read_trace(trace)
     assert len(columns["robot_x"]) > 1
-    plot_trajectory(columns, tmp_path / "trajectory.png", "chase")
+    assert "robot_heading" in columns and "reward" in columns
+    assert outcome(columns).startswith(("reached the ball in", "lost the ball after",
+                                        "timed out after"))
+    plot_trajectory(columns, tmp_path / "trajectory.png", "chase", pitch=(4200.0, 2700.0))
     assert (tmp_path / "trajectory.png").read_bytes().startswith(PNG)
+    svg = (tmp_path / "trajectory.svg").read_text()
+    assert "x along the pitch (mm)" in svg and "pitch" in svg
 
 
 def test_a_file_that_is_not_a_trace(tmp_path: Path) -> None:
@@ -96,7 +109,9 @@ def test_plot_command(tmp_path: Path) -> None:
     result = runner.invoke(app, ["plot", str(hybrid.path), "--rule", "7"])
     assert result.exit_code == 0, result.output
     assert "(rule 7)" in result.output
-    assert (hybrid.path / "fitness.png").is_file() and (hybrid.path / "strengths.png").is_file()
+    for name in ("fitness", "strengths", "memberships", "rules", "surface", "trajectory"):
+        assert (hybrid.path / f"{name}.png").is_file(), name
+        assert (hybrid.path / f"{name}.svg").is_file(), name
     out = tmp_path / "compare"
     result = runner.invoke(app, ["plot", str(hybrid.path), str(pitt.path), "-o", str(out)])
     assert result.exit_code == 0, result.output
@@ -104,3 +119,71 @@ def test_plot_command(tmp_path: Path) -> None:
     result = runner.invoke(app, ["plot", str(pitt.path), "--rule", "3"])
     assert result.exit_code == 1
     assert "--rule picks the rule of one run" in result.output
+
+
+def test_the_fitness_band_stays_inside_the_possible_range(tmp_path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    run = _run(tmp_path, "pitt", "pitt")
+    captured: list[object] = []
+    original = plt.Axes.fill_between
+
+    def spy(self: object, x: object, low: object, high: object, **kwargs: object) -> object:
+        captured.append((np.asarray(low), np.asarray(high)))
+        return original(self, x, low, high, **kwargs)
+
+    plt.Axes.fill_between = spy  # type: ignore[method-assign]
+    try:
+        plot_fitness([run], tmp_path / "fitness.png")
+    finally:
+        plt.Axes.fill_between = original  # type: ignore[method-assign]
+    (low, high), = captured
+    # ballchase trial fitness lies in [0, 2); mean + std of a two-peaked population does not
+    assert low.min() >= 0.0 and high.max() < 2.0
+    metrics = run.metrics()
+    assert high.tolist() == [m.best for m in metrics]
+    assert low.tolist() == [m.min for m in metrics]
+
+
+def test_controller_figures(tmp_path: Path) -> None:
+    handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
+    written = plot_controller(handmade, tmp_path, 7, "handmade")
+    assert sorted(p.name for p in written) == sorted(
+        f"{n}.{s}" for n in ("memberships", "rules", "surface", "trajectory")
+        for s in ("png", "svg"))
+    svg = (tmp_path / "rules.svg").read_text()
+    for command in ("turn_left", "forward", "turn_right"):
+        assert command in svg
+    assert "pan (deg)" in (tmp_path / "surface.svg").read_text()
+
+
+def test_controllers_without_a_pitch_or_two_inputs(tmp_path: Path) -> None:
+    cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
+    plot_memberships(cartpole, tmp_path / "m.png")
+    plot_rule_table(cartpole, tmp_path / "r.png")  # rules not learned: empty cells
+    assert "(none)" in (tmp_path / "r.svg").read_text()
+    with pytest.raises(FlcError, match="a control surface needs two inputs"):
+        plot_surface(cartpole, tmp_path / "s.png")
+
+
+def test_plot_an_experiment(tmp_path: Path) -> None:
+    from flctool.experiment import ExperimentPlan, make_executor, prepare_experiment, write_report
+
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                                  {"generations": 3, "population": 4})
+    plan = ExperimentPlan("ballchase", ("pitt", "hybrid"), 2, heldout_episodes=10)
+    experiment = prepare_experiment(behaviour, plan, tmp_path / "exp")
+    experiment.run(make_executor("local"))
+    write_report(experiment)
+    result = runner.invoke(app, ["plot", str(experiment.path), "--rule", "7"])
+    assert result.exit_code == 0, result.output
+    assert "strengths.png (rule 7)" in result.output
+    for name in ("learning", "heldout", "strengths", "memberships", "rules", "surface",
+                 "trajectory"):
+        assert (experiment.path / f"{name}.png").read_bytes().startswith(PNG), name
+    assert "training episodes (trials)" in (experiment.path / "learning.svg").read_text()
+    both = runner.invoke(app, ["plot", str(experiment.path), str(experiment.path)])
+    assert both.exit_code == 1 and "one experiment directory at a time" in both.output

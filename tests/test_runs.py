@@ -298,3 +298,61 @@ def test_a_damaged_earlier_q_table_is_found_when_the_tables_are_rebuilt(
         open_run(run.path).train()
     assert json.loads((run.path / "run.json").read_text())["status"] == "stopped"
     assert path.exists()
+
+
+def test_bookkeeping_snapshots_best_and_syncs_only_at_intervals_and_the_end(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The policy of RunRecorder: a checkpoint every generation; best.yaml, run.json and an
+    # fsync at most every SNAPSHOT_SECONDS and at the end; the end state is the same.
+    import os
+
+    from flctool import runs
+
+    every = create_run(ballchase(learner="pitt", seed=3), tmp_path / "every")
+    monkeypatch.setattr(runs, "SNAPSHOT_SECONDS", 0.0)
+    every.train()
+    synced: list[int] = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: synced.append(fd) or real_fsync(fd))
+    monkeypatch.setattr(runs, "SNAPSHOT_SECONDS", 1e9)
+    written: list[Path] = []
+    real_best = runs.RunRecorder._write_best
+
+    def counting_best(recorder: runs.RunRecorder, *args: Any) -> None:
+        written.append(recorder.run.path)
+        real_best(recorder, *args)
+
+    monkeypatch.setattr(runs.RunRecorder, "_write_best", counting_best)
+    rarely = create_run(ballchase(learner="pitt", seed=3), tmp_path / "rarely")
+    rarely.train()
+    assert rarely.checkpoint_generations() == list(range(5))
+    assert len(written) == 1  # at the end, not after each of the 5 generations
+    # behaviour.yaml at creation; at the end the last checkpoint, best.yaml and run.json
+    assert len(synced) == 4
+    for name in (BEST_FILE, METRICS_FILE, "run.json"):
+        expected = (every.path / name).read_text().replace("every", "rarely")
+        if name == METRICS_FILE:
+            assert without_wall_time(rarely.path / name) == without_wall_time(every.path / name)
+        else:
+            assert (rarely.path / name).read_text() == expected
+
+
+def test_a_run_stopped_between_snapshots_keeps_every_generation(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from flctool import runs
+
+    monkeypatch.setattr(runs, "SNAPSHOT_SECONDS", 1e9)
+    run = create_run(ballchase(learner="hybrid"), tmp_path / "run")
+
+    class Crash(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            if metrics.generation == 2:
+                raise KeyboardInterrupt
+            return True
+
+    with pytest.raises(KeyboardInterrupt):
+        run.train([Crash()])
+    assert run.checkpoint_generations() == [0, 1, 2]
+    assert [int(r["generation"]) for r in rows(run.path / METRICS_FILE)] == [0, 1, 2]
+    _, provenance = open_run(run.path).behaviour_for()
+    assert f"generation {provenance['generation']}," in (run.path / BEST_FILE).read_text()

@@ -452,6 +452,7 @@ from flctool.cli import (  # noqa: E402
     export_commands,  # noqa: F401  (export, import)
     infer,  # noqa: F401  (infer)
     learn,  # noqa: F401  (learn)
+    new,  # noqa: F401  (new)
     plot,  # noqa: F401  (plot)
     serve,  # noqa: F401  (serve)
     spec_commands,  # noqa: F401  (validate, show, schema)

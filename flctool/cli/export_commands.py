@@ -30,14 +30,16 @@ IMPORT_SUFFIXES = {".fll": "fll", ".fcl": "fcl", ".fis": "fis"}
 @app.command("export", epilog=example(
     "flctool export runs/first -o controller.fll",
     "flctool export runs/first -o robot/flc.c --float",
-    "flctool export behaviours/ballchase-handmade.yaml --format json"))
+    "flctool export behaviours/ballchase-handmade.yaml --format json",
+    "flctool export runs/first --format bundle -o robot/ballchase"))
 def export_controller(
     source: Annotated[Path, typer.Argument(
         metavar="CONTROLLER",
         help="A deployable behaviour file, or a run directory (its best controller).")],
     format: Annotated[str | None, typer.Option(
-        "--format", "-f", help="yaml, json, fll, fcl, fis or c (default: from the suffix of "
-        "-o; yaml on stdout).")] = None,
+        "--format", "-f", help="yaml, json, fll, fcl, fis, c, or bundle (a folder: the "
+        "controller, its wiring and a C and a Python harness). Default: from the suffix of "
+        "-o; yaml on stdout.")] = None,
     output: Annotated[Path | None, typer.Option(
         "--output", "-o", help="Where to write (default: stdout). For c, -o NAME writes "
         "NAME.h and NAME.c.")] = None,

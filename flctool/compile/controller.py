@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import cached_property, partial
+from functools import cache, cached_property
 from typing import TYPE_CHECKING, Any, TypeVar, cast
 
 import numpy as np
@@ -26,6 +26,10 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+_FLOAT64 = np.dtype(np.float64)
+# From this many states, output(threads=n) splits the batch (below, starting threads costs
+# more than it saves).
+THREADED_STATES = 20_000
 
 
 _Array = TypeVar("_Array", bound=NDArray[Any])
@@ -79,8 +83,9 @@ class Controller:
 
     # -- inference -----------------------------------------------------------------------
     # The public methods validate and shape; the work is done by compiled kernels
-    # (flctool.compile.kernels) that walk only the rules that fire and give exactly what the
-    # plain eq. 1-3 give (tests compare with a loop over rules).
+    # (flctool.compile.kernels) that give exactly what the plain eq. 1-3 give (tests compare
+    # with a loop over rules). Arrays already in the kernels' form (float64, C-contiguous,
+    # right shape) go to them untouched: a small call costs little more than the kernel.
 
     def check_states(self, states: FloatArray) -> FloatArray:
         """States as a (B, N) float array, clipped to the ranges; NaN is an error."""
@@ -101,14 +106,10 @@ class Controller:
         Dense by definition; for large M prefer :meth:`active_rules` or :meth:`output`, which
         never make a (B, M) array.
         """
-        from flctool.compile import kernels
-
         array = self._as_states(states)
         alpha = np.zeros((array.shape[0], self.n_rules))
         layout = self._layout
-        nan_state = kernels.activations(array, layout.lo, layout.hi, layout.quads,
-                                        layout.offsets, layout.strides, layout.max_sets, alpha)
-        if nan_state >= 0:
+        if _kernel("activations")(array, layout.floats, layout.ints, alpha) >= 0:
             self._raise_nan(array)
         return alpha
 
@@ -119,51 +120,74 @@ class Controller:
         With overlapping trapezoids A <= 2^N however large M is, and the cost of this call
         follows A, not M: per-step work that uses only these follows the active rules.
         """
-        x = np.array(state, dtype=np.float64)  # a copy: writable and contiguous, as compiled
-        if x.shape != self._state_shape:
-            x = self._as_states(x)[0]  # (1, N) is accepted too; other shapes raise
-        rules, alpha, nan_input = self._active_kernel(x)
+        x = self._as_state(state)
+        layout = self._layout
+        rules, alpha, nan_input = _kernel("active_one")(layout.floats, layout.ints, x)
         if nan_input >= 0:
             self._raise_nan(x[None, :])
         return rules, alpha
 
-    def output(self, states: FloatArray, consequents: IntArray | None = None) -> FloatArray:
+    def output(self, states: FloatArray, consequents: IntArray | None = None, *,
+               threads: int = 1) -> FloatArray:
         """Crisp output by centre of area over singletons (eq. 3).
 
         ``states (B, N)`` -> ``(B,)`` with this controller's consequents (or one ``(M,)``
         vector); with a population ``consequents (P, M)`` -> ``(P, B)``. Only the rules that
         fire are visited and no (B, M) array is made, whatever M is.
-        """
-        from flctool.compile import kernels
 
-        table = self._consequents(consequents)
-        array = self._as_states(states)
-        # One compiled signature: writable C-contiguous arrays.
-        tables = np.ascontiguousarray(table.reshape(-1, self.n_rules), dtype=np.intp)
-        if not tables.flags.writeable:
-            tables = tables.copy()
-        out = np.empty((tables.shape[0], array.shape[0]))
-        layout = self._layout
-        failed = kernels.infer(array, layout.lo, layout.hi, layout.quads, layout.offsets,
-                               layout.strides, layout.max_sets, layout.grid, tables,
-                               layout.singletons, out)
+        ``threads`` > 1 splits a large batch (from :data:`THREADED_STATES` states) into that
+        many contiguous parts inferred at once (the kernels release the GIL); each state's
+        output is computed alone, so the result is identical to ``threads=1``.
+        """
+        floats, ints, tables, dense, infer, n_inputs = self._batch
+        single = True
+        if consequents is not None or tables is None:  # (raises if there are none)
+            table = self._consequents(consequents)
+            single = table.ndim == 1
+            tables = np.array(table.reshape(-1, self.n_rules), dtype=np.intp, order="C")
+        # Any float64 (B, N) array goes to the kernel as it is (it reads strides).
+        if not (type(states) is np.ndarray and states.dtype is _FLOAT64
+                and states.ndim == 2 and states.shape[1] == n_inputs):
+            states = self._as_states(states)
+        count = states.shape[0]
+        population = tables.shape[0]
+        out = np.empty(population * count)  # (P, B) flat
+        if threads > 1 and count >= THREADED_STATES:
+            failed = self._infer_threaded(states, tables, out, threads)
+        else:
+            failed = infer(states, floats, ints, tables, out, 0, count, dense)
         if failed >= 0:
-            self._raise_undefined(array, failed)
-        return out if table.ndim == 2 else out[0]
+            self._raise_undefined(states, failed)
+        return out if single else out.reshape(population, count)
 
     def output_one(self, state: FloatArray) -> float:
         """Crisp output (eq. 3) of one state ``(N,)`` with this controller's consequents.
 
-        The fast path for a control loop that infers one state at a time (about a
+        The fast path for a control loop that infers one state at a time (well under a
         microsecond a call); equal to ``output(state[None])[0]``.
         """
-        x = np.array(state, dtype=np.float64)  # a copy: writable and contiguous, as compiled
-        if x.shape != self._state_shape:
-            x = self._as_states(x)[0]  # (1, N) is accepted too; other shapes raise
-        value: float = self._one_kernel(x)
+        if not (type(state) is np.ndarray and state.dtype is _FLOAT64
+                and state.shape == self._state_shape and state.flags.c_contiguous):
+            state = self._as_state(state)
+        floats, ints, kernel = self._one
+        value: float = kernel(floats, ints, state)
         if value != value:  # a NaN input, or no rule fires (never a NaN output)
-            self._raise_undefined(x[None, :], 0)
+            self._raise_undefined(state[None, :], 0)
         return value
+
+    def _infer_threaded(self, states: FloatArray, tables: IntArray, out: FloatArray,
+                        threads: int) -> int:
+        from concurrent.futures import ThreadPoolExecutor
+
+        layout = self._layout
+        bounds = np.linspace(0, states.shape[0], threads + 1).astype(int).tolist()
+        infer = _kernel("infer")
+        with ThreadPoolExecutor(threads) as pool:
+            failures = list(pool.map(
+                lambda start, stop: infer(states, layout.floats, layout.ints, tables, out, start,
+                                          stop, layout.dense),
+                bounds[:-1], bounds[1:]))
+        return next((failed for failed in failures if failed >= 0), -1)
 
     @cached_property
     def _layout(self) -> Layout:
@@ -172,24 +196,36 @@ class Controller:
         return kernels.layout(self.ranges, self.quadruples, self.rule_grid, self.singletons)
 
     @cached_property
+    def _tables(self) -> IntArray:
+        # This controller's consequents as the (1, M) table the batched kernel takes.
+        return np.array(self._consequents(None), dtype=np.intp).reshape(1, self.n_rules)
+
+    @cached_property
+    def _batch(self) -> tuple[FloatArray, IntArray, IntArray | None, bool, Callable[..., int],
+                              int]:
+        # What a batched call with this controller's consequents passes, looked up once.
+        layout = self._layout
+        tables = self._tables if self.consequents is not None else None
+        return (layout.floats, layout.ints, tables, layout.dense, _kernel("infer"),
+                self.n_inputs)
+
+    @cached_property
+    def _one(self) -> tuple[FloatArray, IntArray, Callable[..., float]]:
+        # What a one-state call passes, looked up once: a call pays only for its checks and
+        # the kernel. The consequents follow the layout's ints (see kernels.infer_one).
+        layout = self._layout
+        ints = np.concatenate([layout.ints, self._tables[0]])
+        return layout.floats, ints, _kernel("infer_one")
+
+    @cached_property
     def _state_shape(self) -> tuple[int]:
         return (self.n_inputs,)
 
-    @cached_property
-    def _one_kernel(self) -> Callable[[FloatArray], float]:
-        # The kernel with this controller's arrays bound: a one-state call pays only for
-        # checking the state and numba's dispatch. The table is copied writable so that the
-        # kernel is compiled for one signature.
-        from flctool.compile import kernels
-
-        table = np.array(self._consequents(None), dtype=np.intp)
-        return partial(kernels.infer_one, self._layout.floats, self._layout.ints, table)
-
-    @cached_property
-    def _active_kernel(self) -> Callable[[FloatArray], tuple[IntArray, FloatArray, int]]:
-        from flctool.compile import kernels
-
-        return partial(kernels.active_one, self._layout.floats, self._layout.ints)
+    def _as_state(self, state: FloatArray) -> FloatArray:
+        x = np.array(state, dtype=np.float64)  # a copy: writable and contiguous, as compiled
+        if x.shape != self._state_shape:
+            x = self._as_states(x)[0].copy()  # (1, N) is accepted too; other shapes raise
+        return x
 
     def _as_states(self, states: FloatArray) -> FloatArray:
         array = np.asarray(states, dtype=np.float64)
@@ -199,8 +235,6 @@ class Controller:
             raise InferenceError(
                 f"states must have shape (B, {self.n_inputs}) for inputs "
                 f"{', '.join(self.input_names)}; got shape {array.shape}")
-        if not array.flags.writeable:
-            return np.array(array, dtype=np.float64)
         return np.ascontiguousarray(array, dtype=np.float64)
 
     def _raise_nan(self, states: FloatArray) -> None:
@@ -242,10 +276,19 @@ class Controller:
         controller = Controller(self.input_names, self.set_names, self.output_name,
                                 self.command_names, self.ranges, self.quadruples,
                                 self.rule_grid, self.singletons, _frozen(table.copy()))
-        for shared in ("_layout", "_active_kernel"):  # same sets: share what depends on them
+        for shared in ("_layout",):  # same sets: share what depends on them
             if shared in self.__dict__:
                 controller.__dict__[shared] = self.__dict__[shared]
         return controller
+
+
+@cache
+def _kernel(name: str) -> Callable[..., Any]:
+    # A kernel's compiled entry point, found once a process and only when first used
+    # (importing numba, and compiling or loading the cached machine code of that kernel).
+    from flctool.compile import kernels
+
+    return kernels.entry(name)
 
 
 def compile_behaviour(behaviour: Behaviour) -> Controller:

@@ -1,11 +1,17 @@
-"""Compiled inference kernels: eq. 1-3 over only the rules that fire.
+"""Compiled inference kernels: eq. 1-3, bit for bit, at every batch size.
 
-With overlapping trapezoids only a few sets of each input have non-zero membership, so only
-the rules combining those sets fire (at most 2^N of the M = prod(L_i) rules). The kernels find
-each input's non-zero sets (O(sum L_i) per state), enumerate the fired rules in increasing rule
-order (the product of the fired sets, last input fastest, as in the rule grid) and never touch
-the others: a step costs O(sum L_i + active rules), not O(M), and no (B, M) array is made.
-Any number of overlapping sets is handled; two per input is only the common case.
+Three ways through, each chosen where it is cheapest:
+
+- **a few states** (``SMALL_BATCH`` or fewer, and :func:`infer_one`): state by state, each
+  input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
+  only the rules combining them summed -- an odometer over the fired sets, last input
+  fastest, which is increasing rule order;
+- **blocks of states, every rule**: for small rule bases (:func:`walks_every_rule`), the
+  memberships and then eq. 2-3 of every rule for ``_BLOCK`` states at once, in loops over
+  the states that vectorise;
+- **blocks of states, fired rules**: for larger rule bases, the memberships for a block at
+  once, then each state's fired rules only: the cost follows the fired rules, not M, and no
+  (B, M) array is made.
 
 The arithmetic is the plain reference's, operation for operation, so results are identical,
 not merely close: the trapezoid's divisions as written (no precomputed inverses), min for
@@ -13,9 +19,12 @@ eq. 2, and for eq. 3 the sums sum(alpha_m * c_m) and sum(alpha_m) accumulated fr
 increasing rule order. Skipping a rule with alpha_m = 0 adds nothing to either sum (x + 0.0 is
 x), which is why the sparse sums equal the dense ones bit for bit.
 
-This module imports numba; :mod:`flctool.compile.controller` imports it only when inference
-runs, so commands that do not infer do not pay for numba's import. ``cache=True`` keeps the
-compiled machine code in numba's cache, so only the first run on a machine compiles.
+Each kernel is used with one signature (:data:`SIGNATURES`), and :func:`entry` gives its
+compiled entry point, which the controller calls without numba's dispatch. This module
+imports numba; :mod:`flctool.compile.controller` imports it only when inference runs, so
+commands that do not infer do not pay for numba's import. ``cache=True`` keeps the compiled
+machine code in numba's cache, so only the first run on a machine compiles. The kernels
+release the GIL, so threads can infer parts of a batch at once.
 """
 
 from __future__ import annotations
@@ -53,6 +62,20 @@ def _membership(s: float, pa: float, pb: float, pc: float, pd: float) -> float:
             return 0.0
         return (s - pa) / (pb - pa)
     return 1.0
+
+
+@_jit
+def _membership_free(s: float, pa: float, pb: float, pc: float, pd: float) -> float:
+    # _membership without branches (random states make its branches unpredictable): the
+    # reference's branches become selects of the numerator and width, then one division (on
+    # the middle plateau it may be 0/0 or x/0, and is dropped for 1.0). Where a selected
+    # quotient divides by a vertical edge's zero width, s is past that edge, the quotient is
+    # -inf and max(., 0) gives the reference's 0.
+    above = s > pc
+    numerator = (pd - s) if above else (s - pa)
+    width = (pd - pc) if above else (pb - pa)
+    value = numerator / width if above or s < pb else 1.0
+    return max(value, 0.0)
 
 
 @_jit
@@ -121,7 +144,7 @@ def _capacity(counts: IntArray) -> int:
     return total
 
 
-_BLOCK = 32  # states whose memberships are computed together (fits in L1 with ~40 sets)
+_BLOCK = 64  # states whose memberships are computed together (fits in L1 with ~40 sets)
 
 
 @_jit
@@ -130,11 +153,8 @@ def _block_memberships(states: FloatArray, start: int, count: int, lo: FloatArra
                        mu: FloatArray) -> int:
     """Memberships of states[start:start + count] in every set, into ``mu (S, _BLOCK)``.
 
-    Returns -1, or the index of the first state with a NaN input. Branch-free, so the loop
-    over states vectorises: the reference's branches become selects of the numerator and
-    width, then one division (on the middle plateau it may be 0/0 or x/0, and is dropped for
-    1.0). Where a selected quotient divides by a vertical edge's zero width, s is past that
-    edge, the quotient is -inf and max(., 0) gives the reference's 0.
+    Returns -1, or the index of the first state with a NaN input. Branch-free
+    (:func:`_membership_free`), so the loop over states vectorises.
     """
     for i in range(states.shape[1]):
         nan = False
@@ -151,35 +171,51 @@ def _block_memberships(states: FloatArray, start: int, count: int, lo: FloatArra
         for j in range(offsets[i], offsets[i + 1]):
             pa, pb, pc, pd = quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3]
             for b in range(count):
-                s = xs[i, b]
-                above = s > pc
-                numerator = (pd - s) if above else (s - pa)
-                width = (pd - pc) if above else (pb - pa)
-                value = numerator / width if above or s < pb else 1.0
-                mu[j, b] = max(value, 0.0)
+                mu[j, b] = _membership_free(xs[i, b], pa, pb, pc, pd)
     return -1
 
 
 @_jit
-def _compact(mu: FloatArray, b: int, offsets: IntArray, sets: IntArray, mus: FloatArray,
-             counts: IntArray) -> None:
-    """Each input's non-zero sets of block state ``b`` (as :func:`_fired_sets`). Branch-free:
-    every set is written and the count advances only when mu > 0."""
-    for i in range(counts.shape[0]):
+def _compact(mu: FloatArray, b: int, ints: IntArray, scratch: IntArray,
+             mus: FloatArray) -> bool:
+    """Each input's non-zero sets of block state ``b``, as :func:`_state_sets` writes them
+    into ``scratch`` and ``mus``; False if an input has none (memberships underflowed).
+    Branch-free: every set is written and the count advances only when mu > 0."""
+    n, max_sets = ints[0], ints[2]
+    for i in range(n):
         count = 0
-        first = offsets[i]
-        for j in range(first, offsets[i + 1]):
+        first = ints[4 + i]
+        for j in range(first, ints[5 + i]):
             value = mu[j, b]
-            sets[i, count] = j - first
-            mus[i, count] = value
+            scratch[i * max_sets + count] = j - first
+            mus[i * max_sets + count] = value
             count += value > 0.0
-        counts[i] = count
+        if count == 0:
+            return False
+        scratch[n * max_sets + i] = count
+        scratch[n * max_sets + n + i] = 0
+    return True
 
 
-# Up to this many rules, inference walks every rule for a block of states at once (a loop
-# over states that vectorises, ~1 ns per rule and state), which beats finding the fired rules
-# state by state; above it, only the fired rules are walked, so the cost follows them, not M.
-DENSE_RULES = 32
+# Batched inference walks every rule for a block of states at once (loops over states that
+# vectorise, 0.15 to 0.23 ns per rule, input and state) while that costs less than finding
+# each state's fired rules and walking only those (about 2 ns per set, plus a cost per state
+# that doubles or so with each input, whatever M is). The per-state costs below were
+# measured on both walks (benchmarks/bench_scaling.py prints them around the switch); with
+# the switch where they cross, going past it costs no more than staying (no cliff).
+_DENSE_NS_PER_RULE_INPUT = (0.15, 0.15, 0.15, 0.23)  # index: N (more: the last); 2 fused
+_SPARSE_NS_PER_SET = 2.0
+_SPARSE_NS_BY_INPUTS = (0.0, 20.0, 40.0, 100.0, 180.0, 420.0)  # index: N
+
+
+def walks_every_rule(n_rules: int, n_inputs: int, n_sets: int) -> bool:
+    """Whether batched inference walks every rule (else only each state's fired rules):
+    the estimated cheaper one for M rules, N inputs and S sets in all."""
+    last = len(_SPARSE_NS_BY_INPUTS) - 1
+    per_state = _SPARSE_NS_BY_INPUTS[min(n_inputs, last)] * 2.3 ** max(0, n_inputs - last)
+    sparse = _SPARSE_NS_PER_SET * n_sets + per_state
+    dense = _DENSE_NS_PER_RULE_INPUT[min(n_inputs, len(_DENSE_NS_PER_RULE_INPUT) - 1)]
+    return dense * n_rules * n_inputs <= sparse
 
 
 @_jit
@@ -190,32 +226,39 @@ def _within(value: float, low: float, high: float) -> float:
 
 
 @_jit
-def _dense_block(start: int, count: int, mu: FloatArray, grid: IntArray, table: IntArray,
-                 singletons: FloatArray, alpha: FloatArray, numerators: FloatArray,
-                 denominators: FloatArray, out: FloatArray) -> None:
+def _dense_block(count: int, mu: FloatArray, grid: IntArray, values: FloatArray,
+                 alpha: FloatArray, numerators: FloatArray, denominators: FloatArray) -> None:
     """Eq. 2-3 over every rule for a block of states: ``grid (M, N)`` holds each rule's
-    rows of ``mu``. Each state's sums run over the rules in increasing order, as the
-    reference's do. ``denominators[:count]`` keeps each state's sum(alpha)."""
+    rows of ``mu``, ``values (P, M)`` each rule's singleton c_m. Each state's sums run over
+    the rules in increasing order, as the reference's do, into ``numerators[:, :count]``
+    and ``denominators[:count]``. Each rule's min, sum(alpha) and sum(alpha * c) are one
+    loop over the states, so they stay in registers."""
     numerators[:, :count] = 0.0
     denominators[:count] = 0.0
+    n = grid.shape[1]
+    population = values.shape[0]
     for m in range(grid.shape[0]):
         first = grid[m, 0]
+        if n <= 2 and population == 1:  # the common case, fused into one loop
+            second = grid[m, n - 1]  # the first row again when n == 1: min(a, a) is a
+            value = values[0, m]
+            for b in range(count):
+                a = min(mu[first, b], mu[second, b])
+                denominators[b] += a
+                numerators[0, b] += a * value
+            continue
         for b in range(count):
             alpha[b] = mu[first, b]
-        for i in range(1, grid.shape[1]):
+        for i in range(1, n):
             row = grid[m, i]
             for b in range(count):
                 alpha[b] = min(alpha[b], mu[row, b])
         for b in range(count):
             denominators[b] += alpha[b]
-        for p in range(table.shape[0]):
-            value = singletons[table[p, m]]
+        for p in range(population):
+            value = values[p, m]
             for b in range(count):
                 numerators[p, b] += alpha[b] * value
-    low, high = singletons.min(), singletons.max()
-    for p in range(table.shape[0]):
-        for b in range(count):
-            out[p, start + b] = _within(numerators[p, b] / denominators[b], low, high)
 
 
 @_jit
@@ -233,109 +276,222 @@ def _first_zero(denominators: FloatArray, count: int, start: int) -> int:
 
 
 @_jit
-def _sparse_block(start: int, count: int, mu: FloatArray, offsets: IntArray,
-                  strides: IntArray, max_sets: int, table: IntArray, singletons: FloatArray,
-                  numerators: FloatArray, out: FloatArray) -> int:
-    """Eq. 2-3 over only the fired rules, state by state, for a block of states. Returns -1,
-    or the first state where no rule fires (see :func:`infer`)."""
-    n = strides.shape[0]
-    population = table.shape[0]
-    sets, mus, counts = _work(n, max_sets)
-    rules = np.empty(64, np.intp)  # grown below when more rules fire
-    alphas = np.empty(64)
-    low, high = singletons.min(), singletons.max()
-    for b in range(count):
-        _compact(mu, b, offsets, sets, mus, counts)
-        capacity = _capacity(counts)
-        if capacity > rules.shape[0]:
-            rules = np.empty(capacity, np.intp)
-            alphas = np.empty(capacity)
-        fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
-        numerators[:, 0] = 0.0
-        denominator = 0.0
-        for a in range(fired):
-            rule = rules[a]
-            alpha = alphas[a]
-            denominator += alpha
-            for p in range(population):
-                numerators[p, 0] += alpha * singletons[table[p, rule]]
-        if denominator == 0.0:
-            return start + b
-        for p in range(population):
-            out[p, start + b] = _within(numerators[p, 0] / denominator, low, high)
-    return -1
+def _unpack(floats: FloatArray, ints: IntArray) -> tuple[FloatArray, FloatArray, FloatArray,
+                                                         FloatArray, int, IntArray, IntArray,
+                                                         IntArray]:
+    # Views of Layout.floats / Layout.ints: calls pass two arrays instead of eight, because
+    # unboxing each argument is a good part of a small call.
+    n, sets, max_sets, dense_rules = ints[0], ints[1], ints[2], ints[3]
+    quads = floats[2 * n : 2 * n + 4 * sets].reshape((sets, 4))
+    grid = ints[4 + 2 * n + 1 : 4 + 2 * n + 1 + dense_rules * n].reshape((dense_rules, n))
+    return (floats[:n], floats[n : 2 * n], quads, floats[2 * n + 4 * sets :], max_sets,
+            ints[4 : 5 + n], ints[5 + n : 5 + 2 * n], grid)
 
 
 @_jit
-def infer(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: FloatArray,
-          offsets: IntArray, strides: IntArray, max_sets: int, grid: IntArray,
-          table: IntArray, singletons: FloatArray, out: FloatArray) -> int:
-    """Eq. 3 for ``states (B, N)`` and consequent tables ``table (P, M)``: writes ``out (P, B)``.
+def infer(states: FloatArray, floats: FloatArray, ints: IntArray, tables: IntArray,
+          out: FloatArray, start: int, stop: int, dense: bool) -> int:
+    """Eq. 3 for ``states[start:stop]`` (of ``states (B, N)``) and consequent tables
+    ``tables (P, M)``: writes ``out[p * B + b]`` of ``out (P * B,)``, i.e. (P, B) flat.
 
-    ``grid (M, N)``, each rule's sets as rows of ``quads``, walks every rule; an empty
-    ``grid (0, N)`` walks only the fired rules (see DENSE_RULES).
-    Returns -1, or the index of the first state whose output is undefined (``out`` is then
-    partial): a state with a NaN input, or one where every activation is 0. Validated
-    partitions cover their ranges, so the latter happens only when the memberships underflow
-    (sets thousands of orders of magnitude apart) -- the caller raises rather than return
-    the NaN that 0 / 0 would give.
+    ``floats``/``ints`` are :class:`Layout`'s packed arrays. ``dense`` walks every rule (the
+    layout must hold the rule grid: :func:`walks_every_rule`); otherwise only the fired
+    rules are walked. Returns -1, or the index of the first state whose output is undefined
+    (``out`` is then partial): a state with a NaN input, or one where every activation is 0.
+    Validated partitions cover their ranges, so the latter happens only when the memberships
+    underflow (sets thousands of orders of magnitude apart) -- the caller raises rather than
+    return the NaN that 0 / 0 would give.
     """
+    if stop - start <= SMALL_BATCH:
+        return _infer_small(states, floats, ints, tables, out, start, stop)
+    return _infer_blocks(states, floats, ints, tables, out, start, stop, dense)
+
+
+@_jit
+def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables: IntArray,
+                  out: FloatArray, start: int, stop: int, dense: bool) -> int:
+    # infer() block by block (_BLOCK states share the memberships' loops).
+    lo, hi, quads, singletons, max_sets, offsets, _, grid = _unpack(floats, ints)
     n = states.shape[1]
-    dense = grid.shape[0] > 0
-    xs = np.empty((n, _BLOCK))
-    mu = np.empty((quads.shape[0], _BLOCK))
-    alpha = np.empty(_BLOCK)
-    numerators = np.empty((table.shape[0], _BLOCK))
-    denominators = np.empty(_BLOCK)
-    for start in range(0, states.shape[0], _BLOCK):
-        count = min(_BLOCK, states.shape[0] - start)
-        nan_state = _block_memberships(states, start, count, lo, hi, quads, offsets, xs, mu)
+    population = tables.shape[0]
+    batch = states.shape[0]
+    low, high = singletons.min(), singletons.max()
+    dense = dense and grid.shape[0] > 0
+    rules = grid.shape[0] if dense else 0
+    # One allocation for the work arrays (a small call would otherwise spend much of its
+    # time allocating): xs (N, _BLOCK), mu (S, _BLOCK), alpha, denominators (_BLOCK,),
+    # numerators (P, _BLOCK), values (P, M) and mus (N * max L_i,).
+    n_sets = quads.shape[0]
+    work = np.empty((n + n_sets + 2 + population) * _BLOCK + population * rules
+                       + n * max_sets)
+    at = (n + n_sets) * _BLOCK
+    xs = work[: n * _BLOCK].reshape((n, _BLOCK))
+    mu = work[n * _BLOCK : at].reshape((n_sets, _BLOCK))
+    alpha = work[at : at + _BLOCK]
+    denominators = work[at + _BLOCK : at + 2 * _BLOCK]
+    at += 2 * _BLOCK
+    numerators = work[at : at + population * _BLOCK].reshape((population, _BLOCK))
+    at += population * _BLOCK
+    values = work[at : at + population * rules].reshape((population, rules))
+    mus = work[at + population * rules :]
+    for p in range(population):  # each rule's c_m, looked up once rather than once a block
+        for m in range(rules):
+            values[p, m] = singletons[tables[p, m]]
+    scratch = np.empty(n * max_sets + 2 * n, np.intp)
+    for first in range(start, stop, _BLOCK):
+        count = min(_BLOCK, stop - first)
+        nan_state = _block_memberships(states, first, count, lo, hi, quads, offsets, xs, mu)
         if nan_state >= 0:
             return nan_state
         if dense:
-            _dense_block(start, count, mu, grid, table, singletons, alpha, numerators,
-                         denominators, out)
-            failed = _first_zero(denominators, count, start)
+            _dense_block(count, mu, grid, values, alpha, numerators, denominators)
         else:
-            failed = _sparse_block(start, count, mu, offsets, strides, max_sets, table,
-                                   singletons, numerators, out)
+            for b in range(count):  # eq. 2-3 over each state's fired rules
+                denominators[b] = 0.0  # no rule fires (see _first_zero)
+                if _compact(mu, b, ints, scratch, mus):
+                    for p in range(population):
+                        numerators[p, b], denominators[b] = _state_sums(
+                            floats, ints, scratch, mus, tables, p)
+        failed = _first_zero(denominators, count, first)
         if failed >= 0:
             return failed
+        for p in range(population):
+            for b in range(count):
+                out[p * batch + first + b] = _within(numerators[p, b] / denominators[b], low,
+                                                     high)
     return -1
 
 
 @_jit
-def _unpack(floats: FloatArray, ints: IntArray) -> tuple[FloatArray, FloatArray, FloatArray,
-                                                         FloatArray, int, IntArray, IntArray]:
-    # Views of Layout.floats / Layout.ints: one-state calls pass two arrays instead of seven,
-    # because numba's per-argument dispatch cost is most of a one-state call.
-    n, sets = ints[0], ints[1]
-    quads = floats[2 * n : 2 * n + 4 * sets].reshape((sets, 4))
-    return (floats[:n], floats[n : 2 * n], quads, floats[2 * n + 4 * sets :], ints[2],
-            ints[3 : 4 + n], ints[4 + n : 4 + 2 * n])
+def _state_sets(floats: FloatArray, ints: IntArray, states: FloatArray, b: int,
+                scratch: IntArray, mus: FloatArray) -> int:
+    """Each input's fired sets for ``states[b]``, reading the packed layout in place (no
+    views: at a hundred nanoseconds a state, making them would be a good part of it).
+
+    Writes ``scratch``: sets (N, max L_i), counts (N,), digits (N,) zeroed; and ``mus``
+    (N, max L_i), both flat. Returns -1, or 0 if an input is NaN, 1 if an input has no
+    fired set (every membership underflowed: no rule fires).
+    """
+    n, max_sets = ints[0], ints[2]
+    quads = 2 * n  # where the quadruples start in floats
+    offsets = 4  # where the offsets start in ints
+    for i in range(n):
+        s = states[b, i]
+        if s != s:
+            return 0
+        s = min(max(s, floats[i]), floats[n + i])  # clipped, as np.clip does
+        count = 0
+        first = ints[offsets + i]
+        for j in range(first, ints[offsets + i + 1]):
+            q = quads + 4 * j
+            mu = _membership_free(s, floats[q], floats[q + 1], floats[q + 2], floats[q + 3])
+            scratch[i * max_sets + count] = j - first
+            mus[i * max_sets + count] = mu
+            count += mu > 0.0  # kept only if non-zero, without a branch to mispredict
+        if count == 0:
+            return 1
+        scratch[n * max_sets + i] = count
+        scratch[n * max_sets + n + i] = 0
+    return -1
 
 
 @_jit
-def infer_one(floats: FloatArray, ints: IntArray, table: IntArray, state: FloatArray) -> float:
-    """Eq. 3 for one ``state (N,)`` with one ``table (M,)``; NaN if an input is NaN or no
-    rule fires (every activation underflowed to 0: see :func:`infer`).
+def _state_sums(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: FloatArray,
+                tables: IntArray, p: int) -> tuple[float, float]:
+    """sum(alpha_m * c_m) and sum(alpha_m) over the fired rules (eq. 2-3) of the state that
+    :func:`_state_sets` wrote, with consequents ``tables[p]``.
 
-    ``floats``/``ints`` are :class:`Layout`'s packed arrays."""
-    lo, hi, quads, singletons, max_sets, offsets, strides = _unpack(floats, ints)
-    sets, mus, counts = _work(state.shape[0], max_sets)
-    if _fired_sets(state.reshape((1, state.shape[0])), 0, lo, hi, quads, offsets, sets, mus,
-                   counts) >= 0:
-        return np.nan
-    capacity = _capacity(counts)
-    rules = np.empty(capacity, np.intp)
-    alphas = np.empty(capacity)
-    fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
+    The fired rules are enumerated like an odometer over each input's fired sets, last
+    input fastest, so in increasing rule order (eq. 1) -- the reference's order of sums.
+    """
+    n, max_sets = ints[0], ints[2]
+    singletons = 2 * n + 4 * ints[1]
+    counts = n * max_sets
+    digits = counts + n
+    strides = 4 + n + 1
     numerator = 0.0
     denominator = 0.0
-    for a in range(fired):
-        numerator += alphas[a] * singletons[table[rules[a]]]
-        denominator += alphas[a]
-    return _within(numerator / denominator, singletons.min(), singletons.max())
+    if n == 2:  # the common case, without the odometer's bookkeeping
+        for a in range(scratch[counts]):
+            rule = scratch[a] * ints[strides]
+            first = mus[a]
+            for b in range(max_sets, max_sets + scratch[counts + 1]):
+                alpha = min(first, mus[b])  # eq. 2
+                numerator += alpha * floats[singletons + tables[p, rule + scratch[b]]]
+                denominator += alpha
+        return numerator, denominator
+    while True:
+        rule = 0
+        alpha = np.inf
+        for i in range(n):
+            slot = i * max_sets + scratch[digits + i]
+            rule += scratch[slot] * ints[strides + i]
+            alpha = min(alpha, mus[slot])  # eq. 2
+        numerator += alpha * floats[singletons + tables[p, rule]]
+        denominator += alpha
+        i = n - 1
+        while i >= 0:
+            scratch[digits + i] += 1
+            if scratch[digits + i] < scratch[counts + i]:
+                break
+            scratch[digits + i] = 0
+            i -= 1
+        if i < 0:
+            return numerator, denominator
+
+
+@_jit
+def _singleton_bounds(floats: FloatArray, ints: IntArray) -> tuple[float, float]:
+    first = 2 * ints[0] + 4 * ints[1]
+    low = high = floats[first]
+    for k in range(first + 1, floats.shape[0]):
+        low = min(low, floats[k])
+        high = max(high, floats[k])
+    return low, high
+
+
+# Batches up to this size are inferred state by state (_state_sets, _state_sums): the block
+# walks' set-up costs more than they save on a few states.
+SMALL_BATCH = 8
+
+
+@_jit
+def _infer_small(states: FloatArray, floats: FloatArray, ints: IntArray, tables: IntArray,
+                 out: FloatArray, start: int, stop: int) -> int:
+    # infer() for a few states (see SMALL_BATCH).
+    n, max_sets = ints[0], ints[2]
+    scratch = np.empty(n * max_sets + 2 * n, np.intp)
+    mus = np.empty(n * max_sets)
+    low, high = _singleton_bounds(floats, ints)
+    batch = states.shape[0]
+    for b in range(start, stop):
+        if _state_sets(floats, ints, states, b, scratch, mus) >= 0:
+            return b
+        for p in range(tables.shape[0]):
+            numerator, denominator = _state_sums(floats, ints, scratch, mus, tables, p)
+            out[p * batch + b] = _within(numerator / denominator, low, high)
+    return -1
+
+
+@_jit
+def infer_one(floats: FloatArray, ints: IntArray, state: FloatArray) -> float:
+    """Eq. 3 for one ``state (N,)``; NaN if an input is NaN or no rule fires (every
+    activation underflowed to 0: see :func:`infer`).
+
+    ``floats`` is :class:`Layout`'s, ``ints`` its ints followed by the consequents ``(M,)``
+    (three arguments to unbox rather than four).
+    """
+    n, max_sets = ints[0], ints[2]
+    scratch = np.empty(n * max_sets + 2 * n, np.intp)
+    mus = np.empty(n * max_sets)
+    if _state_sets(floats, ints, state.reshape((1, n)), 0, scratch, mus) >= 0:
+        return np.nan
+    table = 5 + 2 * n + ints[3] * n  # where the consequents start
+    rules = ints.shape[0] - table
+    numerator, denominator = _state_sums(floats, ints, scratch, mus,
+                                         ints[table:].reshape((1, rules)), 0)
+    low, high = _singleton_bounds(floats, ints)
+    return _within(numerator / denominator, low, high)
 
 
 @_jit
@@ -344,7 +500,7 @@ def active_one(floats: FloatArray, ints: IntArray,
     """The fired rules of one ``state (N,)`` in increasing order and their activations
     (eq. 2): ``(rules (A,), alpha (A,), nan_input)``, ``nan_input`` -1 unless an input is NaN.
     """
-    lo, hi, quads, _, max_sets, offsets, strides = _unpack(floats, ints)
+    lo, hi, quads, _, max_sets, offsets, strides, _ = _unpack(floats, ints)
     sets, mus, counts = _work(state.shape[0], max_sets)
     nan_input = _fired_sets(state.reshape((1, state.shape[0])), 0, lo, hi, quads, offsets,
                             sets, mus, counts)
@@ -359,10 +515,10 @@ def active_one(floats: FloatArray, ints: IntArray,
 
 
 @_jit
-def activations(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: FloatArray,
-                offsets: IntArray, strides: IntArray, max_sets: int, out: FloatArray) -> int:
+def activations(states: FloatArray, floats: FloatArray, ints: IntArray, out: FloatArray) -> int:
     """Dense eq. 2 for ``states (B, N)`` into a zeroed ``out (B, M)``; returns -1 or the
     first state with a NaN input."""
+    lo, hi, quads, _, max_sets, offsets, strides, _ = _unpack(floats, ints)
     sets, mus, counts = _work(states.shape[1], max_sets)
     rules = np.empty(16, np.intp)
     alphas = np.empty(16)
@@ -379,19 +535,46 @@ def activations(states: FloatArray, lo: FloatArray, hi: FloatArray, quads: Float
     return -1
 
 
-class Layout(NamedTuple):
-    """A controller's sets laid out for the kernels (S = sum L_i sets in all)."""
+def _array(dtype: Any, ndim: int) -> Any:
+    return numba.types.Array(dtype, ndim, "C")
 
-    lo: FloatArray  # (N,) range lows
-    hi: FloatArray  # (N,) range highs
-    quads: FloatArray  # (S, 4) every input's sets, input after input
-    offsets: IntArray  # (N + 1,) input i's sets are quads[offsets[i]:offsets[i + 1]]
-    strides: IntArray  # (N,) rule index = sum(set index * stride), last input fastest
-    max_sets: int  # max L_i
-    grid: IntArray  # (M, N) each rule's rows of quads if M <= DENSE_RULES, else (0, N)
-    singletons: FloatArray  # (K,)
-    floats: FloatArray  # lo, hi, quads, singletons in one array (for one-state kernels)
-    ints: IntArray  # N, S, max_sets, offsets, strides in one array (for one-state kernels)
+
+_F1, _F2 = _array(numba.types.float64, 1), _array(numba.types.float64, 2)
+_STATES = numba.types.Array(numba.types.float64, 2, "A")  # any strides: no copy needed
+_I1, _I2 = _array(numba.types.intp, 1), _array(numba.types.intp, 2)
+# The one signature each kernel is used with (writable C arrays): entry() compiles it, or
+# loads it from numba's cache, ahead of the first call.
+SIGNATURES: dict[str, tuple[Any, ...]] = {
+    "infer": (_STATES, _F1, _I1, _I2, _F1, numba.types.intp, numba.types.intp,
+              numba.types.boolean),
+    "infer_one": (_F1, _I1, _F1),
+    "active_one": (_F1, _I1, _F1),
+    "activations": (_F2, _F1, _I1, _F2),
+}
+
+
+def entry(name: str) -> Callable[..., Any]:
+    """Kernel ``name``'s compiled entry point for its one signature (:data:`SIGNATURES`).
+
+    Calling it skips numba's dispatch (finding the argument types and the matching
+    compilation), about a third of a one-state call. It trusts its arguments' types: callers
+    pass exactly the signature's arrays (float64 or intp, C-contiguous) and Python
+    ints/bools, never anything else.
+    """
+    dispatcher = globals()[name]
+    return cast(Callable[..., Any], dispatcher.compile(SIGNATURES[name]))
+
+
+class Layout(NamedTuple):
+    """A controller's sets laid out for the kernels, packed in two arrays so that a call
+    unboxes two arguments instead of eight (S = sum L_i sets in all, M rules)."""
+
+    floats: FloatArray  # lo (N,), hi (N,), quads (S, 4) input after input, singletons (K,)
+    # N, S, max L_i, M if the grid is kept (else 0), offsets (N + 1,): input i's sets are
+    # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
+    # last input fastest; grid (M, N): each rule's rows of quads, if walks_every_rule
+    ints: IntArray
+    dense: bool  # whether batched inference walks every rule (walks_every_rule)
 
 
 def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: IntArray,
@@ -404,14 +587,11 @@ def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: In
     for i in range(len(sizes) - 2, -1, -1):
         strides[i] = strides[i + 1] * sizes[i + 1]
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
-    small = rule_grid.shape[0] <= DENSE_RULES
-    grid = rule_grid + offsets[:-1] if small else np.empty((0, len(sizes)), dtype=np.intp)
-    lo = np.array(ranges[:, 0], dtype=np.float64)
-    hi = np.array(ranges[:, 1], dtype=np.float64)
-    quads = np.array(np.concatenate(quadruples), dtype=np.float64)
-    values = np.array(singletons, dtype=np.float64)
-    header = np.array([len(sizes), len(quads), max(sizes)], dtype=np.intp)
-    return Layout(lo=lo, hi=hi, quads=quads, offsets=offsets, strides=strides,
-                  max_sets=max(sizes), grid=np.array(grid, dtype=np.intp), singletons=values,
-                  floats=np.concatenate([lo, hi, quads.ravel(), values]),
-                  ints=np.concatenate([header, offsets, strides]).astype(np.intp))
+    dense = walks_every_rule(rule_grid.shape[0], len(sizes), sum(sizes))
+    grid = rule_grid + offsets[:-1] if dense else np.empty((0, len(sizes)), dtype=np.intp)
+    quads = np.concatenate(quadruples).astype(np.float64)
+    header = [len(sizes), len(quads), max(sizes), grid.shape[0]]
+    floats = np.concatenate([ranges[:, 0], ranges[:, 1], quads.ravel(), singletons])
+    ints = np.concatenate([header, offsets, strides, grid.ravel()])
+    return Layout(floats=np.array(floats, dtype=np.float64), ints=np.array(ints, dtype=np.intp),
+                  dense=dense)

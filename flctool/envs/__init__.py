@@ -26,6 +26,7 @@ class EnvFactory(Protocol):
 
 ENVIRONMENTS: Registry[EnvFactory] = Registry("environment adapter")
 ENVIRONMENTS.register("ballchase-sim", "flctool.envs.ballchase:BallchaseSim")
+ENVIRONMENTS.register("pitch", "flctool.envs.pitch:PitchSim")
 ENVIRONMENTS.register("gymnasium", "flctool.envs.gym_adapter:GymnasiumEnv")
 ENVIRONMENTS.register("robot-link", "flctool.envs.robot_link:RobotLinkEnv")
 

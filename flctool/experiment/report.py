@@ -70,14 +70,14 @@ def read_records(experiment: Experiment) -> list[RunRecord]:
         if not metrics:
             raise RunDirError(f"{directory}: the run has no finished generation",
                               hint="run the experiment to the end")
-        selection = run.info().get("selection")
-        selection = selection if isinstance(selection, dict) else {}
+        # training and model selection (validation episodes), as the run recorded them
+        usage = run.summary().usage
         records.append(RunRecord(
             learner, seed, np.array([m.mean for m in metrics]),
             np.array([m.std for m in metrics]),
             np.cumsum([m.episodes for m in metrics]).astype(np.float64),
             int(sum(m.episodes for m in metrics)), int(sum(m.steps for m in metrics)),
-            int(selection.get("episodes", 0)), int(selection.get("steps", 0)),
+            int(usage.get("selection_episodes", 0)), int(usage.get("selection_steps", 0)),
             read_heldout(directory)))
     return records
 
@@ -354,8 +354,9 @@ def _comparison_table(summary: dict[str, Any]) -> list[str]:
 def _cost_table(summary: dict[str, Any]) -> list[str]:
     lines = ["## What it cost", "",
              "Environment episodes and steps summed over every run of a learner: training, "
-             "the run's own choice of best.yaml (selection; 0 where runs take the last "
-             "generation's best), and the held-out test.", "",
+             "the run's own choice of best.yaml (model selection: its candidates re-run on "
+             "validation episodes; 0 with `selection.candidates=0`), and the held-out test. "
+             "'Largest run' is the most episodes one run used, training and selection.", "",
              "| learner | training episodes | training steps | selection episodes | "
              "selection steps | largest run (episodes) | held-out episodes | held-out steps |",
              "|---|---:|---:|---:|---:|---:|---:|---:|"]

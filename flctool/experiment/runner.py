@@ -33,7 +33,15 @@ from flctool.compile import compile_behaviour
 from flctool.envs import make_env
 from flctool.errors import RunDirError
 from flctool.rollout import evaluate, evaluation_seeds
-from flctool.runs import BEHAVIOUR_FILE, BEST_FILE, Run, create_run, open_run, resolve_behaviour
+from flctool.runs import (
+    BEHAVIOUR_FILE,
+    BEST_FILE,
+    CHECKPOINT_DIR,
+    Run,
+    create_run,
+    open_run,
+    resolve_behaviour,
+)
 from flctool.spec import Behaviour, behaviour_to_yaml, load_behaviour
 from flctool.spec.learning import LEARNER_NAMES
 
@@ -124,8 +132,11 @@ def run_job(job: Job, directory: Path) -> JobOutcome:
     """Train (or resume) the job's run in ``directory`` and test its best controller on the
     held-out episodes; a job already finished there is only read back."""
     heldout_path = directory / HELDOUT_FILE
-    run = (open_run(directory) if (directory / BEHAVIOUR_FILE).is_file()
-           else create_run(job.behaviour, directory))
+    if (directory / BEHAVIOUR_FILE).is_file():
+        run = open_run(directory)
+    else:
+        _clear_unstarted(directory)
+        run = create_run(job.behaviour, directory)
     if heldout_path.is_file() and run.info().get("status") == "finished":
         return JobOutcome(job.learner, job.seed, read_heldout(directory)["success_rate"], True)
     if run.info().get("status") != "finished":
@@ -133,6 +144,19 @@ def run_job(job: Job, directory: Path) -> JobOutcome:
     result = heldout_evaluation(run, job.heldout_seed, job.heldout_episodes)
     write_text_atomic(heldout_path, json.dumps(result, indent=2) + "\n")
     return JobOutcome(job.learner, job.seed, result["success_rate"], False)
+
+
+def _clear_unstarted(directory: Path) -> None:
+    """Remove what a kill inside :func:`create_run` leaves (an empty checkpoints folder, a
+    temporary file) so the run can be created; anything else stays, and create_run refuses
+    the folder with its own message."""
+    if not directory.is_dir():
+        return
+    for entry in directory.iterdir():
+        if entry.name == CHECKPOINT_DIR and entry.is_dir() and not any(entry.iterdir()):
+            entry.rmdir()
+        elif entry.is_file() and entry.name.startswith(".") and entry.name.endswith(".tmp"):
+            entry.unlink()
 
 
 def heldout_evaluation(run: Run, seed: int, episodes: int) -> dict[str, Any]:
@@ -238,6 +262,10 @@ class Executor(ABC):
 def prepare_experiment(behaviour: Behaviour, plan: ExperimentPlan, path: Path) -> Experiment:
     """A new experiment directory, or the existing one at ``path`` if it holds the same plan
     (then running it continues where it stopped)."""
+    if behaviour.learning.stop.seconds is not None:
+        raise RunDirError("learning.stop.seconds: a time budget ends runs at different points "
+                          "on different machines, so the experiment would not reproduce",
+                          hint="budget episodes or steps instead (stop.episodes, stop.steps)")
     text = _behaviour_text(behaviour)
     plan_file = path / PLAN_FILE
     if plan_file.is_file():

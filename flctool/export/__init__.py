@@ -21,6 +21,7 @@ EXPORTERS.register("fll", "flctool.export.fll:FllExporter")
 EXPORTERS.register("fcl", "flctool.export.fcl:FclExporter")
 EXPORTERS.register("fis", "flctool.export.fis:FisExporter")
 EXPORTERS.register("c", "flctool.export.c_source:CExporter")
+EXPORTERS.register("bundle", "flctool.export.bundle:BundleExporter")
 
 IMPORTERS: Registry[type[Importer]] = Registry("import format")
 IMPORTERS.register("fll", "flctool.export.fll:FllImporter")

@@ -17,6 +17,7 @@ import numpy as np
 
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, header_lines, number, require_deployable
+from flctool.export.float_error import check_float_error
 from flctool.spec import Behaviour
 from flctool.spec.base import identifier
 from flctool.spec.checks import uncovered_gap
@@ -83,6 +84,18 @@ class CExporter(Exporter):
         if len(set(enums)) != len(enums):
             raise ExportError("two inputs differ only in case, so their C names collide",
                               hint="rename one of them in the behaviour file")
+        commands = [f"{macro}CMD_{name.upper()}" for name in behaviour.output.commands]
+        if len(set(commands)) != len(commands):
+            raise ExportError("two commands differ only in case, so their C names collide",
+                              hint="rename one of them in the behaviour file")
+        values = list(behaviour.output.commands.values())
+        accuracy = []
+        if self.options.single:
+            error, bound, count = check_float_error(behaviour)
+            accuracy = [f" * float: the largest difference from flctool's (64-bit) output, "
+                        f"measured at export on {count} states", f" * (a grid over every "
+                        f"range, its ends and every set corner), is {error:.3g}; the "
+                        f"documented bound is {bound:.3g}."]
         about = header_lines(behaviour, self.options.provenance)
         lines = ["/*", *(f" * {line}" for line in about), " *",
                  f" * A fuzzy logic controller: {len(behaviour.inputs)} inputs, "
@@ -97,14 +110,30 @@ class CExporter(Exporter):
             lines.append(f" *   state[{i}] {name} in [{number(variable.range[0])}, "
                          f"{number(variable.range[1])}]{unit}")
         unit = f" ({behaviour.output.unit})" if behaviour.output.unit else ""
-        lines += [f" * The output is {behaviour.output.name}{unit}. Compile without -ffast-math"
-                  ": it would reorder the sums.", " */",
+        lines += [f" * The output is {behaviour.output.name}{unit}, within [{macro}OUTPUT_MIN, "
+                  f"{macro}OUTPUT_MAX]. The source", " * refuses to compile with -ffast-math: "
+                  "it would reorder the sums and drop the NaN checks.", *accuracy, " */",
                   f"#ifndef {guard}", f"#define {guard}", "",
-                  f"#define {macro}N_INPUTS {len(behaviour.inputs)}", "",
+                  f"#define {macro}N_INPUTS {len(behaviour.inputs)}",
+                  f"#define {macro}N_COMMANDS {len(values)}",
+                  "/* The smallest and largest singleton: the output never leaves them. */",
+                  f"#define {macro}OUTPUT_MIN ({self.literal(min(values))})",
+                  f"#define {macro}OUTPUT_MAX ({self.literal(max(values))})", "",
+                  "/* The inputs' places in the state. */",
                   "enum {", *(f"    {e} = {i}," for i, e in enumerate(enums)), "};", "",
+                  "/* The commands' indices, as <prefix>command returns them, with their "
+                  "singletons. */",
+                  "enum {", *(f"    {e} = {k}, /* {self.literal(v)} */"
+                              for k, (e, v) in enumerate(zip(commands, values, strict=True))),
+                  "};", "",
                   "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
                   "/* The controller's output for one state (paper eq. 1-3). */",
                   f"{real} {prefix}output(const {real} state[{macro}N_INPUTS]);", "",
+                  "/* The index of the command whose singleton is nearest that output (of "
+                  "two equally",
+                  "   near ones, the smaller singleton), as flctool's 'nearest' action picks "
+                  "it; -1 for a NaN output. */",
+                  f"int {prefix}command(const {real} state[{macro}N_INPUTS]);", "",
                   "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */"]
         return "\n".join(lines) + "\n"
 
@@ -127,6 +156,9 @@ class CExporter(Exporter):
         ctype = ("unsigned char" if k <= 256 else "unsigned short" if k <= 65536
                  else "unsigned int")
         lines = [f'#include "{include}"', ""] if include else []
+        lines += ["#if defined(__FAST_MATH__)",
+                  '#error "compile without -ffast-math: it reorders the sums of eq. 3 and '
+                  'removes the NaN checks"', "#endif", ""]
         lines += [
             f"#define {macro}N_SETS {first[-1]}",
             f"#define {macro}N_RULES {behaviour.rule_count}L", "",
@@ -243,4 +275,22 @@ static {real} {prefix}membership({real} s, const {real} q[4])
     if (weighted < {prefix}lowest) return {prefix}lowest;
     if (weighted > {prefix}highest) return {prefix}highest;
     return weighted;
+}}
+
+int {prefix}command(const {real} state[{macro}N_INPUTS])
+{{
+    {real} out = {prefix}output(state), gap = {zero}, d;
+    int best = -1, k;
+    if (out != out) return -1;
+    for (k = 0; k < (int)(sizeof {prefix}singletons / sizeof {prefix}singletons[0]); ++k) {{
+        d = out - {prefix}singletons[k];
+        if (d < {zero}) d = -d;
+        /* on a tie, the smaller singleton, as flctool's gymnasium adapter picks */
+        if (best < 0 || d < gap
+            || (d == gap && {prefix}singletons[k] < {prefix}singletons[best])) {{
+            best = k;
+            gap = d;
+        }}
+    }}
+    return best;
 }}""".splitlines()

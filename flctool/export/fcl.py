@@ -40,6 +40,7 @@ from flctool.export.imported import (
     quad_from_points,
     span,
     unsupported,
+    zero_order_constant,
 )
 from flctool.spec import Behaviour
 from flctool.spec.base import identifier
@@ -163,7 +164,7 @@ _TOKEN = re.compile(r"""
     (?P<space>\s+) | (?P<comment>\(\*.*?\*\)|//[^\n]*|/\*.*?\*/)
   | (?P<number>[+-]?(\d(_?\d)*(\.(?!\.)(\d(_?\d)*)?)?|\.\d(_?\d)*)([eE][+-]?\d(_?\d)*)?)
   | (?P<name>[A-Za-z_][A-Za-z0-9_]*)
-  | (?P<symbol>:=|\.\.|[:;(),])
+  | (?P<symbol>:=|\.\.|[:;(),|])
 """, re.VERBOSE | re.DOTALL)
 
 
@@ -360,6 +361,17 @@ class _FclParser:
             raise self.fail(kind, f"a term of height {values[n]!r}: flctool's sets reach 1")
         return fuzzylite_quad(kind.text, values[:n], self.file, kind.line)
 
+    def fuzzylite_output(self, term: Token) -> float:
+        """fuzzylite's ``Constant c`` or zero-order ``Linear 0 ... 0 c`` output term."""
+        kind = self.take()
+        numbers: list[float] = []
+        while self.peek().kind == "number" and len(numbers) <= len(self.input_names):
+            numbers.append(self.number())
+        if self.peek().word != ";":
+            numbers = []  # not numbers only: refused below as not a constant
+        return zero_order_constant(kind.text, numbers, len(self.input_names), self.file,
+                                   kind.line, term.text)
+
     def points(self, term: Token) -> list[tuple[float, float]]:
         points = []
         while self.peek().word == "(":
@@ -396,11 +408,14 @@ class _FclParser:
             if key.word == "TERM":
                 term = self.name()
                 self.expect(":=")
-                if self.peek().kind != "number":
+                if self.peek().kind == "name":  # fuzzylite's syntax: Constant c, Linear ...
+                    value = self.fuzzylite_output(term)
+                elif self.peek().kind != "number":
                     raise self.fail(term, f"output term '{term.text}' is not a singleton: "
                                     "a Mamdani output set cannot be expressed (flctool's "
                                     "commands are singletons)", "write TERM name := value;")
-                value = self.number()
+                else:
+                    value = self.number()
                 self.expect(";")
                 self.result.commands.append(ImportedCommand(term.text, value, term.line))
             elif key.word == "METHOD":
@@ -485,9 +500,12 @@ class _FclParser:
                 raise self.fail(end, f"a rule weight of {weight!r}: flctool's rules all weigh 1")
             end = self.take()
         if end.word == ",":
-            raise self.fail(end, "a rule with several conclusions")
-        if end.word != ";":
-            raise self.fail(end, f"'{end.text}' where the rule should end with ';'")
+            raise self.fail(end, "a rule with several conclusions", "split it into rules")
+        if end.word in ("RULE", "END_RULEBLOCK"):  # fuzzylite ends rules at the line's end
+            self.at -= 1
+        elif end.word != ";":
+            raise self.fail(end, f"'{end.text}' where the rule should end with ';'",
+                            "end the rule with ';'")
         self.result.rules.append(ImportedRule(antecedent, command, start.line))
 
     def proposition(self) -> tuple[Token, str]:
@@ -503,7 +521,8 @@ class _FclParser:
         if term.kind != "name":
             raise self.fail(term, f"'{term.text}' where a term name should be")
         following = self.peek()
-        if following.kind == "name" and following.word not in ("AND", "OR", "THEN", "WITH"):
+        if following.kind == "name" and following.word not in ("AND", "OR", "THEN", "WITH",
+                                                                 "RULE", "END_RULEBLOCK"):
             raise self.fail(term, f"the hedge '{term.text}' before '{following.text}': "
                             "flctool's rules use plain terms")
         return first, term.text

@@ -14,6 +14,7 @@ import re
 
 from flctool.export.base import Exporter, Importer, number, require_deployable, sloped_quad
 from flctool.export.imported import (
+    DONT_CARE_HINT,
     ImportedCommand,
     ImportedController,
     ImportedInput,
@@ -21,7 +22,9 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
+    fuzzylite_quad,
     parse_number,
+    zero_order_constant,
 )
 from flctool.spec import Behaviour
 
@@ -186,19 +189,37 @@ class _FisReader:
         elif key.startswith("MF") and key != "NumMFs":
             self.mf_key(key, len(variable.sets), line)
             name, kind, params = self.mf(value, line)
-            arity = {"trapmf": 4, "trimf": 3}
+            arity = {"trapmf": 4, "trimf": 3, "rampmf": 2}
             if kind not in arity:
                 raise self.fail(line, f"membership function '{name}' is a {kind}: flctool's "
                                 "sets are trapezoids", "use trapmf or trimf")
             if len(params) != arity[kind]:
-                raise self.fail(line, f"a {kind} takes {arity[kind]} parameters")
-            quad = ((params[0], params[1], params[1], params[2]) if kind == "trimf"
-                    else (params[0], params[1], params[2], params[3]))
+                raise self.fail(line, f"a {kind} takes {arity[kind]} parameters",
+                                f"give it {arity[kind]} numbers")
+            if kind == "rampmf":  # fuzzylite's extension: a shoulder
+                quad = fuzzylite_quad("Ramp", params, self.file, line)
+            else:
+                quad = ((params[0], params[1], params[1], params[2]) if kind == "trimf"
+                        else (params[0], params[1], params[2], params[3]))
             variable.sets.append(ImportedSet(name, quad, line))
         elif key == "NumMFs":
             self.declared_mfs[-1] = (self.count(value, line, key), line)
+        elif key == "Enabled":  # fuzzylite's extension
+            self.enabled(value, line)
         else:
-            raise self.fail(line, f"'{key}' in an input section")
+            raise self.fail(line, f"'{key}' in an input section",
+                            "remove the line: an input section holds Name, Range, NumMFs and "
+                            "MFk")
+
+    def flag(self, key: str, value: str, line: int) -> bool:
+        if value not in ("0", "1"):
+            raise self.fail(line, f"{key}={_excerpt(value)} is neither 0 nor 1")
+        return value == "1"
+
+    def enabled(self, value: str, line: int) -> None:
+        if not self.flag("Enabled", value, line):
+            raise self.fail(line, "a disabled variable (Enabled=0)",
+                            "enable it, or remove it and its rules")
 
     def output_entry(self, key: str, value: str, line: int) -> None:
         if key == "Name":
@@ -206,15 +227,23 @@ class _FisReader:
         elif key.startswith("MF"):
             self.mf_key(key, len(self.result.commands), line)
             name, kind, params = self.mf(value, line)
-            if kind != "constant" or len(params) != 1:
-                raise self.fail(line, f"output membership function '{name}' is a {kind}: "
-                                "flctool's commands are constants (singletons); a linear "
-                                "output or a Mamdani output set cannot be expressed")
-            self.result.commands.append(ImportedCommand(name, params[0], line))
+            constant = zero_order_constant(kind, params, len(self.result.inputs), self.file,
+                                           line, name)
+            self.result.commands.append(ImportedCommand(name, constant, line))
         elif key == "NumMFs":
             self.output_mfs = (self.count(value, line, key), line)
+        elif key in ("LockPrevious", "LockRange"):
+            # fuzzylite's extensions; neither matters when every state fires a rule
+            self.flag(key, value, line)
+        elif key == "Default":
+            if value.lower() != "nan":
+                parse_number(value, self.file, line, key)
+        elif key == "Enabled":
+            self.enabled(value, line)
         elif key != "Range":
-            raise self.fail(line, f"'{key}' in the output section")
+            raise self.fail(line, f"'{key}' in the output section",
+                            "remove the line: an output section holds Name, Range, NumMFs "
+                            "and MFk")
 
     def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
         match = _MF.fullmatch(value)
@@ -305,8 +334,9 @@ class _FisReader:
         for variable, index in zip(self.result.inputs, sets, strict=True):
             k = self.index(index, line, f"input '{variable.name}'")
             if k == 0:
-                raise self.fail(line, f"the rule leaves out input '{variable.name}' (index 0)",
-                                "flctool rules name one set of every input (eq. 1)")
+                raise self.fail(line, f"the rule leaves out input '{variable.name}' (index 0):"
+                                " it fires with the other inputs' minimum alone, which no "
+                                "rule of the full grid (eq. 1-2) does", DONT_CARE_HINT)
             if k < 0:
                 raise self.fail(line, f"NOT (a negative index) on input '{variable.name}'")
             if k > len(variable.sets):

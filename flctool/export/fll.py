@@ -25,6 +25,7 @@ from flctool.export.imported import (
     check_term_arity,
     fuzzylite_quad,
     parse_number,
+    zero_order_constant,
 )
 from flctool.spec import Behaviour
 from flctool.spec.base import identifier
@@ -210,12 +211,12 @@ class _FllReader:
                                 "use defuzzifier: WeightedAverage TakagiSugeno")
         elif key == "term":
             name, kind, params = self.term(value, line)
-            if kind != "Constant" or len(params) != 1:
-                raise self.fail(line, f"output term '{name}' is a {kind}: flctool's commands "
-                                "are singletons (Constant terms); a Mamdani output set that is "
-                                "not a singleton cannot be expressed")
-            value_ = parse_number(params[0], self.file, line, f"term '{name}'")
-            self.result.commands.append(ImportedCommand(name, value_, line))
+            if kind not in ("Constant", "Linear"):
+                zero_order_constant(kind, [], 0, self.file, line, name)  # refuses it
+            numbers = [parse_number(p, self.file, line, f"term '{name}'") for p in params]
+            constant = zero_order_constant(kind, numbers, len(self.result.inputs), self.file,
+                                           line, name)
+            self.result.commands.append(ImportedCommand(name, constant, line))
         else:
             raise self.fail(line, f"'{key}' in an OutputVariable")
 

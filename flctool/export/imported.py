@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,8 +22,24 @@ from flctool.spec.yaml_source import SourceMap
 Quad = tuple[float, float, float, float]
 
 
+#: What each format's importer reads, for refusals that have no more specific fix.
+SUBSET = {
+    "fll": "a Takagi-Sugeno engine: Trapezoid/Triangle/Rectangle/Ramp inputs, Constant "
+           "outputs, WeightedAverage, conjunction Minimum, plain 'and' rules",
+    "fcl": "singleton output terms with METHOD : COGS, trapezoid point lists or "
+           "Trapezoid/Triangle terms, AND : MIN, plain AND rules",
+    "fis": "Type='sugeno' with constant outputs, trapmf/trimf inputs, AndMethod='min', "
+           "DefuzzMethod='wtaver', AND rules of weight 1",
+}
+
+
 def unsupported(file: str, line: int, construct: str, hint: str = "") -> ExportError:
-    """An import error naming the construct flctool cannot express, and where it is."""
+    """An import error naming the construct flctool cannot express, where it is, and what to
+    do: ``hint``, or (when there is no more specific fix) the subset that flctool reads."""
+    if not hint:
+        suffix = file.rpartition(".")[2].lower()
+        subset = SUBSET.get(suffix, "the subset described in flctool's docs/formats")
+        hint = f"rewrite it within what flctool imports: {subset}"
     return ExportError(f"{file}:{line}: {construct}", hint=hint)
 
 
@@ -272,6 +289,40 @@ def fuzzylite_quad(kind: str, values: list[float], file: str, line: int) -> Quad
     return pa, pb, pc, pd
 
 
+#: The refusal's fix for an output term that is not a constant.
+NOT_A_CONSTANT = ("flctool's commands are constants: give each output term one value (a "
+                  "singleton at the set's centroid is the usual choice, but it changes a "
+                  "Mamdani controller's output)")
+
+
+def zero_order_constant(kind: str, params: list[float], inputs: int, file: str, line: int,
+                        name: str) -> float:
+    """The constant of a zero-order Takagi-Sugeno output term: a constant, or a linear term
+    whose input coefficients are all 0 (``linear [0 0 c]`` in FIS, ``Linear 0 0 c`` in FLL).
+    A first-order term (a non-zero coefficient) or a Mamdani set is refused."""
+    if kind.lower() == "constant" and len(params) == 1:
+        return params[0]
+    if kind.lower() == "linear" and len(params) == inputs + 1:
+        if all(c == 0 for c in params[:-1]):
+            return params[-1]
+        raise unsupported(file, line, f"output term '{name}' is first-order Takagi-Sugeno "
+                          f"(linear with coefficients {params[:-1]}): flctool's commands are "
+                          "constants (eq. 3)", "set every input coefficient to 0, or "
+                          "replace the term by a constant")
+    if kind.lower() == "linear":
+        raise unsupported(file, line, f"output term '{name}' is linear with {len(params)} "
+                          f"numbers; the controller has {inputs} inputs",
+                          f"give {inputs} coefficients and a constant")
+    raise unsupported(file, line, f"output term '{name}' is a {kind}, not a constant: "
+                      "flctool's commands are singletons", NOT_A_CONSTANT)
+
+
+#: The fix for an imported rule that leaves out an input.
+DONT_CARE_HINT = ("name a set of every input in each rule (one rule per set of the input left "
+                  "out), accepting the change in weight, or write the rules in a behaviour "
+                  "file, where leaving out an input means just that expansion")
+
+
 def check_unique(file: str, items: Iterable[tuple[str, int]], kind: str, of: str = "") -> None:
     """Refuse a name given twice (``items`` are (name, line)), naming both lines."""
     first: dict[str, int] = {}
@@ -297,6 +348,7 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
     _check_rules(imported)
     _check_methods(imported)
+    _identifiers(imported)
     marks: dict[tuple[PathPart, ...], tuple[int, int]] = {
         (): (1, 1), ("name",): (imported.name_line, 1), ("output",): (imported.output_line, 1)}
     data: dict[str, Any] = {"flctool": FORMAT_VERSION, "name": imported.name or "imported"}
@@ -320,6 +372,61 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     return behaviour_from_data(data, SourceMap(file, marks))
 
 
+_NOT_IDENTIFIER = re.compile(r"[^A-Za-z0-9_]")
+
+
+def identifier(name: str) -> str:
+    """``name`` as a behaviour-file name: other characters become '_' (MATLAB and fuzzylite
+    files often write ``Food-Quality``), and a leading digit gets a '_' before it."""
+    derived = _NOT_IDENTIFIER.sub("_", name)
+    return f"_{derived}" if derived[:1].isdigit() else derived
+
+
+def _identifiers(imported: ImportedController) -> None:
+    """Rename, in place, every name that is not an identifier to :func:`identifier`'s form.
+
+    The names only label the controller, so the renamed one computes the same outputs; a
+    rename that would make two names of one kind equal is refused.
+    """
+    file = imported.file
+    if imported.name:
+        imported.name = identifier(imported.name)
+    imported.output_name = identifier(imported.output_name)
+    for variable in imported.inputs:
+        sets = {s.name: identifier(s.name) for s in variable.sets}
+        _check_renames(file, [(s.name, sets[s.name], s.line) for s in variable.sets],
+                       f"set of input '{variable.name}'")
+        for item in variable.sets:
+            item.name = sets[item.name]
+        for rule in imported.rules:
+            if variable.name in rule.antecedent:
+                rule.antecedent[variable.name] = sets[rule.antecedent[variable.name]]
+    inputs = {v.name: identifier(v.name) for v in imported.inputs}
+    _check_renames(file, [(v.name, inputs[v.name], v.line) for v in imported.inputs], "input")
+    for variable in imported.inputs:
+        variable.name = inputs[variable.name]
+    for rule in imported.rules:
+        rule.antecedent = {inputs[n]: s for n, s in rule.antecedent.items()}
+    commands = {c.name: identifier(c.name) for c in imported.commands}
+    _check_renames(file, [(c.name, commands[c.name], c.line) for c in imported.commands],
+                   "output term")
+    for command in imported.commands:
+        command.name = commands[command.name]
+    for rule in imported.rules:
+        rule.command = commands[rule.command]
+
+
+def _check_renames(file: str, renames: list[tuple[str, str, int]], kind: str) -> None:
+    first: dict[str, tuple[str, int]] = {}
+    for old, new, line in renames:
+        if new in first and first[new][0] != old:
+            other, other_line = first[new]
+            raise unsupported(file, line, f"the {kind} names '{other}' (line {other_line}) and "
+                              f"'{old}' both become '{new}' as behaviour-file names",
+                              "rename one of them in the file")
+        first.setdefault(new, (old, line))
+
+
 def _check_rules(imported: ImportedController) -> None:
     file = imported.file
     inputs = {i.name: {s.name for s in i.sets} for i in imported.inputs}
@@ -335,8 +442,10 @@ def _check_rules(imported: ImportedController) -> None:
         left_out = [n for n in inputs if n not in rule.antecedent]
         if left_out:
             raise unsupported(
-                file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}",
-                "flctool rules name one set of every input (the full grid of eq. 1)")
+                file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}: it "
+                "fires with the other inputs' minimum alone, which no rule of the full grid "
+                "(eq. 1-2) does, so expanding it over the sets would change the output",
+                DONT_CARE_HINT)
         if rule.command not in commands:
             raise unsupported(file, rule.line,
                               f"the output has no term '{rule.command}' (in a rule)")

@@ -10,7 +10,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator
 
-from flctool.errors import Problem
+from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.base import Name, Section
 
@@ -235,6 +235,292 @@ class BallchaseSimConfig(Section):
         return problems + command_table_problems(self.motion, self.noise, commands)
 
 
+# -- the pitch world ---------------------------------------------------------------------------
+
+#: The pitch world's sensor channels, in the order their noise columns are drawn. Angles are
+#: bearings in degrees relative to the robot's heading (positive = to the left), distances mm.
+PITCH_CHANNELS = (
+    "ball_size", "pan", "ball_distance", "goal_bearing", "goal_distance", "obstacle_bearing",
+    "obstacle_distance", "home_bearing", "home_distance", "heading", "x", "y", "ball_x",
+    "ball_y")
+#: Channels whose noise is relative (reading * (1 + std * z)); the others add std * z.
+RELATIVE_CHANNELS = ("ball_size", "ball_distance", "goal_distance", "obstacle_distance",
+                     "home_distance")
+OUTCOME_KINDS = ("ball_reached", "ball_in_goal", "ball_in_own_goal", "ball_off_pitch",
+                 "threshold", "collision", "off_pitch", "ball_lost")
+
+
+def _box(bounds: tuple[float, float]) -> tuple[float, float]:
+    low, high = bounds
+    if low > high:
+        raise ValueError(f"[{low:g}, {high:g}] must be [low, high] with low <= high")
+    return bounds
+
+
+Interval = Annotated[tuple[float, float], AfterValidator(_box)]
+
+
+class Field2D(Pitch):
+    """The pitch of the pitch world: goals centred on both short sides."""
+
+    goal_width: float = Field(800.0, gt=0, description=(
+        "mm, width of each goal mouth (four-legged league: 800); the target goal is at "
+        "x = +length/2, the own goal at x = -length/2"))
+
+
+class PitchBall(Ball):
+    """The ball and how it moves when the robot pushes it (docs/environments.md)."""
+
+    movable: bool = Field(True, description="false: the ball never moves")
+    kick: float = Field(1.2, ge=0, le=5, description=(
+        "on contact the ball takes this many times the robot's displacement of the step as "
+        "its velocity (mm per step)"))
+    friction: float = Field(0.25, ge=0, le=1, description=(
+        "fraction of the ball's velocity lost per step while rolling"))
+
+
+class RobotStart(Section):
+    """The robot's start pose, each drawn uniformly."""
+
+    x: Interval = Field((-1500.0, 1500.0), description="mm")
+    y: Interval = Field((-1000.0, 1000.0), description="mm")
+    heading: Interval = Field((-180.0, 180.0), description="deg, 0 = facing the target goal")
+
+
+class BallStart(Section):
+    """Where the ball starts: in a box on the pitch (x, y), or ahead of the robot's camera
+    (distance, bearing) -- then the robot is placed anywhere the two fit, as in ballchase."""
+
+    x: Interval | None = Field(None, description="mm; with y: uniform in this box")
+    y: Interval | None = Field(None, description="mm")
+    distance: Annotated[tuple[float, float], AfterValidator(_interval)] | None = Field(
+        None, description="mm, camera to ball, uniform; with bearing")
+    bearing: float | None = Field(None, ge=0, le=180, description=(
+        "deg, the ball's bearing from the camera is uniform in +-bearing"))
+
+    @property
+    def ahead(self) -> bool:
+        return self.distance is not None
+
+
+def _ball_start(start: BallStart) -> BallStart:
+    box = start.x is not None and start.y is not None and start.distance is None \
+        and start.bearing is None
+    ahead = start.x is None and start.y is None and start.distance is not None \
+        and start.bearing is not None
+    if not (box or ahead):
+        raise ValueError("give either x and y (a box on the pitch) or distance and bearing "
+                         "(ahead of the robot's camera)")
+    return start
+
+
+class PitchStart(Section):
+    robot: RobotStart = RobotStart()
+    ball: Annotated[BallStart, AfterValidator(_ball_start)] = BallStart(
+        x=(-1000.0, 1000.0), y=(-800.0, 800.0))
+
+
+class Obstacle(Section):
+    """A round obstacle (a standing or walking robot), drawn uniformly in its box."""
+
+    x: Interval = Field(description="mm")
+    y: Interval = Field(description="mm")
+    radius: float = Field(150.0, gt=0, description="mm")
+    speed: float = Field(0.0, ge=0, description=(
+        "mm per step in a direction drawn at the start; it bounces off the pitch's edges"))
+
+
+class Home(Section):
+    x: float = Field(-1500.0, description="mm")
+    y: float = Field(0.0, description="mm")
+
+
+class PitchSensorNoise(Section):
+    """Standard deviations of each channel's Gaussian noise, per step."""
+
+    ball_size: float = Field(0.02, ge=0, description="relative")
+    pan: float = Field(2.0, ge=0, description="deg")
+    ball_distance: float = Field(0.05, ge=0, description="relative")
+    goal_bearing: float = Field(3.0, ge=0, description="deg")
+    goal_distance: float = Field(0.05, ge=0, description="relative")
+    obstacle_bearing: float = Field(3.0, ge=0, description="deg")
+    obstacle_distance: float = Field(0.05, ge=0, description="relative")
+    home_bearing: float = Field(5.0, ge=0, description="deg")
+    home_distance: float = Field(0.05, ge=0, description="relative")
+    heading: float = Field(5.0, ge=0, description="deg")
+    x: float = Field(50.0, ge=0, description="mm")
+    y: float = Field(50.0, ge=0, description="mm")
+    ball_x: float = Field(50.0, ge=0, description="mm")
+    ball_y: float = Field(50.0, ge=0, description="mm")
+
+
+class Outcome(Section):
+    """One way an episode ends: the first outcome (in file order) that holds ends it."""
+
+    when: Literal["ball_reached", "ball_in_goal", "ball_in_own_goal", "ball_off_pitch",
+                  "threshold", "collision", "off_pitch", "ball_lost", "timeout"] = Field(
+        description="the event; see docs/environments.md")
+    reward: float = Field(0.0, description="given once, at the step the episode ends")
+    success: bool = Field(False, description="whether this ending counts as success")
+    distance: float | None = Field(None, gt=0, description=(
+        "ball_reached: mm from the camera to the ball (default 120)"))
+    bearing: float | None = Field(None, gt=0, le=180, description=(
+        "ball_reached: the ball within +-bearing deg of the camera axis (default 20)"))
+    facing_goal: float | None = Field(None, gt=0, le=180, description=(
+        "ball_reached: also the target goal within +-facing_goal deg of the heading"))
+    channel: str | None = Field(None, description="threshold: the channel (its true value)")
+    min: float | None = Field(None, description="threshold: holds when channel >= min")
+    max: float | None = Field(None, description="threshold: holds when channel <= max")
+
+    @field_validator("channel")
+    @classmethod
+    def _known_channel(cls, channel: str | None) -> str | None:
+        if channel is not None and channel not in PITCH_CHANNELS:
+            raise ValueError(f"unknown channel '{channel}'.{did_you_mean(channel, PITCH_CHANNELS)}"
+                             f" The channels: {', '.join(PITCH_CHANNELS)}")
+        return channel
+
+    def fields_problem(self) -> str | None:
+        """A key that does not belong to this kind of outcome, or a missing one."""
+        reach = ("distance", "bearing", "facing_goal")
+        threshold = ("channel", "min", "max")
+        given = {k for k in (*reach, *threshold) if getattr(self, k) is not None}
+        allowed = set(reach if self.when == "ball_reached" else
+                      threshold if self.when == "threshold" else ())
+        extra = sorted(given - allowed)
+        if extra:
+            return f"'{extra[0]}' does not apply to a '{self.when}' outcome"
+        if self.when == "threshold" and (self.channel is None or
+                                         (self.min is None and self.max is None)):
+            return "a threshold outcome needs 'channel' and 'min' and/or 'max'"
+        return None
+
+
+def _default_outcomes() -> list[Outcome]:
+    return [Outcome(when="ball_reached", reward=1.0, success=True),
+            Outcome(when="ball_lost", reward=-1.0), Outcome(when="off_pitch", reward=-1.0)]
+
+
+class PitchConfig(Section):
+    """A football pitch with goals, a ball, the robot and obstacles (docs/environments.md)."""
+
+    adapter: Literal["pitch"]
+    max_steps: int = Field(200, ge=1, le=100_000, description=(
+        "steps before an episode ends with the timeout outcome"))
+    step_period: float = Field(0.25, gt=0, description=(
+        "s per step; documents the units of the motion table (a step is one command)"))
+    action: Literal["crisp", "nearest", "vote"] = Field("crisp", description=(
+        "crisp: blend the two commands around the output a; nearest: the nearest command; "
+        "vote: each command's firing rules sum their activations, the strongest command runs"))
+    robot: Robot = Robot()
+    ball: PitchBall = PitchBall()
+    pitch: Field2D = Field2D()
+    home: Home = Home()
+    start: PitchStart = PitchStart()
+    obstacles: list[Obstacle] = Field(default_factory=list, max_length=16, description=(
+        "round obstacles; the obstacle_* channels read the nearest one"))
+    sensors: dict[Name, str] = Field(default_factory=dict, description=(
+        "behaviour input name -> channel it reads; an input not listed reads the channel of "
+        "its own name"))
+    sensor_noise: PitchSensorNoise = PitchSensorNoise()
+    outcomes: list[Outcome] = Field(default_factory=_default_outcomes, min_length=1,
+                                    max_length=32, description=(
+        "how episodes end, first that holds wins; time-out after max_steps is the 'timeout' "
+        "outcome (reward 0, failure unless declared)"))
+    motion: dict[Name, Motion] = Field(default_factory=lambda: dict(DEFAULT_MOTION), description=(
+        "command name -> mean displacement per step; extends the default table"))
+    noise: dict[Name, MotionNoise] = Field(
+        default_factory=lambda: dict(DEFAULT_NOISE), description=(
+            "command name -> standard deviation per step; extends the default table"))
+
+    @field_validator("motion", mode="before")
+    @classmethod
+    def _motion_over_defaults(cls, motion: Any) -> Any:
+        return _extend_defaults(motion, DEFAULT_MOTION)
+
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise_over_defaults(cls, noise: Any) -> Any:
+        return _extend_defaults(noise, DEFAULT_NOISE)
+
+    def channel_of(self, input_name: str) -> str:
+        return self.sensors.get(input_name, input_name)
+
+    def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
+        """What keeps the pitch world from running a behaviour; checked by validate."""
+        problems = []
+        for name in inputs:
+            channel = self.channel_of(name)
+            if channel not in PITCH_CHANNELS:
+                where = ("environment", "sensors", name) if name in self.sensors else \
+                    ("inputs", name)
+                problems.append(Problem(
+                    where, f"the pitch world has no channel '{channel}'."
+                    f"{did_you_mean(channel, PITCH_CHANNELS)}",
+                    "name the input after a channel or map it in environment.sensors; the "
+                    "channels: " + ", ".join(PITCH_CHANNELS)))
+        problems += [Problem(("environment", "sensors", name), f"'{name}' is not an input."
+                             f"{did_you_mean(name, inputs)}", "map behaviour inputs only")
+                     for name in self.sensors if name not in inputs]
+        read = [self.channel_of(name) for name in inputs]
+        if len(set(read)) != len(read):
+            problems.append(Problem(("inputs",), "two inputs read the same channel",
+                                    "give each input a channel of its own"))
+        uses_obstacles = any(c.startswith("obstacle_") for c in read) or any(
+            o.when == "collision" or (o.channel or "").startswith("obstacle_")
+            for o in self.outcomes)
+        if uses_obstacles and not self.obstacles:
+            problems.append(Problem(("environment", "obstacles"),
+                                    "obstacle channels or a collision outcome, but no obstacles",
+                                    "add e.g. 'obstacles: [{x: [-200, 200], y: [-200, 200]}]'"))
+        for i, outcome in enumerate(self.outcomes):
+            problem = outcome.fields_problem()
+            if problem:
+                problems.append(Problem(("environment", "outcomes", i), problem,
+                                        "see the outcome vocabulary in docs/environments.md"))
+        if not any(o.success for o in self.outcomes):
+            problems.append(Problem(("environment", "outcomes"), "no outcome is a success",
+                                    "mark the outcome the behaviour aims at with success: true"))
+        return problems + self._start_problems() + command_table_problems(
+            self.motion, self.noise, commands)
+
+    def _start_problems(self) -> list[Problem]:
+        """Start boxes that reach off the pitch, or leave no room for a ball ahead."""
+        half = {"x": self.pitch.length / 2.0, "y": self.pitch.width / 2.0}
+        boxes: list[tuple[tuple[PathPart, ...], str, tuple[float, float], float]] = []
+        start = ("environment", "start")
+        for axis in ("x", "y"):
+            boxes.append(((*start, "robot", axis), "the robot", getattr(self.start.robot, axis),
+                          self.robot.radius))
+            ball_box = getattr(self.start.ball, axis)
+            if ball_box is not None:
+                boxes.append(((*start, "ball", axis), "the ball", ball_box,
+                              self.ball.diameter / 2.0))
+            for i, obstacle in enumerate(self.obstacles):
+                boxes.append((("environment", "obstacles", i, axis), "the obstacle",
+                              getattr(obstacle, axis), obstacle.radius))
+        problems = []
+        for path, what, (low, high), radius in boxes:
+            limit = half[str(path[-1])] - radius
+            if low < -limit or high > limit:
+                problems.append(Problem(path, f"[{low:g}, {high:g}] puts {what} off the pitch: "
+                                        f"its centre must stay within +-{limit:g} mm",
+                                        "shrink the interval or enlarge the pitch"))
+        distance = self.start.ball.distance
+        if distance is not None:
+            # the farthest ball ahead, in any direction, must fit beside some robot position
+            reach = distance[1] + self.robot.neck_offset + self.ball.diameter / 2.0
+            for axis in ("x", "y"):
+                low, high = getattr(self.start.robot, axis)
+                if low > half[axis] - reach or high < -half[axis] + reach:
+                    problems.append(Problem(
+                        (*start, "robot", axis), f"no room for the ball ahead: with the robot "
+                        f"in [{low:g}, {high:g}] a ball {distance[1]:g} mm ahead can be off the "
+                        "pitch", f"let the robot start within {reach:g} mm of the pitch's "
+                        "middle along this axis, or shorten start.ball.distance"))
+        return problems
+
+
 class GymnasiumConfig(Section):
     """Any Gymnasium environment with a Box observation and a Discrete or Box action space."""
 
@@ -295,7 +581,7 @@ class RobotLinkConfig(Section):
 
 
 EnvironmentConfig = Annotated[
-    BallchaseSimConfig | GymnasiumConfig | RobotLinkConfig,
+    BallchaseSimConfig | PitchConfig | GymnasiumConfig | RobotLinkConfig,
     Field(discriminator="adapter"),
 ]
-ADAPTER_NAMES = ("ballchase-sim", "gymnasium", "robot-link")
+ADAPTER_NAMES = ("ballchase-sim", "pitch", "gymnasium", "robot-link")

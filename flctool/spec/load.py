@@ -18,6 +18,7 @@ from flctool.registry import did_you_mean
 from flctool.spec.checks import check_input, check_rules, limit_problems
 from flctool.spec.environment import ADAPTER_NAMES, EnvironmentConfig
 from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
+from flctool.spec.rules import expand_dont_care
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
 
@@ -52,8 +53,9 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None) -> Behaviour
     version_problem = _version_problem(data, source)
     if version_problem is not None:  # other errors in a file of another version are noise
         raise SpecError([version_problem], source.file)
+    data, source, problems = expand_dont_care(data, source)  # rules leaving out inputs
     # Numbers first: pydantic would quietly turn `true` into 1 and "1.5" into 1.5.
-    problems = _number_problems(data, source)
+    problems += _number_problems(data, source)
     semantic: list[Problem] = []
     try:
         behaviour = Behaviour.model_validate(data, context={"problems": semantic})

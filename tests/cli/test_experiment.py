@@ -41,6 +41,7 @@ def test_bad_options_are_clear_errors(tmp_path: Path) -> None:
         (["--executor", "dask"], "unknown executor 'dask'"),
         (["--set", "seed=3"], "--set seed is decided by the experiment"),
         (["--set", "crossover=2"], "learning.crossover"),
+        (["--set", "stop.seconds=5"], "would not reproduce"),
     ]
     for extra, message in cases:
         result = runner.invoke(app, ["experiment", file, *extra, *out])

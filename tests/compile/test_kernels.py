@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.compile import Controller, kernels
@@ -48,12 +50,11 @@ def sparse_output(controller: Controller, states: np.ndarray, table: np.ndarray)
     """kernels.infer forced onto the fired-rules walk (an empty grid), whatever M is."""
     layout = controller._layout
     tables = np.array(table, dtype=np.intp).reshape(-1, controller.n_rules)
-    out = np.empty((tables.shape[0], len(states)))
-    nan_state = kernels.infer(np.ascontiguousarray(states), layout.lo, layout.hi, layout.quads,
-                              layout.offsets, layout.strides, layout.max_sets,
-                              layout.grid[:0], tables, layout.singletons, out)
+    out = np.empty(tables.shape[0] * len(states))
+    nan_state = kernels.infer(np.ascontiguousarray(states), layout.floats, layout.ints, tables,
+                              out, 0, len(states), False)
     assert nan_state == -1
-    return out
+    return out.reshape(tables.shape[0], len(states))
 
 
 def many_overlapping_sets() -> Controller:
@@ -103,8 +104,9 @@ def test_many_overlapping_sets_per_input() -> None:
     states = awkward_states(controller, rng, 60)
     expected = np.array([reference_output(controller, s, controller.consequents)
                          for s in states])
-    assert controller.n_rules > kernels.DENSE_RULES  # output() walks the fired rules
     np.testing.assert_array_equal(controller.output(states), expected)
+    np.testing.assert_array_equal(sparse_output(controller, states, controller.consequents)[0],
+                                  expected)
     np.testing.assert_array_equal([controller.output_one(s) for s in states], expected)
     fired = [len(controller.active_rules(s)[0]) for s in states]
     assert max(fired) > 2 ** controller.n_inputs  # more than two sets per input fire
@@ -153,9 +155,9 @@ def test_one_state_inputs(handmade_path: Path) -> None:
     expected = controller.output(state[None, :])[0]
     readonly = state.copy()
     readonly.setflags(write=False)
-    for given in (state, [0.35, -12.5], (0.35, -12.5), state[None, :], readonly,
+    for argument in (state, [0.35, -12.5], (0.35, -12.5), state[None, :], readonly,
                   np.array([[0.35, 0.0], [-12.5, 0.0]])[:, 0]):
-        assert controller.output_one(given) == expected
+        assert controller.output_one(argument) == expected
     with pytest.raises(InferenceError, match=r"shape \(B, 2\)"):
         controller.output_one([0.1, 0.2, 0.3])
 
@@ -197,10 +199,9 @@ def underflowing_controller(extra_sets: int) -> Controller:
     return controller.with_consequents(np.arange(controller.n_rules) % 2)
 
 
-@pytest.mark.parametrize("extra_sets", [2, 17])  # M = 4 (all rules), M = 34 (fired rules)
+@pytest.mark.parametrize("extra_sets", [2, 17])  # M = 4, M = 34
 def test_no_rule_firing_raises_instead_of_giving_nan(extra_sets: int) -> None:
     controller = underflowing_controller(extra_sets)
-    assert (controller.n_rules > kernels.DENSE_RULES) == (extra_sets == 17)
     fine = np.array([[1.0, 0.5], [-1.0, 0.5]])
     states = np.vstack([np.tile(fine, (20, 1)), [[5e-324, 0.5]]])  # state 40, second block
     with pytest.raises(InferenceError, match=r"no rule fires for state 40: the sets overlap "
@@ -215,11 +216,85 @@ def test_no_rule_firing_raises_instead_of_giving_nan(extra_sets: int) -> None:
     assert controller.consequents is not None
     np.testing.assert_array_equal(controller.output(fine), [reference_output(
         controller, s, controller.consequents) for s in fine])
-    # Both walks report the state rather than write NaN.
+    # Both walks (and the state-by-state path of small batches) report the state rather
+    # than write NaN.
+    with pytest.raises(InferenceError, match="no rule fires for state 1"):
+        controller.output(states[39:41])
     layout = controller._layout
-    out = np.empty((1, len(states)))
+    out = np.empty(len(states))
     table = np.array(controller.consequents, dtype=np.intp)[None, :]
-    for grid in (layout.grid, layout.grid[:0]):
-        assert kernels.infer(states, layout.lo, layout.hi, layout.quads, layout.offsets,
-                             layout.strides, layout.max_sets, grid, table,
-                             layout.singletons, out) == 40
+    for dense in (True, False):
+        assert kernels.infer(states, layout.floats, layout.ints, table, out, 0, len(states),
+                             dense) == 40
+
+
+def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -> list:
+    """kernels.infer on the every-rule walk (a layout that keeps the rule grid whatever M is)
+    and on the fired-rules walk, for ``tables (P, M)``: two (P, B) arrays."""
+    layout = kernels.layout(controller.ranges, controller.quadruples, controller.rule_grid,
+                            controller.singletons)
+    with_grid = layout
+    if not layout.dense:  # the same layout with the grid kept
+        offsets = np.concatenate([[0], np.cumsum(controller.shape)])
+        grid = controller.rule_grid + offsets[:-1]
+        header = [controller.n_inputs, offsets[-1], max(controller.shape), len(grid)]
+        ints = np.concatenate([header, layout.ints[4:], grid.ravel()]).astype(np.intp)
+        with_grid = kernels.Layout(layout.floats, ints, True)
+    results = []
+    for chosen, dense in ((with_grid, True), (layout, False)):
+        out = np.empty(tables.shape[0] * len(states))
+        assert kernels.infer(states, chosen.floats, chosen.ints, tables, out, 0, len(states),
+                             dense) == -1
+        results.append(out.reshape(tables.shape[0], len(states)))
+    return results
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n_inputs=st.integers(1, 4),
+       batch=st.sampled_from([1, 2, kernels.SMALL_BATCH, kernels.SMALL_BATCH + 1, 63, 64,
+                              65, 130]),
+       population=st.integers(1, 3))
+def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
+                                         population: int) -> None:
+    """Small batches (state by state), blocks on both walks, strided states, populations
+    and one-state calls: all give the plain eq. 1-3 bit for bit."""
+    rng = np.random.default_rng(seed)
+    controller = compile_behaviour(behaviour_from_data(
+        random_behaviour_data(rng, n_inputs, rules=False)))
+    tables = rng.integers(0, controller.n_commands, size=(population, controller.n_rules))
+    states = awkward_states(controller, rng, batch)
+    expected = np.array([[reference_output(controller, s, row) for s in states]
+                         for row in tables])
+    for walked in both_walks(controller, states, tables):
+        np.testing.assert_array_equal(walked, expected)
+    np.testing.assert_array_equal(controller.output(states, tables), expected)
+    strided = np.asfortranarray(states)  # read through its strides, not copied
+    np.testing.assert_array_equal(controller.output(strided, tables), expected)
+    deployed = controller.with_consequents(tables[0])
+    np.testing.assert_array_equal(deployed.output(states), expected[0])
+    np.testing.assert_array_equal([deployed.output_one(s) for s in states], expected[0])
+
+
+def test_threads_give_identical_outputs(handmade_path: Path) -> None:
+    from flctool.compile.controller import THREADED_STATES
+
+    controller = compile_behaviour(load_behaviour(handmade_path))
+    rng = np.random.default_rng(3)
+    states = awkward_states(controller, rng, THREADED_STATES + 77)
+    one = controller.output(states)
+    np.testing.assert_array_equal(controller.output(states, threads=2), one)
+    np.testing.assert_array_equal(controller.output(states, threads=3), one)
+    population = rng.integers(0, controller.n_commands, size=(2, controller.n_rules))
+    np.testing.assert_array_equal(controller.output(states, population, threads=2),
+                                  controller.output(states, population))
+    states[THREADED_STATES + 5, 1] = np.nan  # in the second thread's part
+    with pytest.raises(InferenceError, match=f"NaN in state {THREADED_STATES + 5}"):
+        controller.output(states, threads=2)
+
+
+def test_the_walks_switch_where_their_costs_cross() -> None:
+    # Two inputs of 5 or 6 sets (M = 25, 36) walk every rule, as does any small rule base;
+    # six inputs of five sets (M = 15,625) walk only the fired rules.
+    assert kernels.walks_every_rule(25, 2, 10) and kernels.walks_every_rule(36, 2, 12)
+    assert kernels.walks_every_rule(3, 1, 3)
+    assert not kernels.walks_every_rule(15_625, 6, 30)

@@ -219,3 +219,20 @@ def test_misspelt_command_is_located_by_line() -> None:
     line = text.splitlines().index("    forwrd: {forward: 70, sideways: 0, rotation: 0}") + 1
     with pytest.raises(SpecError, match=rf"b.yaml:{line}:\d+: environment\.motion\.forwrd"):
         parse_behaviour(text, "b.yaml")
+
+
+def test_episodes_are_those_of_the_first_release() -> None:
+    # Figures recorded with the simulator before it became a preset of the pitch world: the
+    # same seeds must keep giving the same episodes, to the last bit.
+    behaviour = load_behaviour(HANDMADE)
+    controller = compile_behaviour(behaviour)
+    env = make_env(behaviour)
+    result = evaluate(controller, env, np.arange(200))
+    assert (int(result.lengths.sum()), float(result.fitness.sum())) == (4164, 379.18)
+    table = np.array([4, 3, 2, 1, 1, 0, 0, 0, 0, 4, 3, 4, 2, 3, 4])
+    result = evaluate(controller, make_env(behaviour, 200), np.arange(200), table)
+    assert (int(result.lengths.sum()), float(result.fitness.sum()),
+            int(result.success.sum())) == (1552, 13.3475, 5)
+    evaluate(controller, env, [3])
+    assert (float(env.x[0]), float(env.y[0]), float(env.heading[0])) == (
+        336.40049678082136, -593.7193542029227, 1.2884405221715665)

@@ -17,7 +17,7 @@ from ..conftest import BEHAVIOURS, MINIMAL
 
 # One shipped behaviour per registered adapter.
 EXAMPLES = {"ballchase-sim": "ballchase.yaml", "gymnasium": "cartpole.yaml",
-            "robot-link": "ballchase-robot.yaml"}
+            "robot-link": "ballchase-robot.yaml", "pitch": "face-goal.yaml"}
 
 
 def test_every_adapter_has_a_config_and_an_example() -> None:

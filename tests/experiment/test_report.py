@@ -43,6 +43,14 @@ def test_summary_matches_the_runs(finished: Path) -> None:
     assert cost["training_episodes"] == 3 * 12
     assert cost["heldout_episodes"] == 3 * 20
     assert cost["training_steps"] == sum(r.training_steps for r in hybrid)
+    # model selection's validation episodes are counted, as each run recorded them
+    from flctool.runs import open_run
+
+    usage = [open_run(experiment.runs_dir / f"hybrid-seed{s}").summary().usage
+             for s in range(3)]
+    assert cost["selection_episodes"] == sum(u["selection_episodes"] for u in usage) > 0
+    assert cost["episodes_per_run_max"] == max(
+        u["training_episodes"] + u["selection_episodes"] for u in usage)
     # every pair of learners, for every measure
     pairs = {(c["a"], c["b"]) for c in summary["comparisons"]}
     assert pairs == {("pitt", "hybrid"), ("pitt", "fuzzy_q"), ("hybrid", "fuzzy_q")}

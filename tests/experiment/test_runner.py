@@ -132,3 +132,51 @@ def test_prepare_refuses_an_unwritable_place(tmp_path: Path) -> None:
     experiment = tiny_experiment(tmp_path / "exp", seeds=1)
     with pytest.raises(RunDirError, match="not an experiment directory"):
         prepare_experiment(experiment.behaviour, experiment.plan, blocker)
+
+
+def test_a_run_killed_while_being_created_starts_over(tmp_path: Path) -> None:
+    experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("pitt",))
+    job = experiment.jobs()[0]
+    directory = experiment.runs_dir / job.name
+    (directory / "checkpoints").mkdir(parents=True)  # what create_run makes first
+    (directory / ".behaviour.yaml.0123abcd.tmp").write_text("half")
+    assert not run_job(job, directory).skipped
+    assert open_run(directory).info()["status"] == "finished"
+
+
+def test_a_killed_command_continues_where_it_stopped(tmp_path: Path) -> None:
+    """SIGKILL the command mid-way (no chance to clean up), then run it again."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from ..conftest import BEHAVIOURS
+
+    out = tmp_path / "killed"
+    command = [sys.executable, "-m", "flctool", "experiment", str(BEHAVIOURS / "ballchase.yaml"),
+               "--seeds", "3", "--learners", "hybrid,pitt", "--set", "generations=12",
+               "--set", "population=4", "--heldout", "20", "--json", "--out", str(out)]
+    process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(out.glob("runs/*/heldout.json"))) < 2:
+            assert process.poll() is None, "the experiment ended before it could be killed"
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        os.kill(process.pid, signal.SIGKILL)
+    finally:
+        process.wait()
+    finished = {p.parent.name: p.stat().st_mtime_ns for p in out.glob("runs/*/heldout.json")}
+    assert 2 <= len(finished) < 6
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    # finished runs were read back, not redone
+    for name, stamp in finished.items():
+        assert (out / "runs" / name / "heldout.json").stat().st_mtime_ns == stamp
+    whole = prepare_experiment(open_experiment(out).behaviour, open_experiment(out).plan,
+                               tmp_path / "whole")
+    whole.run(LocalExecutor(1))
+    write_report(whole)
+    assert (out / "report.md").read_text() == (whole.path / "report.md").read_text()

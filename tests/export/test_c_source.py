@@ -174,3 +174,68 @@ def test_a_source_path_cannot_end_the_comment(tmp_path: Path) -> None:
     assert CC is not None
     subprocess.run([CC, *FLAGS, "-fsyntax-only", str(files[1])], check=True,
                    capture_output=True, text=True)
+
+
+@needs_cc
+def test_command_is_the_nearest_singleton_and_the_header_gives_the_range(tmp_path: Path
+                                                                        ) -> None:
+    behaviour = random_behaviour(5, max_sets=4)
+    files = CExporter(ExportOptions(prefix="r_")).to_file(behaviour, tmp_path / "ctl")
+    header = files[0].read_text()
+    values = list(behaviour.output.commands.values())
+    assert f"#define R_OUTPUT_MIN ({min(values)!r})" in header
+    assert f"#define R_OUTPUT_MAX ({max(values)!r})" in header
+    assert f"#define R_N_COMMANDS {len(values)}" in header
+    n = len(behaviour.inputs)
+    driver = tmp_path / "main.c"
+    driver.write_text(f"""#include <stdio.h>
+#include "ctl.h"
+int main(void)
+{{
+    double s[{n}];
+    int i;
+    for (;;) {{
+        for (i = 0; i < {n}; ++i) if (scanf("%lf", &s[i]) != 1) return 0;
+        printf("%d\\n", r_command(s));
+    }}
+}}
+""")
+    assert CC is not None
+    subprocess.run([CC, *FLAGS, "-o", str(tmp_path / "main"), str(driver), str(files[1])],
+                   check=True, capture_output=True, text=True)
+    states = random_states(behaviour, 2_000, seed=1)
+    result = subprocess.run([str(tmp_path / "main")], check=True, capture_output=True,
+                            text=True, input="\n".join(" ".join(map(repr, row))
+                                                       for row in states.tolist()))
+    got = np.array([int(v) for v in result.stdout.split()])
+    outputs = compile_behaviour(behaviour).output(states)
+    order = np.argsort(values, kind="stable")  # a tie goes to the smaller singleton
+    nearest = np.argmin(np.abs(np.array(values)[order][None, :] - outputs[:, None]), axis=1)
+    assert np.array_equal(got, order[nearest])
+
+
+@needs_cc
+def test_fast_math_is_refused_at_compile_time(tmp_path: Path) -> None:
+    files = CExporter().to_file(load_behaviour(SHIPPED[0]), tmp_path / "ctl")
+    assert CC is not None
+    result = subprocess.run([CC, *FLAGS, "-ffast-math", "-c", "-o", str(tmp_path / "ctl.o"),
+                             str(files[1])], capture_output=True, text=True, check=False)
+    assert result.returncode != 0
+    assert "compile without -ffast-math" in result.stderr
+
+
+def test_float_error_is_measured_and_refused_beyond_the_bound() -> None:
+    text = CExporter(ExportOptions(single=True)).to_string(load_behaviour(SHIPPED[0]))
+    assert "measured at export on 20000 states" in text
+    # a narrow range at a large magnitude: float keeps ~3 decimals of 10000.x
+    narrow = with_rules(behaviour_from_data({
+        "flctool": 1, "name": "narrow",
+        "inputs": {"x": {"range": [10000.0, 10000.5], "sets": {
+            "a": [10000.0, 10000.0, 10000.1, 10000.4],
+            "b": [10000.1, 10000.4, 10000.5, 10000.5]}}},
+        "output": {"name": "u", "commands": {"l": -1.0, "r": 1.0}}}), np.array([0, 1]))
+    with pytest.raises(ExportError, match=r"in float, the controller differs from flctool's "
+                       r"double output by up to 0.00\d+ .*beyond the float export's bound of "
+                       r"1e-05.*\(fix: export without --float"):
+        CExporter(ExportOptions(single=True)).to_string(narrow)
+    CExporter().to_string(narrow)  # double is fine

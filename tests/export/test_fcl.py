@@ -225,3 +225,17 @@ def test_both_dialects_import_back_exactly(dialect: str, seed: int) -> None:
     text = FclExporter(ExportOptions(dialect=dialect)).to_string(behaviour)
     assert_same_controller(FclImporter().from_string(text), behaviour,
                            random_states(behaviour, 2_000, seed=seed))
+
+
+def test_fuzzylite_written_fcl_imports() -> None:
+    """fuzzylite writes Trapezoid / Triangle terms, rules without ';', 'DEFAULT := nan | NC'
+    and ACCU in DEFUZZIFY."""
+    text = (BLOCK.replace("(0, 1) (0.2, 1) (0.8, 0)", "Trapezoid 0.0 0.0 0.2 0.8")
+            .replace("(0.2, 0) (1, 1)", "Triangle 0.2 1.0 1.0")
+            .replace("DEFAULT := 0;", "DEFAULT := nan | NC;\n    ACCU : NSUM;")
+            .replace("    ACCU : NSUM;\n    RULE", "    RULE")
+            .replace("THEN u IS up;", "then u is up").replace("THEN u IS down;", "then u is down"))
+    behaviour = FclImporter().from_string(text, "tiny.fcl")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    assert [r.then for r in behaviour.rules] == ["up", "down"]

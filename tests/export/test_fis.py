@@ -68,7 +68,7 @@ def test_import_reads_the_subset() -> None:
 @pytest.mark.parametrize(("old", "new", "message"), [
     ("Type='sugeno'", "Type='mamdani'", r"tiny.fis:3: Type='mamdani'.*Mamdani output sets"),
     ("MF2='up':'constant',[1]", "MF2='up':'linear',[1 0]",
-     r"tiny.fis:21: output membership function 'up' is a linear"),
+     r"tiny.fis:21: output term 'up' is first-order Takagi-Sugeno"),
     ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'gaussmf',[0.1 1]",
      r"tiny.fis:14: membership function 'high' is a gaussmf"),
     ("1, 2 (1) : 1", "1, 2 (0.5) : 1", r"tiny.fis:24: a rule weight of 0.5"),
@@ -103,11 +103,17 @@ def test_duplicate_antecedents_are_refused_with_both_lines() -> None:
         FisImporter().from_string(text, "tiny.fis")
 
 
-def test_invalid_names_are_located() -> None:
-    from flctool.errors import SpecError
-
-    with pytest.raises(SpecError, match=r"tiny.fis:10:1: inputs.*'x y' is not a valid name"):
-        FisImporter().from_string(SYSTEM.replace("Name='x'", "Name='x y'"), "tiny.fis")
+def test_names_become_identifiers_unless_two_collide() -> None:
+    """MATLAB files name things 'Food-Quality': the import derives 'Food_Quality'."""
+    text = SYSTEM.replace("Name='x'", "Name='x y'").replace("'low'", "'Low-1'")
+    behaviour = FisImporter().from_string(text, "tiny.fis")
+    assert list(behaviour.inputs) == ["x_y"]
+    assert list(behaviour.inputs["x_y"].sets) == ["Low_1", "high"]
+    assert behaviour.rules[0].if_ == {"x_y": "Low_1"}
+    with pytest.raises(ExportError, match=r"tiny.fis:14: the set of input 'x' names 'low-1' "
+                       r"\(line 13\) and 'low_1' both become 'low_1'"):
+        FisImporter().from_string(SYSTEM.replace("'low'", "'low-1'").replace(
+            "'high'", "'low_1'"), "tiny.fis")
 
 
 @pytest.mark.parametrize(("old", "new", "message"), [
@@ -178,3 +184,32 @@ def test_octave_reads_and_agrees(source: object, tmp_path: Path) -> None:
                      controller.ranges[:, 1])
     got = octave_outputs(FisExporter().to_string(behaviour), states, tmp_path)
     assert np.max(np.abs(got - controller.output(states))) <= 1e-12
+
+
+def test_what_other_toolchains_write_imports_exactly() -> None:
+    """MATLAB's shoulder feet outside the range, a zero-order linear output, fuzzylite's
+    Enabled / Default / LockRange keys, and max aggregation where no rules share a term."""
+    text = (SYSTEM.replace("[0 0 0.2 0.8]", "[-1 0 0.2 0.8]").replace("[0.2 1 1]", "[0.2 1 7]")
+            .replace("'constant',[1]", "'linear',[0 1]")
+            .replace("Name='x'", "Name='x'\nEnabled=1")
+            .replace("Name='u'", "Name='u'\nDefault=nan\nLockPrevious=0\nLockRange=0")
+            .replace("DefuzzMethod", "AggMethod='max'\nDefuzzMethod"))
+    behaviour = FisImporter().from_string(text, "tiny.fis")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    assert behaviour.output.commands == {"down": -1.0, "up": 1.0}
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("[0 0 0.2 0.8]", "[-1 0.5 0.6 0.8]", r"tiny.fis:13: set 'low' .* has a ramp that the "
+     r"range's low end 0.0 cuts.*\(fix: move its first two points"),
+    ("'constant',[1]", "'linear',[2 1]", r"tiny.fis:21: output term 'up' is first-order"),
+    ("'constant',[1]", "'trimf',[0 1 2]", r"tiny.fis:21: output term 'up' is a trimf, not a "
+     r"constant.*\(fix: flctool's commands are constants"),
+    ("Name='x'", "Name='x'\nEnabled=0", r"tiny.fis:11: a disabled variable"),
+    ("Name='x'", "Name='x'\nColour=1", r"tiny.fis:11: 'Colour' in an input section \(fix:"),
+])
+def test_refusals_of_other_toolchains_files_say_what_to_do(old: str, new: str,
+                                                           message: str) -> None:
+    with pytest.raises(ExportError, match=message):
+        FisImporter().from_string(SYSTEM.replace(old, new), "tiny.fis")

@@ -210,3 +210,22 @@ def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) ->
     quads = [list(v.sets.values()) for v in behaviour.inputs.values()]
     assert_fuzzylite_agrees(behaviour, FllExporter().to_string(behaviour), "fll", states,
                             quads, tmp_path)
+
+
+def test_ramps_and_zero_order_linear_terms_import_exactly() -> None:
+    text = (ENGINE.replace("Trapezoid 0.0 0.0 0.2 0.8", "Ramp 0.8 0.2")
+            .replace("Triangle 0.2 1.0 1.0", "Ramp 0.2 1.0")
+            .replace("Constant 1.0", "Linear 0.0 1.0"))
+    behaviour = FllImporter().from_string(text, "tiny.fll")
+    assert behaviour.inputs["x"].sets == {"low": (0.0, 0.0, 0.2, 0.8),
+                                          "high": (0.2, 1.0, 1.0, 1.0)}
+    assert behaviour.output.commands == {"down": -1.0, "up": 1.0}
+    with pytest.raises(ExportError, match=r"tiny.fll:14: output term 'up' is first-order"):
+        FllImporter().from_string(ENGINE.replace("Constant 1.0", "Linear 0.5 1.0"), "tiny.fll")
+
+
+@pytest.mark.parametrize("line", ["  lock-range: maybe", "  range: 0 1 x", "  default: soon"])
+def test_the_outputs_settings_must_be_valid(line: str) -> None:
+    text = ENGINE.replace("  range: -1.0 1.0", line)
+    with pytest.raises(ExportError, match=r"tiny.fll:\d+: "):
+        FllImporter().from_string(text, "tiny.fll")

@@ -28,7 +28,8 @@ def read_back(format: str, text: str) -> Behaviour:
 
 
 def test_registries_name_every_format() -> None:
-    assert set(EXPORTERS.names()) == {"yaml", "json", "fll", "fcl", "fis", "c"}
+    assert set(EXPORTERS.names()) == {"yaml", "json", "fll", "fcl", "fis", "c",
+                                      "bundle"}
     assert set(IMPORTERS.names()) == {"fll", "fcl", "fis"}
     for name in EXPORTERS:
         exporter = EXPORTERS.get(name)

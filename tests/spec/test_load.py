@@ -97,8 +97,11 @@ BAD = [
      "rules.4", "duplicate rule: the same antecedent as rules[1]"),
     ("unknown key", GOOD.replace("    unit: deg", "    units: deg"), 11,
      "inputs.pan.units", "unknown key 'units'. Did you mean 'unit'?"),
-    ("rule misses an input", GOOD.replace("{size: large, pan: left}", "{size: large}"), 22,
-     "rules.3.if", "rule gives no set for input(s) pan"),
+    # a rule that leaves out an input stands for all its sets (flctool/spec/rules.py); here
+    # that contradicts rules[2]
+    ("don't-care conflict", GOOD.replace("{if: {size: large, pan: left}, then: ahead}",
+                                         "{if: {size: large}, then: left}"), 22,
+     "rules.3", "both cover IF size IS large AND pan IS right, with different commands"),
     ("unknown input in a rule", GOOD.replace("{size: large, pan: left}",
                                              "{size: large, pann: left, pan: left}"), 22,
      "rules.3.if.pann", "rule names an unknown input 'pann'. Did you mean 'pan'?"),
