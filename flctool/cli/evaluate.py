@@ -1,7 +1,7 @@
 """``flctool evaluate``: run a deployable controller for many episodes and summarise.
 
-Episodes run in lock-step in chunks of :data:`CHUNK_EPISODES`, so memory follows the chunk,
-not ``--episodes``; every episode depends on its own seed only, so the chunking does not
+Episodes run in lock-step in chunks of at most :data:`CHUNK_EPISODES`, so memory follows the
+chunk, not ``--episodes``; every episode depends on its own seed only, so the chunking does not
 change a result (tests check it).
 """
 
@@ -42,8 +42,12 @@ if TYPE_CHECKING:
     from flctool.rollout import Estimate, EvaluationResult
     from flctool.spec import Behaviour
 
-#: Episodes stepped together; the peak memory of an evaluation follows this, not --episodes.
+#: Most episodes stepped together; the peak memory of an evaluation follows this, not
+#: --episodes.
 CHUNK_EPISODES = 1024
+#: Episodes of the first chunk, and the seconds later chunks are sized to take (so that a
+#: slow environment still shows progress).
+FIRST_CHUNK, CHUNK_SECONDS = 64, 2.0
 #: Most episodes one --seeds list may name.
 MAX_LISTED_SEEDS = 10_000_000
 #: Training episodes use seeds from 2^32 up (flctool.learners.base.TRAIN_SEED_LOW).
@@ -201,8 +205,15 @@ def evaluate_command(
 def evaluate_in_chunks(controller: Controller, env: BatchEnv, seeds: NDArray[np.int64], *,
                        show_progress: bool = True, success: bool = True,
                        chunk: int = CHUNK_EPISODES) -> EvaluationResult:
-    """:func:`flctool.rollout.evaluate` of ``seeds (E,)``, :data:`CHUNK_EPISODES` at a
-    time: the same outcomes, with memory that does not grow with E."""
+    """:func:`flctool.rollout.evaluate` of ``seeds (E,)``, at most ``chunk`` episodes at a
+    time: the same outcomes, with memory that does not grow with E.
+
+    The first chunk is small; later ones are sized to take about :data:`CHUNK_SECONDS` each
+    (up to ``chunk``), so a slow environment still reports progress every few seconds while
+    a fast one runs in large lock-step batches.
+    """
+    import time
+
     import numpy as np
 
     from flctool.rollout import EvaluationResult, evaluate
@@ -211,10 +222,15 @@ def evaluate_in_chunks(controller: Controller, env: BatchEnv, seeds: NDArray[np.
     total = int(seeds.shape[0])
     with compiling():  # load (or, on a machine's first run, compile) the kernels
         controller.output(controller.ranges[:, 0][None, :])
+    size = min(FIRST_CHUNK, chunk)
+    done = 0
     with Progress("episodes", total, terminal=show_progress) as progress:
-        for start in range(0, total, chunk):
-            parts.append(evaluate(controller, env, seeds[start:start + chunk]))
-            done = start + parts[-1].episodes
+        while done < total:
+            started = time.monotonic()
+            parts.append(evaluate(controller, env, seeds[done:done + size]))
+            seconds = max(time.monotonic() - started, 1e-6)
+            done += parts[-1].episodes
+            size = max(1, min(chunk, int(parts[-1].episodes * CHUNK_SECONDS / seconds)))
             if success:
                 rate = sum(int(p.success.sum()) for p in parts) / done
                 progress.update(done, success=f"{100 * rate:.1f} %")
