@@ -1,17 +1,24 @@
-"""How long learning takes and how much memory it holds: issue 6's learning goals.
+"""How much CPU learning takes, how much of it is the run directory, and memory: issue 16.
 
-    python benchmarks/bench_learning.py [--repeats 5] [--seeds 30] [--workers 2] [--json FILE]
+    nice -n 10 python benchmarks/bench_learning.py [--repeats 5] [--seeds 30] [--workers 2]
+                                                   [--json FILE]
+
+Every time is CPU time, the least of ``--repeats`` (the least disturbed by the other
+processes of a shared machine): ``time.process_time`` in this process, and for commands and
+pool workers ``getrusage(RUSAGE_CHILDREN)`` (user + system) of the children.
 
 1. The paper's protocol on ballchase (population 10, 30 generations, one trial each = 300
    trials of up to 200 steps), per learner: the training loop alone
-   (``flctool.learners.train``), training into a run directory (checkpoints, metrics,
-   best.yaml: ``Run.train``), and the whole command ``python -m flctool learn
-   behaviours/ballchase.yaml``, with how much of it is start-up (the bare interpreter, then
-   importing what the command imports). Best of ``--repeats`` each. Goal: under 0.3 s after
-   start-up.
+   (``flctool.learners.train``), training into a run directory (``Run.train``: checkpoints,
+   metrics, strengths, best.yaml, run.json), the share of the run that is bookkeeping (goal
+   <= 15 %), and the whole command ``python -m flctool learn behaviours/ballchase.yaml`` with
+   its start-up (the bare interpreter, then importing what the command imports). Goal: the
+   whole command <= 0.4 s.
 2. ``--seeds`` seeds x 3 learners through a process pool of ``--workers`` (spawn start, so
-   the workers' imports are counted), once with the loop alone and once writing run
-   directories. Goal: 30 x 3 in under 15 s on 2 cores.
+   the workers' imports are counted), with the loop alone and writing run directories: the
+   CPU of the parent and every worker, and the runs per minute that gives on 2 cores
+   (runs / (CPU / 2) x 60: two cores kept busy). Goal: >= 300 with run directories. The
+   wall time is printed too; on a shared machine it says more about the others' load.
 3. Peak resident memory of the real commands, each the only child of a fresh interpreter
    (``getrusage(RUSAGE_CHILDREN).ru_maxrss``). Goal: ``flctool learn`` at most 150 MB.
 
@@ -23,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing
+import resource
 import statistics
 import subprocess
 import sys
@@ -40,8 +48,9 @@ from flctool.runs import create_run, resolve_behaviour
 BALLCHASE = ROOT / "behaviours" / "ballchase.yaml"
 HANDMADE = ROOT / "behaviours" / "ballchase-handmade.yaml"
 LEARNERS = ("pitt", "hybrid", "fuzzy_q")
-GOAL_SECONDS = 0.3
-GOAL_POOL_SECONDS = 15.0
+GOAL_BOOKKEEPING = 0.15  # share of a run's CPU
+GOAL_COMMAND_SECONDS = 0.4  # flctool learn, the whole command
+GOAL_RUNS_PER_MINUTE = 300.0  # with run directories, on 2 cores
 GOAL_MEGABYTES = 150.0
 
 # What `flctool learn` imports before it trains (the learners and the simulator are
@@ -59,10 +68,17 @@ RSS_PROBE = ("import resource, subprocess, sys\n"
              "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n")
 
 
-def wall(command: list[str], cwd: Path) -> float:
-    start = time.perf_counter()
+def children_cpu() -> float:
+    """User + system CPU seconds of every child reaped so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def cpu(command: list[str], cwd: Path) -> float:
+    """CPU seconds of one command run as a child."""
+    before = children_cpu()
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL, cwd=cwd)
-    return time.perf_counter() - start
+    return children_cpu() - before
 
 
 def learn_command(learner: str, out: Path) -> list[str]:
@@ -73,8 +89,8 @@ def learn_command(learner: str, out: Path) -> list[str]:
 # -- 1. the paper's protocol, one run --------------------------------------------------------
 def startup(repeats: int, tmp: Path) -> dict[str, float]:
     """Seconds of a bare interpreter and of importing what ``flctool learn`` imports."""
-    interpreter = min(wall([sys.executable, "-c", "pass"], tmp) for _ in range(repeats))
-    imports = min(wall([sys.executable, "-c", IMPORTS], tmp) for _ in range(repeats))
+    interpreter = min(cpu([sys.executable, "-c", "pass"], tmp) for _ in range(repeats))
+    imports = min(cpu([sys.executable, "-c", IMPORTS], tmp) for _ in range(repeats))
     return {"interpreter_seconds": interpreter, "import_seconds": imports - interpreter,
             "startup_seconds": imports}
 
@@ -91,14 +107,15 @@ def measure(learner: str, repeats: int, tmp: Path, startup_seconds: float) -> di
     runs = iter(range(repeats))
     recorded = best_seconds(
         lambda: create_run(behaviour, tmp / f"{learner}-run{next(runs)}").train(), repeats)
-    command = min(wall([sys.executable, *learn_command(learner, tmp / f"{learner}-cli{i}")],
-                       tmp) for i in range(repeats))
+    command = min(cpu([sys.executable, *learn_command(learner, tmp / f"{learner}-cli{i}")],
+                      tmp) for i in range(repeats))
     probe = subprocess.run([sys.executable, "-c", NUMBA_PROBE,
                             *learn_command(learner, tmp / f"{learner}-probe")[2:]],
                            check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                            text=True, cwd=tmp)
     return {"learner": learner, "steps": steps, "loop_seconds": loop,
             "steps_per_second": steps / loop, "run_dir_seconds": recorded,
+            "bookkeeping_share": max(0.0, recorded - loop) / recorded,
             "command_seconds": command, "command_after_startup_seconds":
             command - startup_seconds,
             "command_imports_numba": probe.stderr.strip().splitlines()[-1] == "True"}
@@ -109,32 +126,38 @@ def train_one(task: tuple[str, int, str | None]) -> dict[str, Any]:
     """One run of the protocol in a pool worker: (learner, seed, run directory or None)."""
     learner, seed, out = task
     behaviour = resolve_behaviour(load_behaviour(BALLCHASE), {"learner": learner, "seed": seed})
-    start = time.perf_counter()
+    start = time.process_time()
     if out is None:
         history = train(make_learner(behaviour))
         best = max(m.best for m in history)
     else:
         summary = create_run(behaviour, Path(out)).train()
         best = float(summary.best["fitness"])
-    return {"learner": learner, "seed": seed, "seconds": time.perf_counter() - start,
+    return {"learner": learner, "seed": seed, "seconds": time.process_time() - start,
             "best": best}
 
 
 def pool(seeds: int, workers: int, tmp: Path | None) -> dict[str, Any]:
-    """Wall time of ``seeds`` x 3 runs through ``workers`` spawned processes, from creating
-    the pool (the workers' start-up counts) to the last result."""
+    """``seeds`` x 3 runs through ``workers`` spawned processes, from creating the pool (the
+    workers' start-up counts) to the last worker's exit: CPU of the parent and the workers,
+    and wall time."""
     tasks = [(learner, seed, None if tmp is None else str(tmp / f"{learner}-seed{seed}"))
              for seed in range(seeds) for learner in LEARNERS]
     context = multiprocessing.get_context("spawn")
-    start = time.perf_counter()
-    with context.Pool(workers) as workers_pool:
-        results = list(workers_pool.imap_unordered(train_one, tasks))
+    start, parent, children = time.perf_counter(), time.process_time(), children_cpu()
+    workers_pool = context.Pool(workers)
+    results = list(workers_pool.imap_unordered(train_one, tasks))
+    workers_pool.close()
+    workers_pool.join()  # reaped: their CPU is in RUSAGE_CHILDREN
     total = time.perf_counter() - start
+    used = time.process_time() - parent + children_cpu() - children
     seconds = [r["seconds"] for r in results]
     return {"runs": len(results), "workers": workers, "run_dirs": tmp is not None,
-            "wall_seconds": total, "wall_per_run_seconds": total / len(results),
-            "mean_run_seconds": statistics.fmean(seconds), "max_run_seconds": max(seconds),
-            "per_learner_mean_seconds": {
+            "cpu_seconds": used, "runs_per_minute_on_2_cores": len(results) / (used / 2) * 60,
+            "wall_seconds": total, "runs_per_minute_wall": len(results) / total * 60,
+            "mean_run_cpu_seconds": statistics.fmean(seconds),
+            "max_run_cpu_seconds": max(seconds),
+            "per_learner_mean_cpu_seconds": {
                 learner: statistics.fmean(r["seconds"] for r in results
                                           if r["learner"] == learner) for learner in LEARNERS}}
 
@@ -178,44 +201,54 @@ def main() -> None:
         peaks = memory(tmp)
 
     print(f"1. ballchase, paper protocol (population 10, 30 generations, 1 trial = 300 "
-          f"trials); best of {args.repeats}")
+          f"trials); CPU seconds, least of {args.repeats}")
     print(f"{'learner':8} {'steps':>6} {'loop s':>7} {'steps/s':>8} {'run dir s':>9} "
-          f"{'command s':>9} {'- start-up':>10} {'numba':>6}")
+          f"{'bookkeeping':>11} {'command s':>9} {'- start-up':>10} {'numba':>6}")
     for r in results:
         print(f"{r['learner']:8} {r['steps']:6d} {r['loop_seconds']:7.3f} "
               f"{r['steps_per_second']:8.0f} {r['run_dir_seconds']:9.3f} "
-              f"{r['command_seconds']:9.3f} {r['command_after_startup_seconds']:10.3f} "
+              f"{r['bookkeeping_share']:10.0%} {r['command_seconds']:9.3f} "
+              f"{r['command_after_startup_seconds']:10.3f} "
               f"{'yes' if r['command_imports_numba'] else 'no':>6}")
-    print(f"start-up of the command: {start['startup_seconds']:.3f} s = interpreter "
+    print(f"start-up of the command: {start['startup_seconds']:.3f} s CPU = interpreter "
           f"{start['interpreter_seconds']:.3f} s + imports {start['import_seconds']:.3f} s")
 
     print(f"\n2. {args.seeds} seeds x {len(LEARNERS)} learners, pool of {args.workers} "
           f"spawned workers")
-    print(f"{'run dirs':8} {'runs':>5} {'wall s':>7} {'wall/run s':>10} {'mean run s':>10} "
-          f"{'max run s':>9}  mean per learner")
+    print(f"{'run dirs':8} {'runs':>5} {'CPU s':>7} {'runs/min on 2 cores':>19} {'wall s':>7} "
+          f"{'runs/min wall':>13}  mean CPU per learner")
     for p in pools:
-        per = ", ".join(f"{k} {v:.3f}" for k, v in p["per_learner_mean_seconds"].items())
-        print(f"{'yes' if p['run_dirs'] else 'no':8} {p['runs']:5d} {p['wall_seconds']:7.2f} "
-              f"{p['wall_per_run_seconds']:10.3f} {p['mean_run_seconds']:10.3f} "
-              f"{p['max_run_seconds']:9.3f}  {per}")
+        per = ", ".join(f"{k} {v:.3f}" for k, v in p["per_learner_mean_cpu_seconds"].items())
+        print(f"{'yes' if p['run_dirs'] else 'no':8} {p['runs']:5d} {p['cpu_seconds']:7.2f} "
+              f"{p['runs_per_minute_on_2_cores']:19.0f} {p['wall_seconds']:7.2f} "
+              f"{p['runs_per_minute_wall']:13.0f}  {per}")
 
     print("\n3. peak resident memory")
     for m in peaks:
         print(f"{m['peak_rss_mb']:7.1f} MB  {m['command']}")
 
     learn_mb = peaks[0]["peak_rss_mb"]
+    bookkeeping = max(r["bookkeeping_share"] for r in results)
+    command = max(r["command_seconds"] for r in results)
+    per_minute = pools[1]["runs_per_minute_on_2_cores"]
     goals = {
-        "protocol_loop_under_0.3s": all(r["loop_seconds"] < GOAL_SECONDS for r in results),
-        "protocol_run_dir_under_0.3s": all(r["run_dir_seconds"] < GOAL_SECONDS
-                                           for r in results),
-        "pool_under_15s": pools[0]["wall_seconds"] < GOAL_POOL_SECONDS,
-        "pool_with_run_dirs_under_15s": pools[1]["wall_seconds"] < GOAL_POOL_SECONDS,
-        "learn_peak_at_most_150mb": learn_mb <= GOAL_MEGABYTES,
+        "bookkeeping_share": (bookkeeping, "<=", GOAL_BOOKKEEPING),
+        "learn_command_cpu_seconds": (command, "<=", GOAL_COMMAND_SECONDS),
+        "runs_per_minute_with_run_dirs_on_2_cores": (per_minute, ">=", GOAL_RUNS_PER_MINUTE),
+        "learn_peak_mb": (learn_mb, "<=", GOAL_MEGABYTES),
     }
-    print("\ngoals: " + ", ".join(f"{k} {'met' if v else 'MISSED'}" for k, v in goals.items()))
+    print()
+    met = {}
+    for name, (value, sense, goal) in goals.items():
+        met[name] = value >= goal if sense == ">=" else value <= goal
+        print(f"goal {name}: {value:,.3f} {sense} {goal:g} (worst learner where per learner): "
+              f"{'met' if met[name] else 'MISSED'}")
     write_json(args.json, {"machine": machine(), "repeats": args.repeats, "startup": start,
+                           "timing": "CPU time, least of the repeats",
                            "protocol": results, "pool": pools, "memory": peaks,
-                           "goals": goals})
+                           "goals": {name: {"value": value, "sense": sense, "goal": goal,
+                                            "met": met[name]}
+                                     for name, (value, sense, goal) in goals.items()}})
     print(f"wrote {args.json.name}")
 
 

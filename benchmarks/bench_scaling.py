@@ -7,13 +7,18 @@ For M = 15 (the ballchase controller, 3 x 5 sets) and M = 625, 15,625, 117,649 (
 (``output`` on a batch), one-state inference (``output_one``) and a fuzzy-Q step's
 rule work (``active_rules`` and their phi_m = alpha_m / sum(alpha), eq. 8), each also per
 fired rule, and the peak memory numpy allocates during the batched call next to what a
-dense (B, M) activation array would take. Writes JSON (default: bench_scaling.json beside
-this script).
+dense (B, M) activation array would take. Then, for rule bases around the switch between
+the two batched walks (every rule for a block of states; each state's fired rules), both
+walks side by side with the one ``output`` takes, and the cost per state as M grows past the
+switch (goal: no cliff -- going past it costs at most 1.5x the largest rule base before it,
+and ``output`` takes the cheaper walk to within 25 %). Times are CPU time, the least of
+several repeats. Writes JSON (default: bench_scaling.json beside this script).
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import time
 import tracemalloc
 from pathlib import Path
@@ -24,9 +29,14 @@ import numpy as np
 
 import flctool
 from flctool import Controller
+from flctool.compile import kernels
 from flctool.spec import behaviour_from_data
 
 GOAL_PER_ACTIVE_RULE = 5.0  # largest M at most 5x the smallest, per fired rule
+GOAL_CLIFF = 1.5  # the first rule base past the walks' switch, against the last one before
+GOAL_WALK_CHOICE = 1.25  # output's walk against the cheaper of the two
+# Rule bases around the switch between the walks, by number of inputs: N x L sets.
+AROUND_SWITCH = {2: (5, 6, 8, 12, 16, 20, 24), 3: (3, 4, 5, 6, 7), 4: (3, 4, 5)}
 
 
 def overlapping_controller(n_inputs: int, n_sets: int, seed: int) -> Controller:
@@ -82,6 +92,57 @@ def measure(name: str, controller: Controller, batch: int, singles: int,
             "dense_activations_bytes": batch * controller.n_rules * 8}
 
 
+def walk_ns(controller: Controller, states: np.ndarray, dense: bool, repeats: int) -> float:
+    """CPU ns per state of the batched kernel on one walk (every rule, or the fired rules)."""
+    layout = controller._layout
+    if dense and not layout.dense:  # keep the grid the default layout leaves out
+        offsets = np.concatenate([[0], np.cumsum(controller.shape)])
+        grid = controller.rule_grid + offsets[:-1]
+        ints = np.concatenate([[controller.n_inputs, offsets[-1], max(controller.shape),
+                                len(grid)], layout.ints[4:], grid.ravel()]).astype(np.intp)
+        layout = kernels.Layout(layout.floats, ints, True)
+    tables = np.array(controller.consequents, dtype=np.intp)[None, :]
+    out = np.empty(len(states))
+    infer = kernels.entry("infer")
+    seconds = common.best_seconds(lambda: infer(states, layout.floats, layout.ints, tables,
+                                                out, 0, len(states), dense), repeats)
+    return seconds / len(states) * 1e9
+
+
+def around_switch(batch: int, repeats: int) -> list[dict[str, Any]]:
+    rows = []
+    for n_inputs, sizes in AROUND_SWITCH.items():
+        for n_sets in sizes:
+            controller = overlapping_controller(n_inputs, n_sets, seed=n_inputs * 10 + n_sets)
+            states = common.uniform_states(controller, batch, seed=2)
+            controller.output(states[:100])
+            every = walk_ns(controller, states, True, repeats)
+            fired = walk_ns(controller, states, False, repeats)
+            output = common.best_seconds(lambda c=controller, s=states: c.output(s),
+                                         repeats) / batch * 1e9
+            rows.append({"inputs": n_inputs, "sets": n_sets, "rules": controller.n_rules,
+                         "walks_every_rule": controller._layout.dense,
+                         "every_rule_ns": every, "fired_rules_ns": fired,
+                         "output_ns": output, "over_cheaper": output / min(every, fired)})
+            print(f"N = {n_inputs}, L = {n_sets:>2}, M = {controller.n_rules:>4}: every rule "
+                  f"{every:6.1f}, fired rules {fired:6.1f}, output {output:6.1f} ns/state "
+                  f"({'every rule' if controller._layout.dense else 'fired rules'})",
+                  flush=True)
+    return rows
+
+
+def cliffs(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Where output's walk changes as M grows (per N): the cost just past, over just before."""
+    found = []
+    for before, after in itertools.pairwise(rows):
+        if before["inputs"] == after["inputs"] and (before["walks_every_rule"]
+                                                    != after["walks_every_rule"]):
+            found.append({"inputs": before["inputs"], "rules_before": before["rules"],
+                          "rules_after": after["rules"],
+                          "ratio": after["output_ns"] / before["output_ns"]})
+    return found
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", type=Path, default=Path(__file__).with_suffix(".json"),
@@ -122,11 +183,28 @@ def main() -> None:
         print(f"largest / smallest M, {key.replace('_', ' ')}: {ratios[key]:.2f} "
               f"(goal <= {GOAL_PER_ACTIVE_RULE:g}): {verdict}")
 
+    print("\nAround the switch between the batched walks (CPU ns per state):")
+    switch = around_switch(batch, repeats)
+    found = cliffs(switch)
+    worst_choice = max(row["over_cheaper"] for row in switch)
+    worst_cliff = max((c["ratio"] for c in found), default=1.0)
+    for cliff in found:
+        print(f"N = {cliff['inputs']}: M = {cliff['rules_before']} -> {cliff['rules_after']} "
+              f"crosses the switch: {cliff['ratio']:.2f}x the cost per state")
+    print(f"no cliff (past the switch <= {GOAL_CLIFF}x before it): {worst_cliff:.2f}: "
+          f"{'met' if worst_cliff <= GOAL_CLIFF else 'MISSED'}")
+    print(f"output's walk against the cheaper (<= {GOAL_WALK_CHOICE}x): {worst_choice:.2f}: "
+          f"{'met' if worst_choice <= GOAL_WALK_CHOICE else 'MISSED'}")
+
     common.write_json(args.json, {
         "benchmark": "bench_scaling", "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
         "machine": common.machine(), "quick": args.quick, "repeats": repeats, "rows": rows,
         "largest_over_smallest_per_fired_rule": ratios,
         "goal_per_fired_rule": GOAL_PER_ACTIVE_RULE,
+        "timing": "CPU time, least of the repeats",
+        "around_switch": switch, "switch_crossings": found,
+        "goals": {"no_cliff": {"value": worst_cliff, "goal": GOAL_CLIFF},
+                  "walk_choice": {"value": worst_choice, "goal": GOAL_WALK_CHOICE}},
     })
     print(f"\nwrote {args.json.name}")
 

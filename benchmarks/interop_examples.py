@@ -6,8 +6,9 @@ Walks each folder for ``.fll``, ``.fis`` and ``.fcl`` files and imports each one
 then counts, per folder and in total:
 
 - **exact**: imported, and the controller computes what the file says;
-- **approximated**: imported only with ``--convert-mamdani`` (Mamdani output sets replaced
-  by singletons at their centroids), with the maximum deviation that the import measured;
+- **approximated**: imported only with ``--convert-mamdani`` (a Mamdani FIS whose output sets
+  are replaced by singletons at their centroids), with the largest deviation the import
+  measured;
 - **refused, clear**: refused with one of flctool's errors that names the file and a line,
   says what is not supported and gives a fix (``(fix: ...)``);
 - **refused, unclear**: refused with any other exception, or with a message lacking the
@@ -77,8 +78,8 @@ def outcome(path: Path, convert: bool) -> tuple[str, str]:
         difference = fuzzylite_difference(path, behaviour)
         return "exact", ("" if difference is None else
                          f"max |fuzzylite 6 - flctool| = {difference:.3g}")
-    if convert and hasattr(importer, "convert_mamdani"):
-        importer.convert_mamdani = True
+    if convert and path.suffix.lower() == ".fis":
+        importer = IMPORTERS.get("fis")(mamdani_singletons=True)  # type: ignore[call-arg]
         try:
             importer.from_file(path)
         except FlcError:
@@ -86,7 +87,7 @@ def outcome(path: Path, convert: bool) -> tuple[str, str]:
         except Exception as error:
             return "unclear", f"{type(error).__name__}: {error}"
         else:
-            return "approximated", importer.report
+            return "approximated", getattr(importer, "report", "")
     return ("clear" if clear(exact_error, path) else "unclear"), str(exact_error)
 
 

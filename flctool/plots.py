@@ -107,7 +107,7 @@ def plot_fitness(runs: Sequence[Run], path: Path) -> list[Path]:
     top.set_title(f"{runs[0].behaviour.name}: fitness per generation "
                   "(band: worst to best trial)", fontsize="medium")
     top.legend(fontsize="small")
-    bottom.set_ylabel("population std")
+    bottom.set_ylabel("std of trial fitness")
     bottom.set_xlabel("training episodes (trials)")
     for axes in (top, bottom):
         axes.grid(alpha=0.3)
@@ -182,7 +182,7 @@ def plot_experiment_learning(summary: dict[str, Any], path: Path) -> list[Path]:
     top.set_title(f"{summary['behaviour']}: {seeds} seeds per learner "
                   "(line: median, band: 25-75 %)", fontsize="medium")
     top.set_ylabel("mean fitness of a generation")
-    bottom.set_ylabel("population std")
+    bottom.set_ylabel("std of trial fitness")
     bottom.set_xlabel("training episodes (trials)")
     top.legend(fontsize="small")
     for axes in (top, bottom):

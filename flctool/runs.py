@@ -341,10 +341,13 @@ class Run:
 
     def summary(self) -> RunSummary:
         info = self.info()
-        metrics = self.metrics()
-        return RunSummary(self.path, self.learner, self.seed, len(metrics),
+        done = self.checkpoint_generations()
+        # Only the last checkpoint is read: a summary of a long run costs one file, not all.
+        last = (GenerationMetrics.from_row(self.checkpoint(done[-1])["metrics"]) if done
+                else None)
+        return RunSummary(self.path, self.learner, self.seed, len(done),
                           str(info.get("status", "unknown")), dict(info.get("best") or {}),
-                          metrics[-1] if metrics else None, info.get("selection"))
+                          last, info.get("selection"))
 
     def info(self) -> dict[str, Any]:
         try:

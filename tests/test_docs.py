@@ -153,7 +153,7 @@ def console_commands(text: str) -> list[tuple[str, str]]:
             command = line[2:]
             while command.endswith("\\") and i + 1 < len(lines):
                 i += 1
-                command = command[:-1] + "\n" + lines[i]
+                command += "\n" + lines[i]  # bash joins the lines at the backslash
             pairs.append((command, []))
         elif pairs:
             pairs[-1][1].append(line)
@@ -233,7 +233,7 @@ def test_extract_blocks_reads_markers_and_languages(tmp_path: Path) -> None:
 
 def test_console_commands_and_output_matching() -> None:
     pairs = console_commands("$ printf 'a\\n' \\\n  | cat\na\n$ true\n")
-    assert pairs == [("printf 'a\\n' \n  | cat", "a"), ("true", "")]
+    assert pairs == [("printf 'a\\n' \\\n  | cat", "a"), ("true", "")]
     assert output_matches("first\n...\nlast 1.5 s", "first\nbar 1\nbar 2\nlast 1.5 s  \n")
     assert output_matches("took ... s", "took 0.27 s")
     assert not output_matches("took ... s", "took 0.27 ms")

@@ -16,6 +16,7 @@ from flctool.cli.app import (
     example,
     make_parent,
     output_format,
+    say,
     user_errors,
 )
 from flctool.errors import FlcError
@@ -92,6 +93,9 @@ def import_controller(
     force: Force = False,
     format: Annotated[str | None, typer.Option(
         "--format", "-f", help="fll, fcl or fis (default: from the file's suffix).")] = None,
+    mamdani_singletons: Annotated[bool, typer.Option(
+        "--mamdani-singletons", help="fis only: replace a Mamdani system's output sets by "
+        "singletons at their centroids, and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
     from flctool import __version__
@@ -109,7 +113,16 @@ def import_controller(
                 raise FlcError(f"import writes a behaviour file (YAML), but {output} has the "
                                f"suffix of {implied}",
                                hint="name it .yaml, or use 'flctool export' for other formats")
-        behaviour = IMPORTERS.get(name)().from_file(file)
+        importer_class = IMPORTERS.get(name)
+        if mamdani_singletons and name != "fis":
+            raise FlcError("--mamdani-singletons applies to FIS files only",
+                           hint="leave it out")
+        importer = (importer_class(mamdani_singletons=True)  # type: ignore[call-arg]
+                    if mamdani_singletons else importer_class())
+        behaviour = importer.from_file(file)
+        report = getattr(importer, "report", "")
+        if report:  # on stderr: the YAML may be going to stdout
+            say(report, err=True)
         text = imported_yaml(behaviour, f"{behaviour.name}: imported by flctool {__version__} "
                              f"from {comment_safe(file)}")
         if output is None:

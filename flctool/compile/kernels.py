@@ -338,6 +338,9 @@ def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables
         for m in range(rules):
             values[p, m] = singletons[tables[p, m]]
     scratch = np.empty(n * max_sets + 2 * n, np.intp)
+    sums = np.empty((population, 2))
+    fired_rules = np.empty(0 if dense or n <= 2 else 64, np.intp)  # grown when more fire
+    fired_alphas = np.empty(fired_rules.shape[0])
     for first in range(start, stop, _BLOCK):
         count = min(_BLOCK, stop - first)
         nan_state = _block_memberships(states, first, count, lo, hi, quads, offsets, xs, mu)
@@ -349,9 +352,11 @@ def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables
             for b in range(count):  # eq. 2-3 over each state's fired rules
                 denominators[b] = 0.0  # no rule fires (see _first_zero)
                 if _compact(mu, b, ints, scratch, mus):
+                    fired_rules, fired_alphas = _state_outputs(
+                        floats, ints, scratch, mus, tables, sums, fired_rules, fired_alphas)
                     for p in range(population):
-                        numerators[p, b], denominators[b] = _state_sums(
-                            floats, ints, scratch, mus, tables, p)
+                        numerators[p, b] = sums[p, 0]
+                    denominators[b] = sums[0, 1]
         failed = _first_zero(denominators, count, first)
         if failed >= 0:
             return failed
@@ -441,6 +446,80 @@ def _state_sums(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: Floa
 
 
 @_jit
+def _state_capacity(ints: IntArray, scratch: IntArray) -> int:
+    # prod(counts) of the state _state_sets / _compact wrote: how many rules fire.
+    n, max_sets = ints[0], ints[2]
+    total = 1
+    for i in range(n):
+        total *= scratch[n * max_sets + i]
+    return total
+
+
+@_jit
+def _expand_fired(ints: IntArray, scratch: IntArray, mus: FloatArray, rules: IntArray,
+                  alphas: FloatArray) -> int:
+    """The fired rules of the state :func:`_state_sets` wrote, in increasing rule order, into
+    ``rules``/``alphas`` (capacity >= :func:`_state_capacity`); returns how many. Eq. 1-2.
+
+    For three inputs or more this beats the odometer of :func:`_state_sums`: the product of
+    the fired sets is built input by input (after input i the buffers hold the combinations
+    of inputs 0..i in rule order; input i + 1 splits each entry into one per fired set,
+    from the back so that it happens in place), so each fired rule costs one min, not N.
+    """
+    n, max_sets = ints[0], ints[2]
+    strides = 4 + n + 1
+    size = 1
+    rules[0] = 0
+    alphas[0] = np.inf
+    for i in range(n):
+        count = scratch[n * max_sets + i]
+        stride = ints[strides + i]
+        for entry in range(size - 1, -1, -1):
+            rule = rules[entry]
+            alpha = alphas[entry]
+            for slot in range(count - 1, -1, -1):
+                rules[entry * count + slot] = rule + scratch[i * max_sets + slot] * stride
+                alphas[entry * count + slot] = min(alpha, mus[i * max_sets + slot])
+        size *= count
+    return size
+
+
+@_jit
+def _listed_sums(floats: FloatArray, ints: IntArray, rules: IntArray, alphas: FloatArray,
+                 fired: int, tables: IntArray, p: int) -> tuple[float, float]:
+    # sum(alpha_m * c_m) and sum(alpha_m) over the rules _expand_fired listed (eq. 3).
+    singletons = 2 * ints[0] + 4 * ints[1]
+    numerator = 0.0
+    denominator = 0.0
+    for a in range(fired):
+        alpha = alphas[a]
+        numerator += alpha * floats[singletons + tables[p, rules[a]]]
+        denominator += alpha
+    return numerator, denominator
+
+
+@_jit
+def _state_outputs(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: FloatArray,
+                   tables: IntArray, sums: FloatArray, rules: IntArray,
+                   alphas: FloatArray) -> tuple[IntArray, FloatArray]:
+    """Eq. 2-3 sums of the state :func:`_state_sets` wrote, for every table: into ``sums``
+    (P, 2) numerator and denominator. Returns the rule buffers, grown if more rules fired
+    than they hold (three inputs or more; two use the odometer, without buffers)."""
+    if ints[0] <= 2:
+        for p in range(tables.shape[0]):
+            sums[p, 0], sums[p, 1] = _state_sums(floats, ints, scratch, mus, tables, p)
+        return rules, alphas
+    capacity = _state_capacity(ints, scratch)
+    if capacity > rules.shape[0]:
+        rules = np.empty(capacity, np.intp)
+        alphas = np.empty(capacity)
+    fired = _expand_fired(ints, scratch, mus, rules, alphas)
+    for p in range(tables.shape[0]):
+        sums[p, 0], sums[p, 1] = _listed_sums(floats, ints, rules, alphas, fired, tables, p)
+    return rules, alphas
+
+
+@_jit
 def _singleton_bounds(floats: FloatArray, ints: IntArray) -> tuple[float, float]:
     first = 2 * ints[0] + 4 * ints[1]
     low = high = floats[first]
@@ -464,12 +543,15 @@ def _infer_small(states: FloatArray, floats: FloatArray, ints: IntArray, tables:
     mus = np.empty(n * max_sets)
     low, high = _singleton_bounds(floats, ints)
     batch = states.shape[0]
+    sums = np.empty((tables.shape[0], 2))
+    rules = np.empty(0 if n <= 2 else 64, np.intp)  # grown when more rules fire
+    alphas = np.empty(rules.shape[0])
     for b in range(start, stop):
         if _state_sets(floats, ints, states, b, scratch, mus) >= 0:
             return b
+        rules, alphas = _state_outputs(floats, ints, scratch, mus, tables, sums, rules, alphas)
         for p in range(tables.shape[0]):
-            numerator, denominator = _state_sums(floats, ints, scratch, mus, tables, p)
-            out[p * batch + b] = _within(numerator / denominator, low, high)
+            out[p * batch + b] = _within(sums[p, 0] / sums[p, 1], low, high)
     return -1
 
 
@@ -487,9 +569,15 @@ def infer_one(floats: FloatArray, ints: IntArray, state: FloatArray) -> float:
     if _state_sets(floats, ints, state.reshape((1, n)), 0, scratch, mus) >= 0:
         return np.nan
     table = 5 + 2 * n + ints[3] * n  # where the consequents start
-    rules = ints.shape[0] - table
-    numerator, denominator = _state_sums(floats, ints, scratch, mus,
-                                         ints[table:].reshape((1, rules)), 0)
+    tables = ints[table:].reshape((1, ints.shape[0] - table))
+    if n <= 2:
+        numerator, denominator = _state_sums(floats, ints, scratch, mus, tables, 0)
+    else:
+        capacity = _state_capacity(ints, scratch)
+        rules = np.empty(capacity, np.intp)
+        alphas = np.empty(capacity)
+        fired = _expand_fired(ints, scratch, mus, rules, alphas)
+        numerator, denominator = _listed_sums(floats, ints, rules, alphas, fired, tables, 0)
     low, high = _singleton_bounds(floats, ints)
     return _within(numerator / denominator, low, high)
 

@@ -2,7 +2,9 @@
 a Discrete or one-component Box action space, as a :class:`~flctool.envs.base.BatchEnv`.
 
 * Observations: each behaviour input reads one component of the observation vector, by the
-  index declared in ``environment.observations`` (default: the inputs in order read 0, 1, ...).
+  index declared in ``environment.observations`` (default: the inputs in order read 0, 1, ...),
+  or a feature computed from it (:class:`~flctool.spec.environment.ObservationFeature`: an
+  angle from its cosine and sine, a difference, abs, scale and offset).
 * Discrete actions: ``environment.actions`` maps every command to an action; the crisp output
   ``a`` (eq. 3) executes the action of the command whose singleton is nearest ``a``.
 * Box actions: the singletons are action values and ``a`` itself is the action (clipped to
@@ -28,7 +30,7 @@ from numpy.typing import NDArray
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.errors import EnvError, MissingDependencyError, Problem, SpecError
 from flctool.registry import did_you_mean
-from flctool.spec.environment import GymnasiumConfig
+from flctool.spec.environment import GymnasiumConfig, ObservationFeature
 from flctool.spec.models import Behaviour
 
 
@@ -77,6 +79,28 @@ def _spec_error(path: tuple[str | int, ...], message: str, hint: str = "") -> Sp
     return SpecError([Problem(path, message, hint)])
 
 
+def observation_space_bounds(config: GymnasiumConfig) -> tuple[list[float], list[float]]:
+    """The low and high bounds ``(D,)`` of the environment's one-dimensional Box observation
+    space, each the shortest decimal of its dtype (entries may be infinite). Makes the
+    environment once, then closes it."""
+    gym = import_gymnasium()
+    try:
+        env = gym.make(config.id, disable_env_checker=True, **config.options)
+    except (gym.error.Error, TypeError) as error:  # make_env reports it in full
+        raise _spec_error(("environment", "id"), f"Gymnasium cannot make '{config.id}': "
+                          f"{error}") from None
+    try:
+        space = env.observation_space
+        if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
+            raise _spec_error(("environment", "id"), f"'{config.id}' observes {space}; the "
+                              "gymnasium adapter needs a one-dimensional Box observation space")
+        # Bounds as the space's dtype prints them: float32 4.8 is 4.800000190734863 as a
+        # double, and sets written up to 4.8 would leave a sliver uncovered.
+        return ([float(str(v)) for v in space.low], [float(str(v)) for v in space.high])
+    finally:
+        env.close()
+
+
 class GymnasiumEnv(BatchEnv):
     """B episodes of one Gymnasium environment id (one environment object per episode)."""
 
@@ -90,7 +114,7 @@ class GymnasiumEnv(BatchEnv):
         self._envs: list[Any] = [self._make()]
         try:
             first = self._envs[0]
-            self._indices = self._observation_indices(first.observation_space, input_names)
+            self._features = self._observation_features(first.observation_space, input_names)
             self._discrete, self._action_of = self._action_mapping(first.action_space,
                                                                    commands)
             limit = getattr(first.spec, "max_episode_steps", None)
@@ -146,7 +170,8 @@ class GymnasiumEnv(BatchEnv):
             message += "."
         return message + suggestion
 
-    def _observation_indices(self, space: Any, inputs: tuple[str, ...]) -> NDArray[np.intp]:
+    def _observation_features(self, space: Any,
+                              inputs: tuple[str, ...]) -> list[ObservationFeature]:
         box = self.gym.spaces.Box
         if not isinstance(space, box) or len(space.shape) != 1:
             raise _spec_error(("environment", "id"),
@@ -154,13 +179,11 @@ class GymnasiumEnv(BatchEnv):
                               "needs a one-dimensional Box observation space",
                               "flatten the observation with a wrapper registered as a new id")
         size = int(space.shape[0])
-        mapping = dict(self.config.observations)
-        if not mapping:
-            if len(inputs) > size:
-                raise _spec_error(("inputs",), f"the behaviour has {len(inputs)} inputs but "
-                                  f"'{self.config.id}' observes only {size} components",
-                                  "map inputs to components with environment.observations")
-            mapping = {name: i for i, name in enumerate(inputs)}
+        if not self.config.observations and len(inputs) > size:
+            raise _spec_error(("inputs",), f"the behaviour has {len(inputs)} inputs but "
+                              f"'{self.config.id}' observes only {size} components",
+                              "map inputs to components with environment.observations")
+        mapping = self.config.features(inputs)
         problems = [Problem(("environment", "observations", name),
                             f"'{name}' is not an input of this behaviour."
                             f"{did_you_mean(name, inputs)}", f"inputs: {', '.join(inputs)}")
@@ -172,10 +195,11 @@ class GymnasiumEnv(BatchEnv):
         problems += [Problem(("environment", "observations", name),
                              f"index {index} is out of range: the observation space {space} "
                              f"has components 0..{size - 1}")
-                     for name, index in mapping.items() if name in inputs and index >= size]
+                     for name, feature in mapping.items() if name in inputs
+                     for index in feature.indices if index >= size]
         if problems:
             raise SpecError(problems)
-        return np.array([mapping[name] for name in inputs], dtype=np.intp)
+        return [mapping[name] for name in inputs]
 
     def _action_mapping(self, space: Any, commands: dict[str, float]) -> tuple[bool, Any]:
         spaces = self.gym.spaces
@@ -249,7 +273,8 @@ class GymnasiumEnv(BatchEnv):
             self.raw[b] = array
         else:
             self.raw.append(array)
-        self.obs[b] = array[self._indices]
+        values = array.tolist()
+        self.obs[b] = [feature.value(values) for feature in self._features]
 
     def _action(self, a: float) -> Any:
         if self._discrete:

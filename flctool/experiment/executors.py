@@ -142,7 +142,14 @@ class RayExecutor(Executor):
                 done, _ = ray.wait(list(pending), num_returns=1)
                 for ref in done:
                     job = pending.pop(ref)
-                    outcome, files = ray.get(ref)
+                    try:
+                        outcome, files = ray.get(ref)
+                    except ray.exceptions.RayTaskError as error:
+                        # a flctool error in a worker reads as it would have locally
+                        cause = getattr(error, "cause", None)
+                        if isinstance(cause, FlcError):
+                            raise cause from None
+                        raise
                     unpack_run(files, root / job.name)
                     on_done(outcome)
         finally:

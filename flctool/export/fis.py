@@ -10,6 +10,7 @@ MATLAB does not clip inputs to their range: clip states before evaluating to mat
 
 from __future__ import annotations
 
+import itertools
 import re
 
 from flctool.export.base import Exporter, Importer, number, require_deployable, sloped_quad
@@ -23,9 +24,11 @@ from flctool.export.imported import (
     Method,
     build_behaviour,
     fuzzylite_quad,
+    identifier,
     parse_number,
     zero_order_constant,
 )
+from flctool.export.mamdani import centroid, measure
 from flctool.spec import Behaviour
 
 
@@ -81,18 +84,44 @@ _MF = re.compile(r"'([^']*)'\s*:\s*'([^']*)'\s*,\s*\[([^\]]*)\]")
 MAX_DIGITS = 6
 
 
+#: The Mamdani centroid's resolution: fuzzylite 6's default for an imported FIS.
+CENTROID_RESOLUTION = 100
+#: The fix offered when a Mamdani system is imported without the conversion.
+MAMDANI_HINT = ("import with --mamdani-singletons to replace each output set by a singleton "
+                "at its centroid: an approximation, whose largest error the import measures "
+                "and reports")
+
+
 class FisImporter(Importer):
-    """Reads a Sugeno FIS with constant outputs, trapmf / trimf inputs and AND rules."""
+    """Reads a Sugeno FIS with constant outputs, trapmf / trimf inputs and AND rules; with
+    ``mamdani_singletons``, also a Mamdani one (see :mod:`flctool.export.mamdani`), and then
+    ``report`` says how far the conversion moved the output."""
 
     format = "fis"
 
+    def __init__(self, mamdani_singletons: bool = False) -> None:
+        self.mamdani_singletons = mamdani_singletons
+        self.report = ""
+
     def parse(self, text: str, file: str) -> Behaviour:
-        return build_behaviour(_FisReader(file).read(text))
+        reader = _FisReader(file, self.mamdani_singletons)
+        behaviour = build_behaviour(reader.read(text))
+        self.report = ""
+        if reader.output_sets:
+            sets = {identifier(name): quad for name, quad in reader.output_sets.items()}
+            conversion = measure(behaviour, sets, reader.output_range,
+                                 CENTROID_RESOLUTION)
+            self.report = f"{file}: {conversion.report()}"
+        return behaviour
 
 
 class _FisReader:
-    def __init__(self, file: str) -> None:
+    def __init__(self, file: str, mamdani_singletons: bool = False) -> None:
         self.file = file
+        self.mamdani_singletons = mamdani_singletons
+        #: Mamdani output sets (name -> quadruple) replaced by singletons at their centroids
+        self.output_sets: dict[str, tuple[float, float, float, float]] = {}
+        self.output_range = (0.0, 1.0)
         self.result = ImportedController(file)
         self.fail = self.result.error
         self.system: dict[str, tuple[str, int]] = {}
@@ -227,8 +256,11 @@ class _FisReader:
         elif key.startswith("MF"):
             self.mf_key(key, len(self.result.commands), line)
             name, kind, params = self.mf(value, line)
-            constant = zero_order_constant(kind, params, len(self.result.inputs), self.file,
-                                           line, name)
+            if kind in ("trimf", "trapmf"):
+                constant = self.mamdani_set(name, kind, params, line)
+            else:
+                constant = zero_order_constant(kind, params, len(self.result.inputs),
+                                               self.file, line, name)
             self.result.commands.append(ImportedCommand(name, constant, line))
         elif key == "NumMFs":
             self.output_mfs = (self.count(value, line, key), line)
@@ -240,10 +272,30 @@ class _FisReader:
                 parse_number(value, self.file, line, key)
         elif key == "Enabled":
             self.enabled(value, line)
-        elif key != "Range":
+        elif key == "Range":
+            values = self.vector(value, line, "Range")
+            if len(values) != 2 or not values[0] < values[1]:
+                raise self.fail(line, f"Range {_excerpt(value)} is not [low high] with low "
+                                "below high", "write Range=[low high]")
+            self.output_range = (values[0], values[1])
+        else:
             raise self.fail(line, f"'{key}' in the output section",
                             "remove the line: an output section holds Name, Range, NumMFs "
                             "and MFk")
+
+    def mamdani_set(self, name: str, kind: str, params: list[float], line: int) -> float:
+        """A Mamdani output set, refused unless converting: then its centroid."""
+        if not self.mamdani_singletons:
+            raise self.fail(line, f"output term '{name}' is a {kind}, a Mamdani output set: "
+                            "flctool's commands are singletons", MAMDANI_HINT)
+        n = 3 if kind == "trimf" else 4
+        if len(params) != n or any(b < a for a, b in itertools.pairwise(params)):
+            raise self.fail(line, f"a {kind} takes {n} increasing parameters",
+                            f"give it {n} numbers in increasing order")
+        quad = ((params[0], params[1], params[1], params[2]) if n == 3
+                else (params[0], params[1], params[2], params[3]))
+        self.output_sets[name] = quad
+        return centroid(quad)
 
     def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
         match = _MF.fullmatch(value)
@@ -260,10 +312,16 @@ class _FisReader:
 
     def check_system(self) -> None:
         kind, line = self.system.get("Type", ("", 1))
+        if kind.lower() == "mamdani" and self.mamdani_singletons:
+            self.check_mamdani(line)
+            return
         if kind.lower() != "sugeno":
             raise self.fail(line, f"Type='{kind}': flctool reads Sugeno systems with constant "
                             "outputs; Mamdani output sets that are not singletons cannot be "
-                            "expressed")
+                            "expressed", MAMDANI_HINT if kind.lower() == "mamdani" else "")
+        if self.output_sets:
+            raise self.fail(line, "Type='sugeno' with trimf / trapmf output sets",
+                            "give a Sugeno system constant outputs, or declare it mamdani")
         outputs, line = self.system.get("NumOutputs", ("1", 1))
         if outputs != "1":
             raise self.fail(line, f"NumOutputs={outputs}: flctool controllers have one output")
@@ -271,6 +329,20 @@ class _FisReader:
         if method != "wtaver":
             raise self.fail(line, f"DefuzzMethod='{method}': flctool's output is the weighted "
                             "average (eq. 3)", "use DefuzzMethod='wtaver'")
+
+    def check_mamdani(self, line: int) -> None:
+        """The Mamdani settings that the conversion's measurement computes."""
+        expected = {"ImpMethod": "min", "AggMethod": "max", "DefuzzMethod": "centroid",
+                    "NumOutputs": "1"}
+        for key, want in expected.items():
+            value, at = self.system.get(key, (want, line))
+            if value.lower() != want:
+                raise self.fail(at, f"{key}='{value}': the conversion of a Mamdani system "
+                                f"measures its error against {key}='{want}'",
+                                f"use {key}='{want}' (or convert the system by hand)")
+        if len(self.output_sets) != len(self.result.commands):
+            raise self.fail(line, "a Mamdani system with output MFs other than trimf / trapmf",
+                            "make every output MF a trimf or trapmf")
 
     def check_counts(self) -> None:
         """NumInputs, NumMFs and NumRules must count what the file holds."""
@@ -296,7 +368,7 @@ class _FisReader:
             self.result.conjunction = Method(f"AndMethod='{method}'", line,
                                              "use AndMethod='min'")
         method, line = self.system.get("AggMethod", ("sum", 1))
-        if method != "sum":
+        if method != "sum" and not self.output_sets:  # Mamdani: part of what is measured
             self.result.accumulation = Method(f"AggMethod='{method}'", line,
                                               "use AggMethod='sum'")
 

@@ -6,11 +6,13 @@ in ROS), times in steps. docs/environments.md gives the rationale of every defau
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, Field, ValidationInfo, field_validator
+from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
 
-from flctool.errors import PathPart, Problem
+from flctool.errors import FlcError, PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.base import Name, Section
 
@@ -233,6 +235,80 @@ class BallchaseSimConfig(Section):
                     + ", ".join(BALLCHASE_OBSERVATIONS))
             for name in inputs if name not in BALLCHASE_OBSERVATIONS]
         return problems + command_table_problems(self.motion, self.noise, commands)
+
+
+ObservationIndex = Annotated[int, Field(ge=0)]
+
+
+class ObservationFeature(Section):
+    """One behaviour input computed from a Gymnasium observation vector.
+
+    Exactly one source: a ``component``, an ``angle`` from a cosine and a sine component, or
+    the ``difference`` of two components. Then, in this order, ``abs`` takes its absolute
+    value and ``scale`` and ``offset`` map it linearly: ``value * scale + offset``.
+    """
+
+    component: ObservationIndex | None = Field(None, description=(
+        "index of the observation component the input reads"))
+    angle: tuple[ObservationIndex, ObservationIndex] | None = Field(None, description=(
+        "[cos index, sin index]: the angle atan2(sin, cos) in radians, in [-pi, pi]; one "
+        "input in place of two (e.g. Pendulum's [0, 1])"))
+    difference: tuple[ObservationIndex, ObservationIndex] | None = Field(None, description=(
+        "[i, j]: component i minus component j"))
+    abs: bool = Field(False, description="take the absolute value (before scale and offset)")
+    scale: float = Field(1.0, description=(
+        "multiplies the value (after abs), e.g. 57.29578 for degrees from radians; not 0"))
+    offset: float = Field(0.0, description="added last: value * scale + offset")
+
+    @model_validator(mode="after")
+    def _one_source(self) -> ObservationFeature:
+        sources = [k for k in ("component", "angle", "difference") if getattr(self, k) is not None]
+        if len(sources) != 1:
+            raise ValueError("give exactly one of component, angle or difference (got "
+                             f"{', '.join(sources) or 'none'})")
+        if self.scale == 0:
+            raise ValueError("scale 0 makes the input a constant; use a non-zero scale")
+        return self
+
+    @property
+    def indices(self) -> tuple[int, ...]:
+        """The observation components this feature reads."""
+        if self.component is not None:
+            return (self.component,)
+        pair = self.angle if self.angle is not None else self.difference
+        assert pair is not None
+        return pair
+
+    def value(self, observation: Sequence[float]) -> float:
+        """The input's value for one observation vector ``(D,)``."""
+        if self.component is not None:
+            value = float(observation[self.component])
+        elif self.angle is not None:
+            value = math.atan2(float(observation[self.angle[1]]),
+                               float(observation[self.angle[0]]))
+        else:
+            assert self.difference is not None
+            value = float(observation[self.difference[0]]) - float(
+                observation[self.difference[1]])
+        if self.abs:
+            value = abs(value)
+        return value * self.scale + self.offset
+
+    def bounds(self, low: Sequence[float], high: Sequence[float]) -> tuple[float, float]:
+        """The interval of the value when each component i lies in [low[i], high[i]];
+        infinite where the observation space is unbounded."""
+        if self.component is not None:
+            lo, hi = float(low[self.component]), float(high[self.component])
+        elif self.angle is not None:
+            lo, hi = -math.pi, math.pi
+        else:
+            assert self.difference is not None
+            i, j = self.difference
+            lo, hi = float(low[i]) - float(high[j]), float(high[i]) - float(low[j])
+        if self.abs:
+            lo, hi = (lo, hi) if lo >= 0 else (-hi, -lo) if hi <= 0 else (0.0, max(-lo, hi))
+        lo, hi = lo * self.scale + self.offset, hi * self.scale + self.offset
+        return (lo, hi) if lo <= hi else (hi, lo)
 
 
 # -- the pitch world ---------------------------------------------------------------------------
@@ -528,9 +604,11 @@ class GymnasiumConfig(Section):
     id: str = Field(description="a registered Gymnasium id, e.g. CartPole-v1")
     max_steps: int | None = Field(None, ge=1, description=(
         "steps before truncation; default: the environment's own time limit"))
-    observations: dict[Name, int] = Field(default_factory=dict, description=(
-        "behaviour input name -> index of the observation component it reads; "
-        "default: the inputs in order read components 0, 1, ..."))
+    observations: dict[Name, ObservationIndex | ObservationFeature] = Field(
+        default_factory=dict, description=(
+            "behaviour input name -> the index of the observation component it reads, or a "
+            "feature computed from the observation ({component | angle | difference, abs, "
+            "scale, offset}); default: the inputs in order read components 0, 1, ..."))
     actions: dict[Name, int] = Field(default_factory=dict, description=(
         "Discrete action spaces: command name -> action index; the crisp output executes "
         "the action of the command with the nearest singleton. Box action spaces: leave "
@@ -545,13 +623,61 @@ class GymnasiumConfig(Section):
     options: dict[str, float | int | str | bool] = Field(default_factory=dict, description=(
         "keyword arguments for gymnasium.make"))
 
-    @field_validator("observations", "actions")
+    @field_validator("actions")
     @classmethod
     def _non_negative(cls, mapping: dict[str, int]) -> dict[str, int]:
         for name, index in mapping.items():
             if index < 0:
                 raise ValueError(f"'{name}': index {index} must be >= 0")
         return mapping
+
+    def features(self, inputs: tuple[str, ...]) -> dict[str, ObservationFeature]:
+        """Input name -> its feature, for the inputs ``observations`` maps (all of them by
+        default: the inputs in order read components 0, 1, ...)."""
+        mapping = self.observations or {name: i for i, name in enumerate(inputs)}
+        return {name: ObservationFeature(component=feature) if isinstance(feature, int)
+                else feature for name, feature in mapping.items()}
+
+
+def default_gymnasium_ranges(data: Any) -> Any:
+    """Raw behaviour data with ``range`` filled in for gymnasium inputs that leave it out.
+
+    The default is the interval the input's feature takes over the observation space's
+    bounds (:meth:`ObservationFeature.bounds`), read from the environment, which is made once
+    for it. An input whose interval is infinite, or whose environment cannot be made, keeps
+    no range, and validation reports the missing range where it belongs. Runs before the
+    models validate the file, so the sets are checked against the range as usual; the
+    resolved behaviour (a run's ``behaviour.yaml``, exports) states the range.
+    """
+    if not isinstance(data, dict):
+        return data
+    environment, inputs = data.get("environment"), data.get("inputs")
+    if not (isinstance(environment, dict) and environment.get("adapter") == "gymnasium"
+            and isinstance(inputs, dict)):
+        return data
+    missing = [name for name, variable in inputs.items()
+               if isinstance(variable, dict) and "range" not in variable]
+    env_id = environment.get("id")
+    # An id "module:Env" imports a module: reading a file never does that.
+    if not missing or not isinstance(env_id, str) or ":" in env_id:
+        return data
+    try:
+        config = GymnasiumConfig.model_validate(environment)
+        features = config.features(tuple(str(name) for name in inputs))
+        from flctool.envs.gym_adapter import observation_space_bounds
+
+        low, high = observation_space_bounds(config)
+    except (ValueError, FlcError):  # reported where it belongs when the file is validated
+        return data
+    filled = dict(inputs)
+    for name in missing:
+        feature = features.get(str(name))
+        if feature is None or max(feature.indices) >= len(low):
+            continue
+        lo, hi = feature.bounds(low, high)
+        if math.isfinite(lo) and math.isfinite(hi) and lo < hi:
+            filled[name] = {**inputs[name], "range": [lo, hi]}
+    return {**data, "inputs": filled}
 
 
 class RobotLinkConfig(Section):

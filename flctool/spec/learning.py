@@ -43,7 +43,7 @@ class SelectionConfig(Section):
     Validation episodes count in the run's budget.
     """
 
-    candidates: int = Field(5, ge=0, description=(
+    candidates: int = Field(10, ge=0, description=(
         "controllers kept for validation (0: no selection, best.yaml is the last "
         "generation's best by its training trials)"))
     episodes: int = Field(20, ge=1, description="validation episodes per candidate")

@@ -12,11 +12,18 @@ import itertools
 import math
 from typing import Annotated, Any
 
-from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
+from pydantic import (
+    AfterValidator,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
-from flctool.spec.environment import EnvironmentConfig
+from flctool.spec.environment import EnvironmentConfig, default_gymnasium_ranges
 from flctool.spec.learning import LearningConfig
 
 FORMAT_VERSION = 1
@@ -41,11 +48,21 @@ def _increasing(bounds: tuple[float, float]) -> tuple[float, float]:
     return bounds
 
 
+def _range_may_default(schema: dict[str, Any]) -> None:
+    # The loader fills in a gymnasium input's range before validation
+    # (default_gymnasium_ranges), so a file may leave it out: editors must not flag that.
+    schema["required"] = [key for key in schema.get("required", []) if key != "range"]
+
+
 class InputVariable(Section):
     """One sensor input s_i with its L_i fuzzy sets."""
 
+    model_config = ConfigDict(json_schema_extra=_range_may_default)
+
     range: Annotated[tuple[float, float], AfterValidator(_increasing)] = Field(
-        description="[low, high]; inputs outside it are clipped to it")
+        description="[low, high]; inputs outside it are clipped to it. Required, except "
+        "for a gymnasium input whose observation bounds are finite: it defaults to them "
+        "(docs/environments.md)")
     unit: str | None = None
     sets: dict[Name, Quadruple] = Field(min_length=1, description=(
         "set name -> [pa, pb, pc, pd]; pb == pc is a triangle, pa == pb or pc == pd a "
@@ -93,6 +110,12 @@ class Behaviour(Section):
         if version < 1:
             raise ValueError(f"format version must be {FORMAT_VERSION}, got {version}")
         return version
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_ranges(cls, data: Any) -> Any:
+        # a gymnasium input may leave out its range: the observation space's bounds
+        return default_gymnasium_ranges(data)
 
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo) -> Behaviour:

@@ -13,6 +13,7 @@ from flctool import compile_behaviour, load_behaviour, parse_behaviour
 from flctool.envs import check_env, make_env
 from flctool.errors import MissingDependencyError, SpecError
 from flctool.rollout import evaluate
+from flctool.spec.environment import ObservationFeature
 
 from ..conftest import BEHAVIOURS
 
@@ -162,3 +163,123 @@ def test_max_steps_truncates_before_the_environment_limit() -> None:
     for _ in range(6):
         assert not env.step(np.array([0.0])).truncated[0]
     assert env.step(np.array([0.0])).truncated[0] and env.max_steps == 7
+
+
+# -- inputs computed from the observation (ObservationFeature) -------------------------------
+PENDULUM_ANGLE = """\
+flctool: 1
+name: pendulum_angle
+inputs:
+  angle:
+    sets: {negative: [-3.141592653589793, -3.141592653589793, -1, 0], upright: [-1, 0, 0, 1],
+           positive: [0, 1, 3.141592653589793, 3.141592653589793]}
+  speed:
+    sets: {slow: [0, 0, 1, 4], fast: [1, 4, 8, 8]}
+  swing:
+    range: [-20, 20]
+    sets: {low: [-20, -20, -5, 5], high: [-5, 5, 20, 20]}
+output:
+  name: torque
+  commands: {left: -2.0, none: 0.0, right: 2.0}
+environment:
+  adapter: gymnasium
+  id: Pendulum-v1
+  observations:
+    angle: {angle: [0, 1]}
+    speed: {component: 2, abs: true}
+    swing: {difference: [2, 0], scale: 2, offset: 1}
+  success: never
+"""
+
+
+def test_features_compute_inputs_from_the_observation() -> None:
+    behaviour = parse_behaviour(PENDULUM_ANGLE)
+    env = make_env(behaviour, 3)
+    obs, _ = env.reset(np.array([0, 1, 2]))
+    raw = np.array([[env.trace_state()[f"obs_{i}"][b] for i in range(3)] for b in range(3)])
+    cos, sin, velocity = raw.T
+    assert np.array_equal(obs[:, 0], np.arctan2(sin, cos))
+    assert np.array_equal(obs[:, 1], np.abs(velocity))
+    assert np.array_equal(obs[:, 2], (velocity - cos) * 2 + 1)
+    check_env(lambda: make_env(behaviour, 2), batch_size=2)
+
+
+def test_ranges_default_to_the_feature_bounds_over_the_observation_space() -> None:
+    behaviour = parse_behaviour(PENDULUM_ANGLE)
+    assert behaviour.inputs["angle"].range == (-np.pi, np.pi)  # atan2's range
+    assert behaviour.inputs["speed"].range == (0.0, 8.0)  # |velocity| with velocity in [-8, 8]
+    assert behaviour.inputs["swing"].range == (-20.0, 20.0)  # given: kept
+
+
+def test_an_unbounded_component_needs_its_range() -> None:
+    # CartPole's cart velocity is unbounded (+-inf): there is nothing to default to
+    text = (BEHAVIOURS / "cartpole.yaml").read_text()
+    text = text.replace("    range: [-2.0, 2.0]\n    unit: m/s\n", "    unit: m/s\n", 1)
+    with pytest.raises(SpecError, match=r"inputs\.cart_velocity\.range: required field "
+                                        r"'range' is missing"):
+        parse_behaviour(text)
+    # a bounded one defaults: the cart position's space bound is +-4.8
+    text = (BEHAVIOURS / "cartpole.yaml").read_text()
+    text = text.replace("    range: [-2.4, 2.4]\n", "", 1).replace("2.4", "4.8")
+    # float32 4.8 is read as the decimal 4.8 it prints as, so sets up to 4.8 cover the range
+    assert parse_behaviour(text).inputs["cart_position"].range == (-4.8, 4.8)
+
+
+def test_a_module_id_is_never_imported_to_find_a_range() -> None:
+    text = PENDULUM_ANGLE.replace("id: Pendulum-v1", "id: 'no_such_module_xyz:Env-v0'")
+    with pytest.raises(SpecError, match=r"inputs\.angle\.range: required field"):
+        parse_behaviour(text)
+    assert "no_such_module_xyz" not in sys.modules
+
+
+@pytest.mark.parametrize(("feature", "message"), [
+    ("{component: 0, angle: [0, 1]}", "give exactly one of component, angle or difference "
+                                      r"\(got component, angle\)"),
+    ("{abs: true}", r"give exactly one of component, angle or difference \(got none\)"),
+    ("{component: 0, scale: 0}", "scale 0 makes the input a constant"),
+    ("{angle: [0, -1]}", "greater than or equal to 0"),
+    ("{component: 0, degrees: true}", "unknown key 'degrees'"),
+])
+def test_a_bad_feature_names_its_field(feature: str, message: str) -> None:
+    text = PENDULUM_ANGLE.replace("speed: {component: 2, abs: true}", f"speed: {feature}")
+    text = text.replace("    sets: {slow:", "    range: [0, 8]\n    sets: {slow:")
+    with pytest.raises(SpecError, match=rf"environment\.observations\.speed.*{message}"):
+        parse_behaviour(text)
+
+
+def test_a_feature_index_beyond_the_observation_is_an_error() -> None:
+    text = PENDULUM_ANGLE.replace("angle: {angle: [0, 1]}", "angle: {angle: [0, 3]}")
+    text = text.replace("  angle:\n    sets:", "  angle:\n    range: [-3.141592653589793, "
+                        "3.141592653589793]\n    sets:")
+    with pytest.raises(SpecError, match=r"environment\.observations\.angle: index 3 is out of "
+                                        "range"):
+        make_env(parse_behaviour(text))
+
+
+def test_feature_bounds() -> None:
+    low, high = [-1.0, -2.0, -np.inf], [3.0, 5.0, np.inf]
+    assert ObservationFeature(component=0).bounds(low, high) == (-1.0, 3.0)
+    assert ObservationFeature(difference=(0, 1)).bounds(low, high) == (-6.0, 5.0)
+    assert ObservationFeature(component=0, abs=True).bounds(low, high) == (0.0, 3.0)
+    assert ObservationFeature(component=0, abs=True).bounds([-4.0], [-1.0]) == (1.0, 4.0)
+    assert ObservationFeature(component=0, scale=-2, offset=1).bounds(low, high) == (-5.0, 3.0)
+    lo, hi = ObservationFeature(component=2).bounds(low, high)
+    assert np.isinf(lo) and np.isinf(hi)
+
+
+def test_acrobot_reads_each_angle_as_one_input() -> None:
+    behaviour = load_behaviour(BEHAVIOURS / "acrobot.yaml")
+    assert behaviour.inputs["elbow_angle"].range == (-180.0, 180.0)  # defaulted, in degrees
+    env = make_env(behaviour, 2)
+    obs, _ = env.reset(np.array([5, 6]))
+    trace = env.trace_state()
+    expected = np.degrees(np.arctan2(trace["obs_3"], trace["obs_2"]))
+    np.testing.assert_allclose(obs[:, 0], expected, rtol=1e-12)
+    assert np.array_equal(obs[:, 1], trace["obs_5"])
+    # torque along the elbow's velocity pumps energy into the swing (and a push when still
+    # starts it): the sets can hold a controller that reaches the goal
+    controller = compile_behaviour(behaviour)
+    push = {0: 0, 1: 2, 2: 2}  # velocity set negative, still, positive -> command index
+    consequents = np.array([push[int(v)] for v in controller.rule_grid[:, 1]], dtype=np.intp)
+    result = evaluate(controller, make_env(behaviour, 20), np.arange(20), consequents)
+    assert result.success_rate.value >= 0.9

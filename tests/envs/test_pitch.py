@@ -319,3 +319,18 @@ def test_shipped_pitch_behaviours_are_pitch_worlds(name: str) -> None:
     behaviour = load_behaviour(BEHAVIOURS / f"{name}.yaml")
     assert behaviour.environment is not None and behaviour.environment.adapter == "pitch"
     assert math.isfinite(float(make_env(behaviour).reset_one(0)[0]))
+
+
+@pytest.mark.parametrize(("action", "votes"), [("crisp", False), ("nearest", False),
+                                               ("vote", True)])
+def test_action_modes(action: str, votes: bool) -> None:
+    still = "{forward: 0, sideways: 0, rotation: 0}"
+    env = make_env(_behaviour(f"  adapter: pitch\n  action: {action}\n"
+                              f"  noise: {{forward: {still}, forward_left: {still}}}\n"))
+    assert env.votes is votes
+    env.reset_one(0)
+    heading = float(env.heading[0])
+    env.step_one(0.3)  # crisp blends forward and forward_left; the others run forward_left
+    turned = math.degrees(float(env.heading[0]) - heading)
+    expected = 0.6 * 7.5 if action == "crisp" else 7.5
+    assert turned == pytest.approx(expected)

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import builtins
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from flctool.errors import FlcError, MissingDependencyError, RunDirError
+from flctool.errors import EnvError, FlcError, MissingDependencyError, RunDirError
 from flctool.experiment import make_executor, write_report
 from flctool.experiment.executors import LocalExecutor, RayExecutor, unpack_run
 from flctool.experiment.report import REPORT_FILE, SUMMARY_FILE
@@ -34,14 +35,20 @@ def test_one_and_two_local_workers_give_identical_reports(tmp_path: Path) -> Non
     assert best_one == best_two
 
 
-def test_ray_gives_the_report_of_the_local_executor(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def local_ray() -> Iterator[None]:
+    """A real local Ray instance of 2 CPUs, started once for this module's Ray tests."""
     ray = pytest.importorskip("ray", reason="the Ray executor needs the ray extra")
-    local = _report(tmp_path, "local", LocalExecutor(1))
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
-        remote = _report(tmp_path, "ray", RayExecutor())
+        yield
     finally:
         ray.shutdown()
+
+
+def test_ray_gives_the_report_of_the_local_executor(tmp_path: Path, local_ray: None) -> None:
+    local = _report(tmp_path, "local", LocalExecutor(1))
+    remote = _report(tmp_path, "ray", RayExecutor())
     assert remote == local
     # the runs came back whole: a run directory as the local executor writes it
     for name in ("checkpoints/gen-00002.json", "metrics.csv", "strengths.csv", "best.yaml",
@@ -89,3 +96,13 @@ def test_unpacking_refuses_files_outside_the_run(tmp_path: Path) -> None:
             unpack_run({name: b"x"}, tmp_path / "run")
     unpack_run({"checkpoints/gen-00000.json": b"{}", "heldout.json": b"{}"}, tmp_path / "run")
     assert (tmp_path / "run" / "checkpoints" / "gen-00000.json").read_bytes() == b"{}"
+
+
+def test_a_flctool_error_in_a_ray_worker_reads_as_locally(tmp_path: Path,
+                                                          local_ray: None) -> None:
+    experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("pitt",))
+    job = experiment.jobs()[0]
+    # no held-out episodes: the worker's test of best.yaml refuses them with an EnvError
+    damaged = job.__class__(job.learner, job.seed, job.behaviour, 0, 0)
+    with pytest.raises(EnvError, match="must be at least 1, got 0"):
+        RayExecutor().run([damaged], experiment.runs_dir, lambda _: None)

@@ -112,3 +112,25 @@ def octave_outputs(fis_text: str, states: np.ndarray, folder: Path) -> np.ndarra
         pytest.skip("Octave's fuzzy-logic-toolkit is not installed (an optional check)")
     assert result.returncode == 0, result.stderr + result.stdout
     return np.array([float(v) for v in result.stdout.split()])
+
+
+def reference_controller(source: object) -> Behaviour:
+    """A controller for the reference-engine tests: random controller ``source`` (an int),
+    or a shipped behaviour file, given seeded random consequents if it has no rules yet
+    (so every shipped partition is checked, learned or not)."""
+    from flctool import load_behaviour, with_rules
+
+    from .controllers import random_behaviour
+
+    if isinstance(source, int):
+        return random_behaviour(source, max_inputs=3)
+    behaviour = load_behaviour(str(source))
+    if behaviour.is_deployable:
+        return behaviour
+    rng = np.random.default_rng(0)
+    return with_rules(behaviour, rng.integers(0, len(behaviour.output.commands),
+                                              behaviour.rule_count))
+
+
+#: Every shipped behaviour file.
+ALL_SHIPPED = sorted((Path(__file__).resolve().parents[2] / "behaviours").glob("*.yaml"))

@@ -15,7 +15,7 @@ from flctool.export.base import sloped_quad
 from flctool.export.fcl import FclExporter, FclImporter, fcl_number, set_points
 
 from .controllers import random_behaviour, random_states
-from .engines import assert_fuzzylite_agrees
+from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, reference_controller
 from .roundtrip import SHIPPED, assert_same_controller
 
 
@@ -205,12 +205,12 @@ def test_options_is_a_keyword_and_an_empty_block_is_read() -> None:
                                                 "END_OPTIONS\nEND_FUNCTION_BLOCK"), "tiny.fcl")
 
 
-@pytest.mark.parametrize("source", [*SHIPPED, 3, 11, 12, 21], ids=str)
+@pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
+                         ids=lambda s: getattr(s, "name", str(s)))
 def test_fuzzylite6_reads_the_fuzzylite_dialect(source: object, tmp_path: Path) -> None:
     """fuzzylite 6 reads --dialect fuzzylite and agrees within 1e-12 apart from its 1e-6
     tolerance, 20 % past the range's ends too."""
-    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
-                 else load_behaviour(str(source)))
+    behaviour = reference_controller(source)
     states = random_states(behaviour, 10_000, seed=5)
     text = FclExporter(ExportOptions(dialect="fuzzylite")).to_string(behaviour)
     quads = [[sloped_quad(q, v.range, interior=False) for q in v.sets.values()]

@@ -14,7 +14,7 @@ from flctool.export.fll import FllExporter, FllImporter
 from flctool.spec import Behaviour
 
 from .controllers import random_behaviour, random_states
-from .engines import assert_fuzzylite_agrees
+from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, reference_controller
 from .roundtrip import SHIPPED
 
 fl = pytest.importorskip("fuzzylite", reason="pyfuzzylite (the test extra) checks FLL exports")
@@ -200,12 +200,12 @@ def test_an_infinite_point_inside_a_term_is_refused() -> None:
         FllImporter().from_string(text, "tiny.fll")
 
 
-@pytest.mark.parametrize("source", [*SHIPPED, 3, 11, 12, 21], ids=str)
+@pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
+                         ids=lambda s: getattr(s, "name", str(s)))
 def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
     """The fuzzylite 6 command line reads the export and agrees within 1e-12, apart from its
     1e-6 tolerance; the states include set corners and states 20 % out of range."""
-    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
-                 else load_behaviour(str(source)))
+    behaviour = reference_controller(source)
     states = random_states(behaviour, 10_000, seed=5)
     quads = [list(v.sets.values()) for v in behaviour.inputs.values()]
     assert_fuzzylite_agrees(behaviour, FllExporter().to_string(behaviour), "fll", states,

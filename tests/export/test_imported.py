@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from flctool.errors import ExportError, FlcError, SpecError
 from flctool.export import EXPORTERS, IMPORTERS, ExportOptions
 from flctool.export.base import MAX_IMPORT_CHARS
+from flctool.export.fis import FisExporter
 from flctool.export.fll import FllExporter, FllImporter
 from flctool.export.imported import imported_yaml, quad_from_points
 
@@ -61,12 +62,22 @@ def _located(error: FlcError, file: str) -> bool:
     return re.match(re.escape(file) + r":\d+:", text) is not None
 
 
+#: A valid FIS up to its rules, so that a hostile rule line reaches the rule parser.
+_FIS_HEAD = "\n".join(
+    line for line in FisExporter().to_string(random_behaviour(1, max_inputs=1))
+    .split("[Rules]")[0].splitlines() if not line.startswith("NumRules="))
+
+
 @pytest.mark.parametrize(("format", "text"), [
-    # each used to backtrack for seconds (100,000 spaces: 24 s; 5,000: 34 s)
+    # these used to backtrack: 20,000 spaces in an FLL value took 1.4 s CPU (100,000: ~35 s),
+    # 2,000 spaces twice in an FIS rule's weight over 9 s
+    ("fll", "Engine: a" + " " * 100_000 + "b\n"),
     ("fll", "Engine:" + " " * 100_000 + "x\n"),
     ("fll", " " * 100_000 + "x\n"),
     ("fll", "InputVariable: x\n  range:" + " " * 100_000 + "0 1 x\n"),
-    ("fis", "[Rules]\n1" + " " * 5_000 + "1, 1 (1) : 1 x\n"),
+    ("fis", _FIS_HEAD + "[Rules]\n1, 1 (" + " " * 5_000 + "1" + " " * 5_000 + ") : 1 x\n"),
+    ("fis", _FIS_HEAD + "[Rules]\n1, 1 (" + " " * 5_000 + "x\n"),
+    ("fis", _FIS_HEAD + "[Rules]\n1" + " " * 5_000 + "1, 1 (1) : 1 x\n"),
     ("fis", "[Rules]\n1," + " " * 5_000 + "(" + " " * 5_000 + "1\n"),
     ("fis", "[System]\nName" + " " * 100_000 + "x\n"),
     ("fis", "[Input" + "1" * 5_000 + "]\n"),  # int() refuses > 4,300 digits

@@ -193,7 +193,7 @@ def test_run_json_records_every_validated_candidate_and_the_usage(tmp_path: Path
     run = create_run(ballchase(generations=4), tmp_path / "run")
     summary = run.train()
     selection = json.loads((run.path / "run.json").read_text())["selection"]
-    assert selection["candidates"] == 5 and selection["episodes"] == 20
+    assert selection["candidates"] == 10 and selection["episodes"] == 20
     for candidate in selection["validated"]:
         interval = candidate["validation"]
         assert interval["n"] == 20 and interval["low"] <= interval["value"] <= interval["high"]
