@@ -1,61 +1,235 @@
-"""Reading and writing tables of states as CSV (header row of column names)."""
+"""Reading and writing tables of states as CSV (a header row of column names), streamed.
+
+:class:`StateReader` reads a CSV text stream chunk by chunk, so memory follows the chunk size,
+not the file: ``flctool infer`` on a million rows holds one chunk of lines, its (B, N) states
+and their outputs at a time. Each data line is kept as written, so the output repeats the
+user's cells exactly and adds one column.
+
+What is accepted, and what is an error (every error names the file, line and column):
+
+- a UTF-8 byte order mark before the header, and any line ending (LF, CRLF, CR alone);
+- blank lines at the end of the file (a blank line between rows is an error: a lost reading);
+- a header naming every input; a column named twice, or one with the output's name, is an
+  error (which of the two would be meant?);
+- a cell of an input column must be a number (Python's ``float``); NaN is an error;
+  infinities are clipped to the input's range like any value beyond it.
+"""
 
 from __future__ import annotations
 
 import csv
 import io
+import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from typing import BinaryIO, TextIO
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.errors import Problem, SpecError
 
+#: Characters of rows parsed, inferred and written per step of a stream (a chunk of 2 MB
+#: holds about 100,000 rows of a few columns).
+CHUNK_CHARACTERS = 2**21
+#: Longest cell shown in a message; longer ones are cut (a cell may be megabytes long).
+SHOWN_CELL = 40
+#: Most problems reported for one chunk before the rest are summarised.
+LISTED_PROBLEMS = 20
 
-def read_states(
-    text: str, columns: Sequence[str], file: str
-) -> tuple[list[str], list[list[str]], NDArray[np.float64]]:
-    """Parse CSV text into its header, its data rows, and a (rows, len(columns)) float array.
 
-    Every unparseable cell is reported, with its line, in one :class:`SpecError`.
+def text_stream(binary: BinaryIO) -> TextIO:
+    """A text view of a binary stream that drops a UTF-8 BOM and reads every line ending
+    (LF, CRLF, CR) as LF."""
+    return io.TextIOWrapper(binary, encoding="utf-8-sig", newline=None)
+
+
+def _shown(cell: str) -> str:
+    if len(cell) <= SHOWN_CELL:
+        return cell
+    return f"{cell[:SHOWN_CELL]}... ({len(cell):,} characters)"
+
+
+class StateReader:
+    """The states of a CSV stream, chunk by chunk.
+
+    ``header`` holds the column names; :meth:`chunks` yields ``(lines, states)``: the data
+    lines as written (without line ending) and their inputs as a (B, N) float array in the
+    order of ``columns``. Raises :class:`SpecError` with located problems.
     """
-    rows = list(csv.reader(io.StringIO(text)))
-    if not rows:
-        raise SpecError([Problem((), "the CSV is empty; it needs a header row naming the "
-                                 f"columns {', '.join(columns)}", file=file, line=1)], file)
-    header = [name.strip() for name in rows[0]]
-    missing = [c for c in columns if c not in header]
-    if missing:
-        raise SpecError([Problem((), f"the header lacks the column(s) {', '.join(missing)}",
-                                 f"the header must name the inputs: {', '.join(columns)}",
-                                 file=file, line=1)], file)
-    index = [header.index(c) for c in columns]
-    problems = []
-    values = np.empty((len(rows) - 1, len(columns)))
-    for r, row in enumerate(rows[1:]):
-        line = r + 2
-        if len(row) != len(header):
-            problems.append(Problem((), f"expected {len(header)} cells, found {len(row)}",
-                                    file=file, line=line))
-            continue
-        for c, i in enumerate(index):
+
+    def __init__(self, stream: TextIO, columns: Sequence[str], file: str,
+                 reserved: Sequence[str] = ()) -> None:
+        self._stream = stream
+        self.columns = list(columns)
+        self.file = file
+        self._line = 1  # 1-based number of the last line read
+        try:
+            first = stream.readline()
+        except UnicodeDecodeError as error:
+            raise self._not_utf8(error) from None
+        if not first.strip():
+            raise self._error(1, None, "the CSV is empty; it needs a header row naming the "
+                              f"columns {', '.join(self.columns)}")
+        self.header_line = first.rstrip("\n")
+        cells = self._split(self.header_line, 1)
+        self.header = [name.strip() for name in cells]
+        self._check_header(reserved)
+        self._index = [self.header.index(c) for c in self.columns]
+        self._blank: list[int] = []  # blank lines seen since the last row
+        self._numbers: Sequence[int] = []  # line numbers of the rows of the current chunk
+
+    # -- header --------------------------------------------------------------------------
+    def _check_header(self, reserved: Sequence[str]) -> None:
+        seen: set[str] = set()
+        for position, name in enumerate(self.header, start=1):
+            if name in seen:
+                raise self._error(1, position, f"the column '{_shown(name)}' appears twice",
+                                  "give every column its own name")
+            if name in reserved:
+                raise self._error(1, position, f"the column '{_shown(name)}' is the output's "
+                                  "name, which the result adds",
+                                  "rename or drop that column")
+            seen.add(name)
+        missing = [c for c in self.columns if c not in seen]
+        if missing:
+            raise self._error(1, None, f"the header lacks the column(s) {', '.join(missing)}",
+                              f"the header must name the inputs: {', '.join(self.columns)}")
+
+    # -- rows ----------------------------------------------------------------------------
+    def chunks(self, size: int = CHUNK_CHARACTERS
+               ) -> Iterator[tuple[list[str], NDArray[np.float64]]]:
+        """``(lines, states (B, N))`` for about ``size`` characters of rows at a time."""
+        while True:
             try:
-                values[r, c] = float(row[i])
-            except ValueError:
-                problems.append(Problem((columns[c],), f"'{row[i]}' is not a number",
-                                        file=file, line=line, column=i + 1))
+                text = self._stream.read(size)
+                if text and not text.endswith("\n"):
+                    text += self._stream.readline()  # complete the last line
+            except UnicodeDecodeError as error:
+                raise self._not_utf8(error) from None
+            if not text:
+                return
+            lines = text.split("\n")
+            if lines[-1] == "":
+                lines.pop()  # the end of the last line, not a line
+            first = self._line + 1
+            self._line += len(lines)
+            rows = self._rows(lines, first)
+            if rows:
+                yield rows, self._parse(rows, text)
+
+    def _rows(self, lines: list[str], first: int) -> list[str]:
+        """The rows of a chunk, and their line numbers in ``self._numbers``. A blank line is
+        kept back until a row follows it, which makes it an error; blank lines at the end of
+        the file are fine."""
+        if "" not in lines and lines[-1].strip() and (len(self.header) > 1
+                                                       or all(map(str.strip, lines))):
+            # no blank line (one of spaces between rows has too few cells: _parse says so)
+            if self._blank:
+                raise self._blank_error()
+            self._numbers = range(first, first + len(lines))
+            return lines
+        rows: list[str] = []
+        numbers: list[int] = []
+        for number, line in enumerate(lines, start=first):
+            if not line.strip():
+                self._blank.append(number)
                 continue
-            if math.isnan(values[r, c]):
-                problems.append(Problem((columns[c],), "NaN is a missing reading, not a value",
-                                        "filter or replace missing readings",
-                                        file=file, line=line, column=i + 1))
-    if problems:
-        raise SpecError(problems, file)
-    return header, rows[1:], values
+            if self._blank:
+                raise self._blank_error()
+            rows.append(line)
+            numbers.append(number)
+        self._numbers = numbers
+        return rows
+
+    def _blank_error(self) -> SpecError:
+        return self._error(self._blank[0], None, "a blank line between rows",
+                           "remove it, or give the missing reading")
+
+    def _parse(self, lines: list[str], text: str) -> NDArray[np.float64]:
+        if '"' not in text and self._cell_counts_agree(lines):
+            # The usual table: no quoting, the right number of cells in every row. numpy's C
+            # parser reads the numbers (correctly rounded, like float()); anything it refuses
+            # is re-read cell by cell below to name the culprit.
+            try:
+                values = np.loadtxt(lines, delimiter=",", usecols=self._index,
+                                    dtype=np.float64, ndmin=2, comments=None,
+                                    encoding=None, quotechar=None)
+            except ValueError:
+                pass
+            else:
+                if values.shape[0] == len(lines) and not np.isnan(values).any():
+                    return values
+        return self._parse_cells(lines)
+
+    def _cell_counts_agree(self, lines: list[str]) -> bool:
+        """Whether every line has exactly ``len(header) - 1`` commas."""
+        return set(map(str.count, lines, itertools.repeat(","))) == {len(self.header) - 1}
+
+    def _parse_cells(self, lines: list[str]) -> NDArray[np.float64]:
+        width = len(self.header)
+        values = np.empty((len(lines), len(self.columns)))
+        problems: list[Problem] = []
+        for r, (line, number) in enumerate(zip(lines, self._numbers, strict=True)):
+            cells = self._split(line, number)
+            if len(cells) != width:
+                problems.append(Problem((), f"expected {width} cells, found {len(cells)}",
+                                        file=self.file, line=number))
+                continue
+            for c, i in enumerate(self._index):
+                try:
+                    values[r, c] = float(cells[i])
+                except ValueError:
+                    problems.append(Problem((self.columns[c],),
+                                            f"'{_shown(cells[i])}' is not a number",
+                                            file=self.file, line=number, column=i + 1))
+                    continue
+                if math.isnan(values[r, c]):
+                    problems.append(Problem((self.columns[c],),
+                                            "NaN is a missing reading, not a value",
+                                            "filter or replace missing readings",
+                                            file=self.file, line=number, column=i + 1))
+        if problems:
+            if len(problems) > LISTED_PROBLEMS:
+                rest = len(problems) - LISTED_PROBLEMS
+                problems = [*problems[:LISTED_PROBLEMS],
+                            Problem((), f"and {rest} more problem(s) in the lines that follow",
+                                    file=self.file)]
+            raise SpecError(problems, self.file)
+        return values
+
+    def _split(self, line: str, number: int) -> list[str]:
+        if '"' not in line:
+            return line.split(",")
+        try:
+            return next(csv.reader([line], strict=True))
+        except csv.Error as error:
+            raise self._error(number, None, f"not a CSV row: {error}",
+                              "quote cells that contain commas or quotes") from None
+
+    def _not_utf8(self, error: UnicodeDecodeError) -> SpecError:
+        # decoded a block at a time, so the line is not known; the byte is the first bad one
+        byte = error.object[error.start]
+        return SpecError([Problem((), f"the CSV is not UTF-8 text (byte 0x{byte:02x})",
+                                  "save it as UTF-8 text", file=self.file)], self.file)
+
+    def _error(self, line: int | None, column: int | None, message: str,
+               hint: str = "") -> SpecError:
+        return SpecError([Problem((), message, hint, file=self.file, line=line,
+                                  column=column)], self.file)
+
+
+def format_rows(lines: Sequence[str], values: NDArray[np.float64]) -> str:
+    """The lines with one more cell each: the value's shortest round-trip text (``repr``)."""
+    if len(lines) != values.shape[0]:
+        raise ValueError(f"{len(lines)} lines but {values.shape[0]} values")
+    cells = map(repr, values.tolist())
+    return "".join(map("".join, zip(lines, itertools.repeat(","), cells,
+                                    itertools.repeat("\n"))))
 
 
 def write_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    """A whole table as CSV text (for small tables, e.g. an episode's trace)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(header)

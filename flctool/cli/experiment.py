@@ -7,19 +7,18 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from flctool.cli.app import app, console, err_console, user_errors
+from flctool.cli.app import app, console, escape, example, user_errors
 from flctool.cli.learn import parse_assignments, set_keys
-from flctool.cli.locate import located_in
+from flctool.cli.progress import Progress
 from flctool.errors import FlcError
 
 
-@app.command()
+@app.command(epilog=example(
+    "flctool experiment behaviours/ballchase.yaml --seeds 30 --workers 2",
+    "flctool experiment behaviours/ballchase.yaml --learners pitt,hybrid -o experiments/x"))
 def experiment(
-    file: Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True,
-                                         help="The behaviour file (YAML).")],
+    file: Annotated[Path, typer.Argument(help="The behaviour file (YAML).")],
     learners: Annotated[str, typer.Option(
         help="Comma-separated learners to compare.")] = "pitt,hybrid,fuzzy_q",
     seeds: Annotated[int, typer.Option(min=1, help="Runs per learner, seeds 0..N-1.")] = 30,
@@ -41,7 +40,8 @@ def experiment(
         "--out", "-o", help="Experiment directory (default: experiments/<name>); an existing "
         "one with the same plan is continued.")] = None,
     as_json: Annotated[bool, typer.Option(
-        "--json", help="Print the summary as JSON instead of text (no progress bar).")]
+        "--json", help="Print the summary as JSON instead of text (progress stays on "
+        "stderr).")]
     = False,
 ) -> None:
     """Run the paper's experiment: every learner on every seed, then report the spread across
@@ -49,6 +49,7 @@ def experiment(
 
     Writes report.md and summary.json; 'flctool plot' on the directory draws the figures.
     """
+    from flctool.cli.locate import located_in
     from flctool.experiment import (
         ExperimentPlan,
         make_executor,
@@ -75,18 +76,13 @@ def experiment(
                               overrides=overrides)
         folder = out if out is not None else Path("experiments") / behaviour.name
         study = prepare_experiment(behaviour, plan, folder)
-        progress = Progress(
-            TextColumn("[bold]runs"), BarColumn(), MofNCompleteColumn(),
-            TextColumn("{task.fields[last]}"), TimeElapsedColumn(),
-            console=err_console, disable=as_json, transient=False)
-        task = progress.add_task("runs", total=len(names) * seeds, last="")
+        with Progress("runs", len(names) * seeds, terminal=not as_json) as progress:
 
-        def done(outcome: JobOutcome) -> None:
-            state = "done before" if outcome.skipped else "held-out success"
-            progress.update(task, advance=1, last=f"{outcome.learner} seed {outcome.seed}: "
-                            f"{state} {outcome.heldout_success:.3f}")
+            def done(outcome: JobOutcome) -> None:
+                state = "done before" if outcome.skipped else "held-out success"
+                progress.update(progress.done + 1, last=f"{outcome.learner} seed "
+                                f"{outcome.seed}: {state} {outcome.heldout_success:.3f}")
 
-        with progress:
             study.run(runner, done)
         summary = write_report(study, level)
     if as_json:

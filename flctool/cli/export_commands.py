@@ -7,25 +7,40 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
-from flctool import __version__
-from flctool.cli.app import app, console, err_console, user_errors
-from flctool.errors import ExportError
-from flctool.export import EXPORTERS, IMPORTERS, ExportOptions, load_source
-from flctool.export.base import comment_safe, write_files
-from flctool.export.imported import imported_yaml
+from flctool.cli.app import (
+    Force,
+    app,
+    console,
+    escape,
+    example,
+    make_parent,
+    output_format,
+    say,
+    user_errors,
+)
+from flctool.errors import FlcError
 
-Force = Annotated[bool, typer.Option("--force", help="Overwrite an existing output file.")]
+#: The format each output suffix names (``export -o x.fll`` writes FLL). A format registered
+#: later adds its suffix here.
+EXPORT_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json", ".fll": "fll",
+                   ".fcl": "fcl", ".fis": "fis", ".c": "c", ".h": "c"}
+IMPORT_SUFFIXES = {".fll": "fll", ".fcl": "fcl", ".fis": "fis"}
 
 
-@app.command("export")
+@app.command("export", epilog=example(
+    "flctool export runs/first -o controller.fll",
+    "flctool export runs/first -o robot/flc.c --float",
+    "flctool export behaviours/ballchase-handmade.yaml --format json",
+    "flctool export runs/first --format bundle -o robot/ballchase"))
 def export_controller(
     source: Annotated[Path, typer.Argument(
+        metavar="CONTROLLER",
         help="A deployable behaviour file, or a run directory (its best controller).")],
-    format: Annotated[str, typer.Option(
+    format: Annotated[str | None, typer.Option(
         "--format", "-f", help="yaml, json, fll, fcl, fis, c, or bundle (a folder: the "
-        "controller, its wiring and a C and a Python harness).")] = "yaml",
+        "controller, its wiring and a C and a Python harness). Default: from the suffix of "
+        "-o; yaml on stdout.")] = None,
     output: Annotated[Path | None, typer.Option(
         "--output", "-o", help="Where to write (default: stdout). For c, -o NAME writes "
         "NAME.h and NAME.c.")] = None,
@@ -44,14 +59,17 @@ def export_controller(
         "reads).")] = None,
 ) -> None:
     """Export a controller so that it runs elsewhere, with the same outputs."""
+    from flctool.export import EXPORTERS, ExportOptions, load_source
+
     with user_errors():
-        exporter_class = EXPORTERS.get(format)
-        if format != "c" and (single or prefix is not None):
-            raise ExportError("--float and --prefix apply to --format c only",
-                              hint="leave them out, or add --format c")
-        if format != "fcl" and dialect is not None:
-            raise ExportError("--dialect applies to --format fcl only",
-                              hint="leave it out, or add --format fcl")
+        name = output_format(output, format, EXPORT_SUFFIXES, "yaml")
+        exporter_class = EXPORTERS.get(name)
+        if name != "c" and (single or prefix is not None):
+            raise FlcError("--float and --prefix apply to the c format only",
+                           hint="leave them out, or write C (--format c, or -o NAME.c)")
+        if name != "fcl" and dialect is not None:
+            raise FlcError("--dialect applies to the fcl format only",
+                           hint="leave it out, or write FCL (--format fcl, or -o NAME.fcl)")
         behaviour, provenance = load_source(source, generation, individual)
         exporter = exporter_class(ExportOptions(provenance=provenance,
                                                 prefix="flc_" if prefix is None else prefix,
@@ -59,12 +77,15 @@ def export_controller(
         if output is None:
             sys.stdout.write(exporter.to_string(behaviour))
             return
+        make_parent(output, "export")
         written = exporter.to_file(behaviour, output, force=force)
     for path in written:
         console.print(f"wrote {escape(str(path))}")
 
 
-@app.command("import")
+@app.command("import", epilog=example(
+    "flctool import controller.fll -o behaviours/imported.yaml",
+    "flctool import legacy.txt --format fis"))
 def import_controller(
     file: Annotated[Path, typer.Argument(help="An .fll, .fcl or .fis controller.")],
     output: Annotated[Path | None, typer.Option(
@@ -77,25 +98,36 @@ def import_controller(
         "singletons at their centroids, and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
+    from flctool import __version__
+    from flctool.export import IMPORTERS
+    from flctool.export.base import comment_safe, write_files
+    from flctool.export.imported import imported_yaml
+
     with user_errors():
-        name = format or file.suffix.lstrip(".").lower()
-        if format is None and name not in IMPORTERS:
-            raise ExportError(f"cannot tell the format of {file} from its suffix",
-                              hint="name it .fll, .fcl or .fis, or pass --format")
+        name = output_format(file, format, IMPORT_SUFFIXES, "fll")
+        if output is not None:
+            # import writes a behaviour file: YAML, whatever -o is called, but not under the
+            # name of another format
+            implied = EXPORT_SUFFIXES.get(output.suffix.lower())
+            if implied not in (None, "yaml"):
+                raise FlcError(f"import writes a behaviour file (YAML), but {output} has the "
+                               f"suffix of {implied}",
+                               hint="name it .yaml, or use 'flctool export' for other formats")
         importer_class = IMPORTERS.get(name)
         if mamdani_singletons and name != "fis":
-            raise ExportError("--mamdani-singletons applies to FIS files only",
-                              hint="leave it out")
+            raise FlcError("--mamdani-singletons applies to FIS files only",
+                           hint="leave it out")
         importer = (importer_class(mamdani_singletons=True)  # type: ignore[call-arg]
                     if mamdani_singletons else importer_class())
         behaviour = importer.from_file(file)
         report = getattr(importer, "report", "")
         if report:  # on stderr: the YAML may be going to stdout
-            err_console.print(escape(report))
+            say(report, err=True)
         text = imported_yaml(behaviour, f"{behaviour.name}: imported by flctool {__version__} "
                              f"from {comment_safe(file)}")
         if output is None:
             sys.stdout.write(text)
             return
+        make_parent(output, "behaviour file")
         write_files({output: text}, force=force)
     console.print(f"wrote {escape(str(output))}")

@@ -3,31 +3,34 @@
 from __future__ import annotations
 
 import json
+import shlex
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-import yaml
-from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from flctool.cli.app import app, console, err_console, user_errors
-from flctool.cli.locate import located_in
-from flctool.errors import Problem, RunDirError, SpecError
-from flctool.learners import FunctionCallback, GenerationMetrics, Learner, make_learner
-from flctool.runs import (
-    BEHAVIOUR_FILE,
-    Run,
-    RunSummary,
-    create_run,
-    open_run,
-    resolve_behaviour,
+from flctool.cli.app import (
+    app,
+    console,
+    err_console,
+    escape,
+    example,
+    report_interrupted,
+    user_errors,
 )
-from flctool.spec import Behaviour, behaviour_to_data, load_behaviour
+from flctool.cli.progress import Progress
+from flctool.errors import Problem, RunDirError, SpecError
+
+if TYPE_CHECKING:
+    from flctool.learners import Learner
+    from flctool.runs import Run, RunSummary
+    from flctool.spec import Behaviour
 
 
 def parse_assignments(assignments: list[str]) -> dict[str, Any]:
     """``["q.temperature=0.2", "common_starts=true"]`` -> a mapping; values read as YAML."""
+    import yaml
+
     overrides: dict[str, Any] = {}
     for text in assignments:
         key, sep, value = text.partition("=")
@@ -38,7 +41,7 @@ def parse_assignments(assignments: list[str]) -> dict[str, Any]:
                             "command line")
         try:
             overrides[key] = yaml.safe_load(value) if value.strip() else ""
-        except yaml.YAMLError:
+        except yaml.YAMLError:  # not YAML: the text itself
             overrides[key] = value
     return overrides
 
@@ -55,6 +58,8 @@ def _resume_generations(run: Run, generations: int | None,
                         overrides: dict[str, Any]) -> int | None:
     """The new generation budget of a resumed run: ``-g``, or ``--set generations=N`` (taken
     out of ``overrides``, which must otherwise match the run)."""
+    from flctool.runs import resolve_behaviour
+
     for key in _GENERATIONS_KEYS:
         if key not in overrides:
             continue
@@ -79,6 +84,8 @@ def _differences(a: Any, b: Any, path: str = "") -> list[str]:
 
 
 def _check_same_run(run: Run, requested: Behaviour) -> None:
+    from flctool.spec import behaviour_to_data
+
     recorded = behaviour_to_data(run.behaviour)
     wanted = behaviour_to_data(requested)
     for data in (recorded, wanted):
@@ -91,10 +98,12 @@ def _check_same_run(run: Run, requested: Behaviour) -> None:
                           "new run with --out")
 
 
-@app.command()
+@app.command(epilog=example(
+    "flctool learn behaviours/ballchase.yaml -o runs/first",
+    "flctool learn behaviours/ballchase.yaml --learner pitt --seed 3 --set mutation=0.2",
+    "flctool learn --resume runs/first --generations 60"))
 def learn(
     file: Annotated[Path | None, typer.Argument(
-        exists=True, dir_okay=False, readable=True,
         help="The behaviour file (YAML); optional with --resume.")] = None,
     learner: Annotated[str | None, typer.Option(
         "--learner", "-l", help="pitt, fuzzy_q or hybrid (default: the file's).")] = None,
@@ -114,12 +123,18 @@ def learn(
         "--set", help="Override a learning hyperparameter, e.g. --set q.temperature=0.2 "
         "(repeatable; keys as under 'learning:').")] = None,
     as_json: Annotated[bool, typer.Option(
-        "--json", help="Print a JSON summary instead of text (no progress bar).")] = False,
+        "--json", help="Print a JSON summary instead of text (progress stays on stderr).")]
+    = False,
 ) -> None:
     """Learn the rule consequents of a behaviour (Pitt GA, fuzzy Q-learning or the hybrid).
 
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
+    from flctool.cli.locate import located_in
+    from flctool.learners import make_learner
+    from flctool.runs import BEHAVIOUR_FILE, create_run, open_run, resolve_behaviour
+    from flctool.spec import load_behaviour
+
     with user_errors():
         overrides = parse_assignments(set_ or [])
         for key, value in (("learner", learner), ("seed", seed), ("population", population)):
@@ -157,30 +172,42 @@ def learn(
             except BaseException:
                 learner_.env.close()  # Run.train closes it from here on (a robot gets stop)
                 raise
-        summary = _train(run, learner_, show_progress=not as_json)
+        done = len(run.checkpoint_generations())
+        err_console.print(f"{'resuming' if resume is not None else 'learning'} "
+                          f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
+                          f"from generation {done} in the run directory "
+                          f"{escape(str(run.path))}", highlight=False)
+        try:
+            summary = _train(run, learner_, show_progress=not as_json)
+        except KeyboardInterrupt:
+            report_interrupted(f"the run in {run.path} stopped at its last checkpoint; "
+                               f"continue it with: {resume_command(run.path)}")
+            raise typer.Exit(130) from None
     if as_json:
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
 
 
+def resume_command(path: Path) -> str:
+    """The command line that continues the run in ``path``, ready to paste."""
+    return f"flctool learn --resume {shlex.quote(str(path))}"
+
+
 def _train(run: Run, learner: Learner, show_progress: bool) -> RunSummary:
+    from flctool.learners import FunctionCallback, GenerationMetrics
+
     config = run.behaviour.learning
     done = len(run.checkpoint_generations())
-    progress = Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-        TextColumn("validated best {task.fields[best]}  training mean {task.fields[mean]}"),
-        TimeElapsedColumn(),
-        console=err_console, disable=not show_progress, transient=False)
-    task = progress.add_task(f"{config.learner} gen", total=config.generations,
-                             completed=done, best="-", mean="-")
+    with Progress(f"{config.learner} generation", config.generations, done,
+                  terminal=show_progress) as progress:
 
-    def advance(metrics: GenerationMetrics) -> None:
-        validated = "-" if metrics.validated != metrics.validated else f"{metrics.validated:.3f}"
-        progress.update(task, completed=metrics.generation + 1, best=validated,
-                        mean=f"{metrics.mean:.3f}")
+        def advance(metrics: GenerationMetrics) -> None:
+            validated = ("-" if metrics.validated != metrics.validated
+                         else f"{metrics.validated:.3f}")
+            progress.update(metrics.generation + 1, **{"validated best": validated,
+                                                       "training mean": f"{metrics.mean:.3f}"})
 
-    with progress:
         return run.train([FunctionCallback(advance)], learner=learner)
 
 

@@ -6,15 +6,12 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.markup import escape
 
-from flctool.cli.app import app, console, user_errors, write_user_file
-from flctool.errors import FlcError
-from flctool.spec.scaffold import parse_command, parse_input, parse_sensor, scaffold_behaviour
+from flctool.cli.app import Force, app, console, example, say, user_errors, write_output
 
 
-@app.command(epilog=(
-    "Example: flctool new chase --input ball_size:0:1:3 --input pan:-90:90:5 "
+@app.command(epilog=example(
+    "flctool new chase --input ball_size:0:1:3 --input pan:-90:90:5 "
     "--command turn_right:-1 --command forward_right:-0.5 --command forward:0 "
     "--command forward_left:0.5 --command turn_left:1 --env pitch -o chase.yaml"))
 def new(
@@ -34,10 +31,12 @@ def new(
     output: Annotated[str, typer.Option(help="Name of the output variable.")] = "action",
     out: Annotated[Path | None, typer.Option(
         "--out", "-o", help="Write the file here (default: print it).")] = None,
-    force: Annotated[bool, typer.Option(help="Overwrite an existing --out file.")] = False,
+    force: Force = False,
 ) -> None:
     """Scaffold a valid behaviour file: evenly spaced, overlapping sets over each input's
     range (shoulders at the ends), the commands, and rules left to learn."""
+    from flctool.spec.scaffold import parse_command, parse_input, parse_sensor, scaffold_behaviour
+
     with user_errors():
         sensor_map = dict(parse_sensor(s) for s in sensors or [])
         text = scaffold_behaviour(name, [parse_input(s) for s in inputs],
@@ -46,7 +45,5 @@ def new(
         if out is None:
             console.print(text, end="", markup=False, highlight=False)
             return
-        if out.exists() and not force:
-            raise FlcError(f"{out} exists", hint="choose another --out, or add --force")
-        write_user_file(out, text, "behaviour file")
-    console.print(f"[green]wrote[/] {escape(str(out))}; next: flctool validate {escape(str(out))}")
+        write_output(out, text, "behaviour file", force=force)
+    say(f"{out}; next: flctool validate {out}", "wrote")

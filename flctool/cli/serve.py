@@ -11,15 +11,13 @@ from typing import Annotated
 
 import typer
 
-from flctool.cli.app import app, user_errors
-from flctool.envs.robot_server import RobotServer, print_log
-from flctool.spec import load_behaviour
+from flctool.cli.app import app, example, user_errors
 
 
-@app.command()
+@app.command(epilog=example("flctool serve behaviours/ballchase.yaml --port 5555",
+                            "flctool serve behaviours/ballchase.yaml --port 0 --once"))
 def serve(
-    file: Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True,
-                                         help="A behaviour file whose environment is a "
+    file: Annotated[Path, typer.Argument(help="A behaviour file whose environment is a "
                                          "simulator (e.g. adapter: ballchase-sim).")],
     host: Annotated[str, typer.Option(help="Address to listen on; 0.0.0.0 for every "
                                       "interface.")] = "127.0.0.1",
@@ -36,6 +34,9 @@ def serve(
 ) -> None:
     """Serve a behaviour's simulator over the robot-link protocol (docs/robot-link.md), for
     trying the link without a robot and as an example for bridge writers."""
+    from flctool.envs.robot_server import RobotServer, print_log
+    from flctool.spec import load_behaviour
+
     with user_errors():
         behaviour = load_behaviour(file)
         server = RobotServer.from_behaviour(

@@ -1,47 +1,51 @@
-"""``validate``, ``show``, ``infer`` and ``schema``: behaviour files and plain inference."""
+"""``validate``, ``show`` and ``schema``: behaviour files and their JSON Schema."""
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.markup import escape
-from rich.table import Table
 
 from flctool.cli.app import (
+    Force,
     app,
     console,
+    controller_file,
     debug_enabled,
-    err_console,
+    escape,
+    example,
     print_error,
     read_user_file,
+    say,
     user_errors,
-    write_user_file,
+    write_output,
 )
-from flctool.compile import compile_behaviour
-from flctool.envs.preflight import validate_file
 from flctool.errors import FlcError
-from flctool.spec import Behaviour, load_behaviour
-from flctool.spec.schema import behaviour_schema_text
-from flctool.tabular import read_states, write_table
 
-ExistingFile = Annotated[Path, typer.Argument(exists=True, dir_okay=False, readable=True,
-                                              help="A behaviour file (YAML).")]
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from flctool.envs.preflight import FileReport
+    from flctool.spec import Behaviour
+
+ControllerArgument = Annotated[Path, typer.Argument(
+    metavar="CONTROLLER", help="A behaviour file (YAML), or a run directory (its best.yaml).")]
 DEFAULT_SCHEMA = Path("schemas/behaviour.schema.json")
 
 
-@app.command()
+@app.command(epilog=example("flctool validate behaviours/*.yaml"))
 def validate(
-    files: Annotated[list[Path], typer.Argument(exists=True, dir_okay=False, readable=True,
-                                                help="Behaviour files to check.")],
+    files: Annotated[list[Path], typer.Argument(
+        metavar="FILE...", help="Behaviour files to check (a run directory: its best.yaml).")],
 ) -> None:
-    """Check behaviour files and report every problem in each (exit 1 if any is invalid)."""
+    """Check behaviour files and report every problem in each (exit 1 if any is invalid).
+
+    Runs the environment adapter's checks too, when the adapter can be built here."""
     failed = 0
     for path in files:
         try:
-            report = validate_file(path)
+            report = validate_file(controller_file(path))
         except FlcError as error:
             failed += 1
             print_error(error)
@@ -56,21 +60,33 @@ def validate(
             continue
         behaviour = report.behaviour
         for warning in report.warnings:
-            err_console.print(f"[yellow]warning:[/] {escape(str(warning))}", highlight=False)
+            say(str(warning), "warning:", "yellow", err=True)
         if report.adapter_note:
-            console.print(f"[yellow]note:[/] {escape(str(path))}: {escape(report.adapter_note)}")
+            say(f"{path}: {report.adapter_note}", "note:", "yellow")
         state = ("deployable" if behaviour.is_deployable
                  else f"{len(behaviour.missing_rules())} of {behaviour.rule_count} rules to learn")
-        console.print(f"[green]ok[/] {escape(str(path))}: {behaviour.name} ({state})")
+        say(f"{path}: {behaviour.name} ({state})", "ok")
     if failed:
         raise typer.Exit(1)
 
 
-@app.command()
-def show(file: ExistingFile) -> None:
+def validate_file(path: Path) -> FileReport:
+    """:func:`flctool.envs.preflight.validate_file`, imported when a file is checked."""
+    from flctool.envs.preflight import validate_file as check
+
+    return check(path)
+
+
+@app.command(epilog=example("flctool show behaviours/ballchase-handmade.yaml",
+                            "flctool show runs/first"))
+def show(file: ControllerArgument) -> None:
     """Show a behaviour: its inputs and sets, M and K, and the rule table."""
+    from rich.table import Table
+
+    from flctool.spec import load_behaviour
+
     with user_errors():
-        behaviour = load_behaviour(file)
+        behaviour = load_behaviour(controller_file(file))
     console.print(f"[bold]{escape(behaviour.name)}[/]  {escape(behaviour.description)}")
     sets = Table(title="inputs", title_justify="left")
     for column in ("input", "range", "set", "pa", "pb", "pc", "pd"):
@@ -100,6 +116,8 @@ def show(file: ExistingFile) -> None:
 
 
 def _rule_list(behaviour: Behaviour) -> Table:
+    from rich.table import Table
+
     table = Table(title="rules, in rule order (last input varies fastest)",
                   title_justify="left")
     table.add_column("m", justify="right")
@@ -113,6 +131,8 @@ def _rule_list(behaviour: Behaviour) -> Table:
 
 
 def _rule_grid(behaviour: Behaviour) -> Table:
+    from rich.table import Table
+
     first, second = behaviour.input_names
     table = Table(title=f"rules: rows {first}, columns {second}", title_justify="left")
     table.add_column(f"{first} \\ {second}")
@@ -125,52 +145,28 @@ def _rule_grid(behaviour: Behaviour) -> Table:
     return table
 
 
-@app.command()
-def infer(
-    file: ExistingFile,
-    input: Annotated[str, typer.Option(
-        "--input", "-i", help="CSV of states with a header naming the inputs; - for stdin.")]
-    = "-",
-    output: Annotated[Path | None, typer.Option(
-        "--output", "-o", help="Where to write the CSV (default: stdout).")] = None,
-) -> None:
-    """Run a deployable controller on states from CSV; adds the output column."""
-    with user_errors():
-        behaviour = load_behaviour(file)
-        controller = compile_behaviour(behaviour)
-        if input == "-":
-            text, source = sys.stdin.read(), "<stdin>"
-        else:
-            text, source = read_user_file(Path(input), "states CSV"), input
-        header, rows, states = read_states(text, controller.input_names, source)
-        values = controller.output(states)
-        result = write_table([*header, controller.output_name],
-                             [[*row, repr(float(v))] for row, v in zip(rows, values, strict=True)])
-        if output is None:
-            sys.stdout.write(result)
-        else:
-            write_user_file(output, result, "output CSV")
-
-
-@app.command()
+@app.command(epilog=example("flctool schema --check", "flctool schema --force"))
 def schema(
     check: Annotated[bool, typer.Option(
         "--check", help="Fail (exit 1) if the file differs from the models.")] = False,
-    path: Annotated[Path, typer.Option(help="The schema file.")] = DEFAULT_SCHEMA,
+    path: Annotated[Path, typer.Option(
+        "--output", "-o", "--path", help="The schema file.")] = DEFAULT_SCHEMA,
+    force: Force = False,
 ) -> None:
     """Write the behaviour JSON Schema generated from the models (or check it is current)."""
+    from flctool.spec.schema import behaviour_schema_text
+
     text = behaviour_schema_text()
     with user_errors():
+        current = read_user_file(path, "schema") if path.is_file() else None
         if check:
-            current = read_user_file(path, "schema") if path.is_file() else None
             if current != text:
                 raise FlcError(f"{path} is {'missing' if current is None else 'stale'}",
-                               hint="run 'flctool schema' and commit the result")
-            console.print(f"[green]ok[/] {escape(str(path))} is up to date")
+                               hint="run 'flctool schema --force' and commit the result")
+            say(f"{path} is up to date", "ok")
             return
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-        except OSError as error:
-            raise FlcError(f"cannot create the folder {path.parent}: {error.strerror}") from None
-        write_user_file(path, text, "schema")
-    console.print(f"wrote {escape(str(path))}")
+        if current == text:
+            say(f"{path} is already up to date")
+            return
+        write_output(path, text, "schema", force=force)
+    say(f"wrote {path}")

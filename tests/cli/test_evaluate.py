@@ -7,10 +7,14 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
-from flctool import load_behaviour, with_rules
+from flctool import compile_behaviour, load_behaviour, with_rules
 from flctool.cli import app
+from flctool.cli.evaluate import evaluate_in_chunks, parse_seeds
+from flctool.envs import make_env
+from flctool.rollout import evaluate, evaluation_seeds
 from flctool.spec import behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS
@@ -51,11 +55,15 @@ def test_trace_csv(tmp_path: Path) -> None:
     assert rows[0]["step"] == "0" and rows[-1]["command"] == ""
 
 
-def test_trace_into_a_missing_directory_is_a_clear_error(tmp_path: Path) -> None:
-    result = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace",
-                                 str(tmp_path / "nowhere" / "trace.csv")])
-    assert result.exit_code == 1
-    assert "cannot write the trace" in result.output
+def test_trace_creates_its_folder_and_is_replaced_only_with_force(tmp_path: Path) -> None:
+    trace = tmp_path / "nowhere" / "trace.csv"
+    first = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace", str(trace)])
+    assert first.exit_code == 0, first.output
+    again = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace", str(trace)])
+    assert again.exit_code == 1 and "already exists" in again.output
+    forced = runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "2", "--trace", str(trace),
+                                 "--force"])
+    assert forced.exit_code == 0, forced.output
 
 
 def test_non_deployable_controller_lists_missing_rules() -> None:
@@ -87,3 +95,58 @@ def test_an_environment_error_points_at_the_line_of_the_file(tmp_path: Path) -> 
     assert f"{file}:{line}:" in result.stderr
     assert "environment.id: Gymnasium cannot make 'CartPol-v1'" in " ".join(
         result.stderr.split())
+
+
+def test_seeds_lists_and_ranges() -> None:
+    assert parse_seeds("1,2,5-9") == [1, 2, 5, 6, 7, 8, 9]
+    assert parse_seeds(" 3 - 4 ,0") == [3, 4, 0]
+    for bad, message in (("1,x", "'x' is not a seed"), ("9-5", "is empty"),
+                         ("1,1-2", "named twice"), ("-1", "is not a seed")):
+        with pytest.raises(ValueError, match=message):
+            parse_seeds(bad)
+
+
+def test_evaluate_on_chosen_seeds_lists_them_in_json() -> None:
+    result = runner.invoke(app, ["evaluate", HANDMADE, "--seeds", "1,2,5-9", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    assert data["seeds"] == [1, 2, 5, 6, 7, 8, 9] and data["episodes"] == 7
+    assert data["seed"] is None
+    drawn = json.loads(runner.invoke(app, ["evaluate", HANDMADE, "--episodes", "4", "--json"]
+                                     ).stdout)
+    assert drawn["seeds"] == evaluation_seeds(0, 4).tolist() and drawn["seed"] == 0
+
+
+def test_seeds_and_seed_exclude_each_other() -> None:
+    result = runner.invoke(app, ["evaluate", HANDMADE, "--seeds", "1", "--seed", "2"])
+    assert result.exit_code == 2 and "give either --seeds, or --seed and --episodes" in (
+        result.output)
+    bad = runner.invoke(app, ["evaluate", HANDMADE, "--seeds", "a-b"])
+    assert bad.exit_code == 2 and "--seeds" in bad.output
+
+
+def test_chunks_do_not_change_the_outcomes() -> None:
+    behaviour = load_behaviour(HANDMADE)
+    controller = compile_behaviour(behaviour)
+    seeds = evaluation_seeds(3, 23)
+    env = make_env(behaviour, 23)
+    whole = evaluate(controller, env, seeds)
+    chunked = evaluate_in_chunks(controller, env, seeds, show_progress=False, chunk=5)
+    for name in ("seeds", "returns", "lengths", "success", "fitness"):
+        assert np.array_equal(getattr(whole, name), getattr(chunked, name)), name
+
+
+def test_no_outcome_lines_for_success_the_environment_does_not_define(tmp_path: Path) -> None:
+    cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
+    deployable = with_rules(cartpole, np.zeros(cartpole.rule_count, dtype=np.intp))
+    text = behaviour_to_yaml(deployable).replace("id: CartPole-v1",
+                                                 "id: CartPole-v1\n  success: never")
+    text = text.replace("  success: truncated\n", "")
+    file = tmp_path / "cartpole.yaml"
+    file.write_text(text, encoding="utf-8")
+    result = runner.invoke(app, ["evaluate", str(file), "--episodes", "3"])
+    assert result.exit_code == 0, result.output
+    assert "mean return" in result.output and "success" not in result.output
+    data = json.loads(runner.invoke(app, ["evaluate", str(file), "--episodes", "3", "--json"]
+                                    ).stdout)
+    assert "success_rate" not in data and "mean_return" in data

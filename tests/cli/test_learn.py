@@ -210,7 +210,7 @@ def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
     process = subprocess.Popen(
         [sys.executable, "-m", "flctool", "learn", BALLCHASE, "-g", "100000", "-p", "4",
          "--json", "--out", str(run)],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env, text=True,
         preexec_fn=restore_sigint)
     try:
         first = run / "checkpoints" / "gen-00000.json"
@@ -218,11 +218,17 @@ def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
         while not first.exists() and process.poll() is None and time.monotonic() < deadline:
             time.sleep(0.01)
         process.send_signal(signal.SIGINT)
-        assert process.wait(timeout=60) == 130
+        _, stderr = process.communicate(timeout=60)
+        assert process.returncode == 130, stderr
     finally:
         if process.poll() is None:
             process.kill()
             process.wait()
+    message = " ".join(stderr.split())
+    # the run directory is named at the start, the exact resume command at the end
+    assert f"in the run directory {run}" in message
+    assert f"continue it with: flctool learn --resume {run}" in message
+    assert "Traceback" not in stderr
     info = json.loads((run / "run.json").read_text())
     assert info["status"] == "stopped" and info["best"] is not None
     result = runner.invoke(app, ["learn", "--resume", str(run), "-g",

@@ -40,4 +40,4 @@ def test_bad_spec_is_one_line_and_exit_1() -> None:
 
 def test_help_has_an_example() -> None:
     result = runner.invoke(app, ["new", "--help"])
-    assert result.exit_code == 0 and "Example: flctool new chase" in result.output
+    assert result.exit_code == 0 and "Examples:\n    flctool new chase" in result.output

@@ -98,8 +98,9 @@ def test_import_module_is_the_only_way_to_run_a_module(tmp_path: Path) -> None:
     assert "cannot import the module 'no_such_module_x'" in result.output
 
 
-def test_missing_file_and_unknown_option_are_usage_errors(tmp_path: Path) -> None:
-    assert runner.invoke(app, ["validate", str(tmp_path / "none.yaml")]).exit_code == 2
+def test_missing_file_is_bad_input_and_unknown_option_bad_usage(tmp_path: Path) -> None:
+    missing = runner.invoke(app, ["validate", str(tmp_path / "none.yaml")])
+    assert missing.exit_code == 1 and "none.yaml" in missing.output
     assert runner.invoke(app, ["validate", "--frobnicate"]).exit_code == 2
 
 
@@ -185,7 +186,7 @@ def test_infer_on_a_behaviour_still_to_learn() -> None:
         result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase.yaml")],
                                input=states)
         assert result.exit_code == 1
-        assert "not deployable" in result.output
+        assert "15 of 15 rules are missing, so this controller cannot run" in result.output
 
 
 def test_infer_file_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
@@ -193,11 +194,10 @@ def test_infer_file_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
     binary = tmp_path / "states.csv"
     binary.write_bytes(b"ball_size,pan\n\xff,1\n")
     cases = [
-        (["-i", str(binary)], "the states CSV is not UTF-8 text"),
+        (["-i", str(binary)], "the CSV is not UTF-8 text (byte 0xff)"),
         (["-i", str(tmp_path / "none.csv")], "cannot read the states CSV"),
         (["-i", str(tmp_path)], "cannot read the states CSV"),
-        (["-o", str(tmp_path / "missing" / "out.csv")], "cannot write the output CSV"),
-        (["-o", str(tmp_path)], "cannot write the output CSV"),
+        (["-o", str(tmp_path)], "the output CSV " + str(tmp_path) + " is a folder"),
     ]
     for options, message in cases:
         result = runner.invoke(app, ["infer", path, *options], input="ball_size,pan\n0.1,2\n")
@@ -215,7 +215,7 @@ def test_schema_check_passes_on_the_committed_file() -> None:
 def test_schema_to_an_unwritable_place(tmp_path: Path) -> None:
     result = runner.invoke(app, ["schema", "--path", str(tmp_path)])
     assert result.exit_code == 1
-    assert "cannot write the schema" in result.output
+    assert "is a folder" in result.output
 
 
 def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
@@ -224,5 +224,7 @@ def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
     result = runner.invoke(app, ["schema", "--check", "--path", str(stale)])
     assert result.exit_code == 1
     assert "stale" in result.output
-    assert runner.invoke(app, ["schema", "--path", str(stale)]).exit_code == 0
+    kept = runner.invoke(app, ["schema", "--path", str(stale)])
+    assert kept.exit_code == 1 and "--force" in kept.output
+    assert runner.invoke(app, ["schema", "--path", str(stale), "--force"]).exit_code == 0
     assert runner.invoke(app, ["schema", "--check", "--path", str(stale)]).exit_code == 0

@@ -1,0 +1,150 @@
+"""``flctool infer``: a controller's outputs for states read from CSV, streamed.
+
+Two paths give the same bits (tests compare them):
+
+- a small table (at most :data:`SMALL_TABLE` rows) is inferred in plain Python over the rules
+  that fire (:class:`flctool.learners.trial.SparseRules`, the path learning uses), so a few
+  rows never wait for numba to load or to compile the kernels;
+- a larger one goes through :meth:`Controller.output` (compiled kernels) chunk by chunk, so
+  memory follows the chunk, not the file.
+
+See docs/performance.md ("Whole commands").
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, TextIO
+
+import typer
+
+from flctool.cli.app import Force, app, check_output, example, load_controller, user_errors
+from flctool.cli.progress import compiling
+from flctool.cli.spec_commands import ControllerArgument
+from flctool.errors import FlcError
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from flctool.compile import Controller
+
+#: Tables up to this many rows skip the compiled kernels: in plain Python a row costs a few
+#: microseconds, while loading numba costs about 0.3 s of CPU (and compiling, on a machine's
+#: first run, several seconds).
+SMALL_TABLE = 2_000
+
+
+@app.command(epilog=example(
+    "flctool infer behaviours/ballchase-handmade.yaml -i states.csv -o outputs.csv",
+    "printf 'ball_size,pan\\n0.2,10\\n' | flctool infer runs/first"))
+def infer(
+    file: ControllerArgument,
+    input: Annotated[str, typer.Option(
+        "--input", "-i", help="CSV of states with a header naming the inputs; - for stdin.")]
+    = "-",
+    output: Annotated[Path | None, typer.Option(
+        "--output", "-o", help="Where to write the CSV (default: stdout).")] = None,
+    force: Force = False,
+) -> None:
+    """Run a deployable controller on states from CSV; adds the output column.
+
+    Rows are read, inferred and written in chunks, so a table of any length runs in bounded
+    memory. Writing to stdout, rows before a bad one have already been printed when it is
+    reported; with -o the file is written only if every row is good.
+    """
+    from flctool.compile import compile_behaviour
+    from flctool.tabular import StateReader, format_rows
+
+    with user_errors():
+        behaviour, _ = load_controller(file)
+        controller = compile_behaviour(behaviour)
+        if output is not None:
+            check_output(output, "output CSV", force=force)
+        with _states(input) as (stream, name), _target(output) as target:
+            reader = StateReader(stream, controller.input_names, name,
+                                 reserved=[controller.output_name])
+            target.write(f"{reader.header_line},{controller.output_name}\n")
+            chunks = reader.chunks()
+            first = next(chunks, None)
+            if first is None:
+                return
+            small = first[1].shape[0] <= SMALL_TABLE
+            for lines, states in _chained(first, chunks):
+                if small and states.shape[0] <= SMALL_TABLE:
+                    values = outputs_in_python(controller, states)
+                else:
+                    small = False
+                    with compiling():
+                        values = controller.output(states)
+                target.write(format_rows(lines, values))
+
+
+def outputs_in_python(controller: Controller, states: NDArray[np.float64]
+                      ) -> NDArray[np.float64]:
+    """``controller.output(states)`` computed in plain Python over the rules that fire:
+    (B, N) -> (B,), the same bits, without the compiled kernels."""
+    import numpy as np
+
+    from flctool.learners.trial import SparseRules
+
+    if controller.consequents is None:
+        raise FlcError("this controller has rules still to learn", hint="flctool learn it")
+    consequents = controller.consequents.tolist()
+    rules = SparseRules(controller)
+    values = []
+    for state in states.tolist():
+        fired, alphas, _ = rules.fire(state)
+        values.append(rules.output(alphas, [consequents[m] for m in fired]))
+    return np.array(values, dtype=np.float64)
+
+
+def _chained(first: tuple[list[str], NDArray[np.float64]],
+             rest: Iterator[tuple[list[str], NDArray[np.float64]]]
+             ) -> Iterator[tuple[list[str], NDArray[np.float64]]]:
+    yield first
+    yield from rest
+
+
+@contextmanager
+def _states(input: str) -> Iterator[tuple[TextIO, str]]:
+    from flctool.tabular import text_stream
+
+    if input == "-":
+        yield text_stream(sys.stdin.buffer), "<stdin>"
+        return
+    try:
+        handle = open(input, "rb")  # noqa: SIM115 - closed below
+    except OSError as error:
+        raise FlcError(f"cannot read the states CSV {input}: {error.strerror}",
+                       hint="check the path") from None
+    with handle:
+        yield text_stream(handle), input
+
+
+@contextmanager
+def _target(output: Path | None) -> Iterator[TextIO]:
+    """stdout, or a temporary file beside ``output`` renamed over it once every row is
+    written (a failure leaves no half file)."""
+    if output is None:
+        yield sys.stdout
+        return
+    temporary = output.with_name(f".{output.name}.{secrets.token_hex(4)}.tmp")
+    try:
+        handle = open(temporary, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
+    except OSError as error:
+        raise FlcError(f"cannot write the output CSV {output}: {error.strerror}",
+                       hint="check that the folder exists and is writable") from None
+    try:
+        with handle:
+            yield handle
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(temporary, output)
+    finally:
+        temporary.unlink(missing_ok=True)

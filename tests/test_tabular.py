@@ -1,0 +1,87 @@
+"""CSV of states: the hostile and awkward inputs each get a clear, located answer."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from flctool.errors import SpecError
+from flctool.tabular import StateReader, format_rows, text_stream
+
+
+def _read(data: bytes, size: int = 2**20
+          ) -> tuple[StateReader, list[tuple[list[str], np.ndarray]]]:
+    reader = StateReader(text_stream(io.BytesIO(data)), ["a", "b"], "t.csv", reserved=["y"])
+    return reader, list(reader.chunks(size))
+
+
+def _error(data: bytes) -> str:
+    with pytest.raises(SpecError) as caught:
+        _read(data)
+    return str(caught.value)
+
+
+def test_rows_in_chunks_keep_the_cells_as_written() -> None:
+    data = b"id,a,b\nx,1,2\ny, 3.5 ,-inf\nz,0,1e-3\nw,5,6"  # no newline at the end
+    reader, chunks = _read(data, size=10)
+    assert reader.header == ["id", "a", "b"]
+    assert len(chunks) > 1  # whole lines in each chunk, however small the size
+    assert [line for lines, _ in chunks for line in lines] == [
+        "x,1,2", "y, 3.5 ,-inf", "z,0,1e-3", "w,5,6"]
+    assert np.concatenate([values for _, values in chunks]).tolist() == [
+        [1.0, 2.0], [3.5, -np.inf], [0.0, 0.001], [5.0, 6.0]]
+    _, whole = _read(data)
+    assert len(whole) == 1
+
+
+def test_bom_crlf_cr_only_and_trailing_blank_lines_are_accepted() -> None:
+    for data in (b"\xef\xbb\xbfa,b\n1,2\n", b"a,b\r\n1,2\r\n\r\n\r\n", b"a,b\r1,2\r\r",
+                 b"a,b\n1,2\n   \n"):
+        _, chunks = _read(data)
+        assert [lines for lines, _ in chunks] == [["1,2"]], data
+
+
+def test_a_blank_line_between_rows_is_an_error() -> None:
+    assert "t.csv:3: (top level): a blank line between rows" in _error(b"a,b\n1,2\n\n3,4\n")
+    with pytest.raises(SpecError, match=r"t\.csv:3: .*a blank line between rows"):
+        _read(b"a,b\n1,2\n\n3,4\n", size=5)  # the blank line ends one chunk
+    assert "t.csv:3: (top level): expected 2 cells, found 1" in _error(b"a,b\n1,2\n  \n3,4\n")
+
+
+def test_duplicated_and_reserved_columns_are_errors() -> None:
+    assert "t.csv:1:3: (top level): the column 'a' appears twice" in _error(b"a,b,a\n1,2,3\n")
+    assert "the column 'y' is the output's name" in _error(b"a,b,y\n1,2,3\n")
+
+
+def test_a_huge_cell_is_reported_shortened() -> None:
+    huge = b"x" * 200_000
+    message = _error(b"a,b\n" + huge + b",2\n")
+    assert "t.csv:2:1: a: 'xxxx" in message and "(200,000 characters)' is not a number" in message
+    assert len(message) < 400
+    _, chunks = _read(b"a,b,note\n1,2," + huge + b"\n")  # in another column: just text
+    assert chunks[0][1].tolist() == [[1.0, 2.0]]
+
+
+def test_bad_cells_are_all_located() -> None:
+    message = _error(b"a,b\n1,nan\nq,2\n1,2,3\n")
+    assert "t.csv:2:2: b: NaN is a missing reading" in message
+    assert "t.csv:3:1: a: 'q' is not a number" in message
+    assert "t.csv:4: (top level): expected 2 cells, found 3" in message
+
+
+def test_quoted_cells_and_a_broken_quote() -> None:
+    _, chunks = _read(b'a,b,note\n1,2,"x, y"\n')
+    assert chunks[0][1].tolist() == [[1.0, 2.0]]
+    assert "not a CSV row" in _error(b'a,b\n1,"2\n')
+
+
+def test_empty_and_headerless_input() -> None:
+    assert "the CSV is empty" in _error(b"")
+    assert "lacks the column(s) b" in _error(b"a\n1\n")
+
+
+def test_format_rows_adds_the_shortest_round_trip_text() -> None:
+    text = format_rows(["1,2", "3,4"], np.array([0.1, 1 / 3]))
+    assert text == "1,2,0.1\n3,4,0.3333333333333333\n"
