@@ -3,16 +3,58 @@
 from __future__ import annotations
 
 import re
-from typing import Annotated
+from typing import Annotated, Any, NoReturn
 
-from pydantic import BaseModel, ConfigDict, StringConstraints
+from pydantic import BaseModel, ConfigDict, StringConstraints, model_validator
+
+
+class FrozenDict(dict[Any, Any]):
+    """A dict that refuses changes: a validated section's mappings (sets, commands, ...)."""
+
+    def _refuse(self, *args: Any, **kwargs: Any) -> NoReturn:
+        raise TypeError("a validated behaviour cannot be changed; build a new one "
+                        "(model_copy(update=...) or flctool.runs.resolve_behaviour)")
+
+    __setitem__ = __delitem__ = __ior__ = _refuse
+    clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (FrozenDict, (dict(self),))
+
+
+class FrozenList(list[Any]):
+    """A list that refuses changes: a validated section's lists (rules)."""
+
+    def _refuse(self, *args: Any, **kwargs: Any) -> NoReturn:
+        raise TypeError("a validated behaviour cannot be changed; build a new one "
+                        "(model_copy(update=...) or flctool.runs.resolve_behaviour)")
+
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
+    append = clear = extend = insert = pop = remove = reverse = sort = _refuse
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (FrozenList, (list(self),))
 
 
 class Section(BaseModel):
-    """Frozen, strict about unknown keys: a typo is an error, never silently ignored."""
+    """Frozen, strict about unknown keys: a typo is an error, never silently ignored.
+
+    Frozen all the way down: the dicts and lists a section holds refuse changes too, so a
+    behaviour that passed validation stays what was validated.
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True,
                               allow_inf_nan=False)
+
+    @model_validator(mode="after")
+    def _freeze_containers(self) -> Any:
+        for name in type(self).model_fields:
+            value = getattr(self, name)
+            if type(value) is dict:
+                object.__setattr__(self, name, FrozenDict(value))
+            elif type(value) is list:
+                object.__setattr__(self, name, FrozenList(value))
+        return self
 
 
 # Names become identifiers in FLL, FCL, FIS and C exports, so they are kept to identifiers.

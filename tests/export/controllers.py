@@ -45,10 +45,11 @@ def _partition(rng: np.random.Generator, lo: float, hi: float, count: int
     return sets
 
 
-def random_behaviour(seed: int, max_inputs: int = 4, max_sets: int = 4) -> Behaviour:
+def random_behaviour(seed: int, max_inputs: int = 4, max_sets: int = 4,
+                     min_inputs: int = 1) -> Behaviour:
     """A deployable behaviour drawn from ``seed``."""
     rng = np.random.default_rng(seed)
-    n = int(rng.integers(1, max_inputs + 1))
+    n = int(rng.integers(min_inputs, max_inputs + 1))
     inputs: dict[str, Any] = {}
     for i in range(n):
         lo = float(rng.normal(0, 50))

@@ -122,3 +122,24 @@ def test_sums_add_left_to_right_on_every_python() -> None:
 
     assert add_in_order([1e16, 1.0, 1.0]) == 1e16
     assert add_in_order(iter([0.1, 0.2, 0.3])) == (0.1 + 0.2) + 0.3
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 10_000), st.integers(3, 5))
+def test_learning_acts_as_the_deployed_controller_with_three_and_more_inputs(
+        seed: int, inputs: int) -> None:
+    # The learning loop's sparse path (eq. 1-3 over the fired rules) and the deployed
+    # controller (compiled kernels, one state and batched) give the same bits.
+    from tests.export.controllers import random_behaviour, random_states
+
+    behaviour = random_behaviour(seed, max_inputs=inputs, max_sets=3, min_inputs=inputs)
+    assert len(behaviour.inputs) == inputs
+    controller = compile_behaviour(behaviour)
+    sparse = SparseRules(controller)
+    assert controller.consequents is not None
+    states = random_states(behaviour, 50, seed)
+    batched = controller.output(states)
+    for row, state in enumerate(states):
+        rules, alphas, _ = sparse.fire(state.tolist())
+        learned = sparse.output(alphas, [int(controller.consequents[m]) for m in rules])
+        assert learned == controller.output_one(state) == batched[row]
