@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.compile.membership import trapezoid
-from flctool.errors import InferenceError
+from flctool.errors import InferenceError, NotDeployableError
 from flctool.spec.models import Behaviour, Rule
 
 if TYPE_CHECKING:
@@ -166,8 +166,9 @@ class Controller:
         The fast path for a control loop that infers one state at a time (well under a
         microsecond a call); equal to ``output(state[None])[0]``.
         """
+        # Any float64 (N,) array goes to the kernel as it is (it reads strides).
         if not (type(state) is np.ndarray and state.dtype is _FLOAT64
-                and state.shape == self._state_shape and state.flags.c_contiguous):
+                and state.shape == self._state_shape):
             state = self._as_state(state)
         floats, ints, kernel = self._one
         value: float = kernel(floats, ints, state)
@@ -256,7 +257,7 @@ class Controller:
     def _consequents(self, consequents: IntArray | None) -> IntArray:
         if consequents is None:
             if self.consequents is None:
-                raise InferenceError(
+                raise NotDeployableError(
                     "this controller has no rule consequents (its behaviour is not deployable)",
                     hint="pass consequents, or complete the rules (flctool learn)")
             return self.consequents

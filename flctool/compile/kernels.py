@@ -198,14 +198,14 @@ def _compact(mu: FloatArray, b: int, ints: IntArray, scratch: IntArray,
 
 
 # Batched inference walks every rule for a block of states at once (loops over states that
-# vectorise, 0.15 to 0.23 ns per rule, input and state) while that costs less than finding
+# vectorise, 0.13 to 0.23 ns per rule, input and state) while that costs less than finding
 # each state's fired rules and walking only those (about 2 ns per set, plus a cost per state
-# that doubles or so with each input, whatever M is). The per-state costs below were
+# that grows with each input, whatever M is). The per-state costs below were
 # measured on both walks (benchmarks/bench_scaling.py prints them around the switch); with
 # the switch where they cross, going past it costs no more than staying (no cliff).
 _DENSE_NS_PER_RULE_INPUT = (0.15, 0.15, 0.15, 0.23)  # index: N (more: the last); 2 fused
 _SPARSE_NS_PER_SET = 2.0
-_SPARSE_NS_BY_INPUTS = (0.0, 20.0, 40.0, 100.0, 180.0, 420.0)  # index: N
+_SPARSE_NS_BY_INPUTS = (0.0, 50.0, 95.0, 170.0, 235.0, 450.0)  # index: N
 
 
 def walks_every_rule(n_rules: int, n_inputs: int, n_sets: int) -> bool:
@@ -352,8 +352,11 @@ def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables
             for b in range(count):  # eq. 2-3 over each state's fired rules
                 denominators[b] = 0.0  # no rule fires (see _first_zero)
                 if _compact(mu, b, ints, scratch, mus):
-                    fired_rules, fired_alphas = _state_outputs(
-                        floats, ints, scratch, mus, tables, sums, fired_rules, fired_alphas)
+                    if n > 2 and _state_capacity(ints, scratch) > fired_rules.shape[0]:
+                        fired_rules = np.empty(_state_capacity(ints, scratch), np.intp)
+                        fired_alphas = np.empty(fired_rules.shape[0])
+                    _state_outputs(floats, ints, scratch, mus, tables, sums, fired_rules,
+                                   fired_alphas)
                     for p in range(population):
                         numerators[p, b] = sums[p, 0]
                     denominators[b] = sums[0, 1]
@@ -368,9 +371,9 @@ def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables
 
 
 @_jit
-def _state_sets(floats: FloatArray, ints: IntArray, states: FloatArray, b: int,
-                scratch: IntArray, mus: FloatArray) -> int:
-    """Each input's fired sets for ``states[b]``, reading the packed layout in place (no
+def _state_sets(floats: FloatArray, ints: IntArray, state: FloatArray, scratch: IntArray,
+                mus: FloatArray) -> int:
+    """Each input's fired sets for ``state (N,)``, reading the packed layout in place (no
     views: at a hundred nanoseconds a state, making them would be a good part of it).
 
     Writes ``scratch``: sets (N, max L_i), counts (N,), digits (N,) zeroed; and ``mus``
@@ -381,7 +384,7 @@ def _state_sets(floats: FloatArray, ints: IntArray, states: FloatArray, b: int,
     quads = 2 * n  # where the quadruples start in floats
     offsets = 4  # where the offsets start in ints
     for i in range(n):
-        s = states[b, i]
+        s = state[i]
         if s != s:
             return 0
         s = min(max(s, floats[i]), floats[n + i])  # clipped, as np.clip does
@@ -501,22 +504,18 @@ def _listed_sums(floats: FloatArray, ints: IntArray, rules: IntArray, alphas: Fl
 @_jit
 def _state_outputs(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: FloatArray,
                    tables: IntArray, sums: FloatArray, rules: IntArray,
-                   alphas: FloatArray) -> tuple[IntArray, FloatArray]:
+                   alphas: FloatArray) -> None:
     """Eq. 2-3 sums of the state :func:`_state_sets` wrote, for every table: into ``sums``
-    (P, 2) numerator and denominator. Returns the rule buffers, grown if more rules fired
-    than they hold (three inputs or more; two use the odometer, without buffers)."""
+    (P, 2) numerator and denominator. Two inputs use the odometer; more use ``rules`` /
+    ``alphas``, which hold at least :func:`_state_capacity` entries (callers grow them:
+    returning grown arrays from here would cost reference counting on every state)."""
     if ints[0] <= 2:
         for p in range(tables.shape[0]):
             sums[p, 0], sums[p, 1] = _state_sums(floats, ints, scratch, mus, tables, p)
-        return rules, alphas
-    capacity = _state_capacity(ints, scratch)
-    if capacity > rules.shape[0]:
-        rules = np.empty(capacity, np.intp)
-        alphas = np.empty(capacity)
+        return
     fired = _expand_fired(ints, scratch, mus, rules, alphas)
     for p in range(tables.shape[0]):
         sums[p, 0], sums[p, 1] = _listed_sums(floats, ints, rules, alphas, fired, tables, p)
-    return rules, alphas
 
 
 @_jit
@@ -547,9 +546,12 @@ def _infer_small(states: FloatArray, floats: FloatArray, ints: IntArray, tables:
     rules = np.empty(0 if n <= 2 else 64, np.intp)  # grown when more rules fire
     alphas = np.empty(rules.shape[0])
     for b in range(start, stop):
-        if _state_sets(floats, ints, states, b, scratch, mus) >= 0:
+        if _state_sets(floats, ints, states[b], scratch, mus) >= 0:
             return b
-        rules, alphas = _state_outputs(floats, ints, scratch, mus, tables, sums, rules, alphas)
+        if n > 2 and _state_capacity(ints, scratch) > rules.shape[0]:
+            rules = np.empty(_state_capacity(ints, scratch), np.intp)
+            alphas = np.empty(rules.shape[0])
+        _state_outputs(floats, ints, scratch, mus, tables, sums, rules, alphas)
         for p in range(tables.shape[0]):
             out[p * batch + b] = _within(sums[p, 0] / sums[p, 1], low, high)
     return -1
@@ -566,7 +568,7 @@ def infer_one(floats: FloatArray, ints: IntArray, state: FloatArray) -> float:
     n, max_sets = ints[0], ints[2]
     scratch = np.empty(n * max_sets + 2 * n, np.intp)
     mus = np.empty(n * max_sets)
-    if _state_sets(floats, ints, state.reshape((1, n)), 0, scratch, mus) >= 0:
+    if _state_sets(floats, ints, state, scratch, mus) >= 0:
         return np.nan
     table = 5 + 2 * n + ints[3] * n  # where the consequents start
     tables = ints[table:].reshape((1, ints.shape[0] - table))
@@ -628,14 +630,16 @@ def _array(dtype: Any, ndim: int) -> Any:
 
 
 _F1, _F2 = _array(numba.types.float64, 1), _array(numba.types.float64, 2)
-_STATES = numba.types.Array(numba.types.float64, 2, "A")  # any strides: no copy needed
+# States of any strides: read as they are, no copy needed.
+_STATES = numba.types.Array(numba.types.float64, 2, "A")
+_STATE = numba.types.Array(numba.types.float64, 1, "A")
 _I1, _I2 = _array(numba.types.intp, 1), _array(numba.types.intp, 2)
 # The one signature each kernel is used with (writable C arrays): entry() compiles it, or
 # loads it from numba's cache, ahead of the first call.
 SIGNATURES: dict[str, tuple[Any, ...]] = {
     "infer": (_STATES, _F1, _I1, _I2, _F1, numba.types.intp, numba.types.intp,
               numba.types.boolean),
-    "infer_one": (_F1, _I1, _F1),
+    "infer_one": (_F1, _I1, _STATE),
     "active_one": (_F1, _I1, _F1),
     "activations": (_F2, _F1, _I1, _F2),
 }
