@@ -8,7 +8,8 @@ and loads and compiles the result in a worker process, with a time and memory li
 - ``clear``: a flctool error whose every problem names a line;
 - ``unlocated``: a flctool error with a problem that names no line;
 - ``crash``: any other exception (a user would see a traceback);
-- ``hang``: no answer within the time limit;
+- ``hang``: no answer within the time limit (wall clock, ``--timeout``; each answered case
+  also reports the CPU time it took, which does not depend on the machine's load);
 - ``silent``: loaded, but a value written as a YAML 1.2 boolean or string (``yes``,
   ``true``, ``0x10``, ``1:00``) or a decimal like ``010`` became a different number.
 
@@ -230,7 +231,9 @@ def _worker(conn: Connection) -> None:
         case = conn.recv()
         if case is None:
             return
-        conn.send(run_case(case))
+        start = time.process_time()
+        outcome, detail = run_case(case)
+        conn.send((outcome, detail, time.process_time() - start))
 
 
 class Pool:
@@ -245,17 +248,18 @@ class Pool:
         self.process = self.context.Process(target=_worker, args=(child,), daemon=True)
         self.process.start()
 
-    def run(self, case: Case) -> tuple[str, str]:
+    def run(self, case: Case, timeout: float) -> tuple[str, str, float]:
+        """(outcome, detail, CPU seconds of the worker; NaN if it gave no answer)."""
         self.conn.send(case)
-        if self.conn.poll(TIMEOUT_S):
+        if self.conn.poll(timeout):
             try:
-                result: tuple[str, str] = self.conn.recv()
+                result: tuple[str, str, float] = self.conn.recv()
                 return result
             except EOFError:
                 self._restart()
-                return "crash", "worker died"
+                return "crash", "worker died", float("nan")
         self._restart()
-        return "hang", f"no answer in {TIMEOUT_S:g} s"
+        return "hang", f"no answer in {timeout:g} s", float("nan")
 
     def _restart(self) -> None:
         self.process.kill()
@@ -271,6 +275,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--timeout", type=float, default=TIMEOUT_S,
+                        help="wall-clock seconds before a case counts as a hang")
     parser.add_argument("--json", type=Path, help="write counts and examples here")
     args = parser.parse_args()
     # Imported once here, so that each forked worker starts warm.
@@ -284,9 +290,12 @@ def main() -> None:
     by_kind: dict[str, Counter[str]] = {}
     examples: dict[str, list[str]] = {}
     start = time.process_time()
+    cpu: list[float] = []
     for index in range(args.cases):
         case = make_case(index, args.seed)
-        outcome, detail = pool.run(case)
+        outcome, detail, seconds = pool.run(case, args.timeout)
+        if seconds == seconds:
+            cpu.append(seconds)
         counts[outcome] += 1
         by_kind.setdefault(case.kind, Counter())[outcome] += 1
         if outcome != "ok" and outcome != "clear":
@@ -294,7 +303,13 @@ def main() -> None:
             if len(examples[outcome]) < 15:
                 examples[outcome].append(f"#{index} {case.file} {case.kind}: {detail}")
     pool.close()
-    print(f"{args.cases} cases, seed {args.seed} (parent CPU {time.process_time() - start:.1f} s)")
+    print(f"{args.cases} cases, seed {args.seed}, hang after {args.timeout:g} s wall "
+          f"(parent CPU {time.process_time() - start:.1f} s)")
+    cpu.sort()
+    if cpu:
+        print(f"worker CPU per answered case: median {cpu[len(cpu) // 2]:.3f} s, "
+              f"99th percentile {cpu[int(len(cpu) * 0.99)]:.2f} s, max {cpu[-1]:.2f} s, "
+              f"total {sum(cpu):.0f} s")
     for outcome in ("ok", "clear", "unlocated", "crash", "hang", "silent"):
         print(f"  {outcome:10} {counts[outcome]}")
     print("by mutation kind (outcomes other than ok/clear):")
@@ -308,8 +323,9 @@ def main() -> None:
             print("   ", line)
     if args.json:
         args.json.write_text(json.dumps({"cases": args.cases, "seed": args.seed,
-                                         "counts": dict(counts), "examples": examples},
-                                        indent=1))
+                                         "timeout": args.timeout, "counts": dict(counts),
+                                         "max_cpu": cpu[-1] if cpu else None,
+                                         "examples": examples}, indent=1))
 
 
 if __name__ == "__main__":

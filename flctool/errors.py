@@ -103,6 +103,11 @@ class ExportError(FlcError):
     """A controller cannot be written in (or read from) the requested format."""
 
 
+class NotDeployableError(FlcError):
+    """A behaviour lacks rule consequents where a complete controller is needed (running,
+    evaluating or exporting it); raised by :func:`flctool.spec.require_deployable`."""
+
+
 class MissingDependencyError(FlcError):
     """An optional dependency is not installed; the hint says which extra installs it."""
 

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from flctool.compile import Controller
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray
-from flctool.errors import EnvError
+from flctool.errors import EnvError, NotDeployableError
 
 Z95 = 1.959963984540054  # two-sided 95 % quantile of the standard normal
 
@@ -121,7 +121,7 @@ def _controller(controller: Controller, consequents: NDArray[np.integer] | None)
     if consequents is not None:
         return controller.with_consequents(np.asarray(consequents, dtype=np.intp))
     if controller.consequents is None:
-        raise EnvError("this controller has no rule consequents to evaluate",
+        raise NotDeployableError("this controller has no rule consequents to evaluate",
                        hint="pass consequents, or evaluate a deployable behaviour")
     return controller
 

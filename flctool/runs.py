@@ -3,32 +3,45 @@
 A run directory holds::
 
     behaviour.yaml          the resolved behaviour: the file, its seed, command-line overrides
-    run.json                learner, seed, status (running / stopped / finished), best so far
+    run.json                learner, seed, status (running / stopped / finished), best so far,
+                            and the model-selection record: every validated candidate, the
+                            episodes and steps of training and of selection, why it stopped
     metrics.csv             one row per generation: generation, mean, std, best, min fitness,
-                            episodes, steps, wall_time (seconds)
+                            episodes, steps, wall_time (seconds), selection_episodes,
+                            selection_steps, validated
     strengths.csv           learners with rule strengths: the q table after each generation,
                             one row per (generation, rule, command) -- the paper's Fig. 7
     checkpoints/gen-NNNNN.json
                             after every generation: the evaluated population and its fitness,
                             q table and traces, the state of every random generator, and the
                             generation's metrics row
-    best.yaml               the best controller of the last generation, deployable
+    best.yaml               the run's best controller, deployable: the best validated
+                            candidate (flctool.learners.selection)
 
 Every file is written atomically (write, then rename), checkpoints first: a run killed at any
 moment loses at most the generation in progress, and ``--resume`` rebuilds metrics.csv and
 strengths.csv from the checkpoints, then continues bit for bit where an uninterrupted run
 would be (only the wall_time column differs).
+
+A run directory may come from someone else: training holds a lock (``run.lock``, released by
+the kernel when the process ends, however it ends), never writes through a symbolic link
+inside the directory, deletes the temporary files a killed writer left, and reads checkpoints
+within bounds (size, finite numbers, population, random generator states).
 """
 
 from __future__ import annotations
 
 import csv
+import errno
+import fcntl
 import io
 import json
+import math
 import os
 import re
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -37,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from flctool import __version__
-from flctool.atomic import write_text_atomic
+from flctool.atomic import remove_stale_temporaries, write_text_atomic
 from flctool.compile import with_rules
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError, SpecError
@@ -60,6 +73,12 @@ METRICS_FILE = "metrics.csv"
 STRENGTHS_FILE = "strengths.csv"
 BEST_FILE = "best.yaml"
 CHECKPOINT_DIR = "checkpoints"
+LOCK_FILE = "run.lock"
+#: A checkpoint larger than this is not read (the largest run flctool accepts, population x
+#: rules = 20 million consequents, writes about 200 MB).
+MAX_CHECKPOINT_BYTES = 1 << 30
+#: Random generator states hold 128-bit integers (PCG64); anything larger is tampering.
+_MAX_RNG_INT = 1 << 128
 _CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
 # What every checkpoint holds (learners with rule strengths add "q" and "traces").
 _CHECKPOINT_KEYS = ("learner", "generation", "elapsed", "population", "fitness", "rng",
@@ -120,9 +139,48 @@ def _strengths_text(rows: Iterable[tuple[int, Any]], commands: tuple[str, ...],
     return buffer.getvalue()
 
 
-def _append(path: Path, text: str) -> None:
-    with path.open("a", encoding="utf-8") as handle:
-        handle.write(text)
+def _write_error(path: Path, exc: OSError) -> RunDirError:
+    """An OSError writing into a run directory, as one clear error."""
+    if exc.errno == errno.ENOSPC or exc.errno == errno.EDQUOT:
+        hint = "free some disk space, then continue with flctool learn --resume " + str(
+            path.parent if path.parent.name != CHECKPOINT_DIR else path.parent.parent)
+    elif exc.errno in (errno.EACCES, errno.EPERM, errno.EROFS):
+        hint = f"make {path.parent} writable (chmod u+w), or copy the run and resume the copy"
+    elif exc.errno == errno.ELOOP:
+        hint = "delete the link: flctool never writes through links inside a run directory"
+    else:
+        hint = "check the run directory"
+    return RunDirError(f"cannot write {path}: {exc.strerror or exc}", hint=hint)
+
+
+def _refuse_links(root: Path, path: Path) -> None:
+    """Refuse ``path`` if it, or a folder between ``root`` and it, is a symbolic link: a
+    link planted in a run directory must not make flctool write outside it."""
+    here = root
+    for part in path.relative_to(root).parts:
+        here = here / part
+        if here.is_symlink():
+            raise _write_error(path, OSError(errno.ELOOP, f"{here} is a symbolic link"))
+
+
+def _write(root: Path, path: Path, text: str, durable: bool = True) -> None:
+    """Write ``text`` atomically to ``path`` inside the run directory ``root`` (``durable``:
+    fsync'd before the rename, see :func:`~flctool.atomic.write_bytes_atomic`)."""
+    _refuse_links(root, path)
+    try:
+        write_text_atomic(path, text, durable=durable, follow_symlinks=False)
+    except OSError as exc:
+        raise _write_error(path, exc) from None
+
+
+def _append(root: Path, path: Path, text: str) -> None:
+    _refuse_links(root, path)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+        with os.fdopen(fd, "a", encoding="utf-8") as handle:
+            handle.write(text)
+    except OSError as exc:
+        raise _write_error(path, exc) from None
 
 
 def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
@@ -203,13 +261,25 @@ class Run:
         """The checkpoint of ``generation``, checked to be whole: :class:`RunDirError` naming
         the file if it is missing or damaged."""
         path = self.checkpoint_path(generation)
+        if path.is_symlink():
+            raise self._damaged(generation, "the checkpoint is a symbolic link; flctool reads "
+                                "and writes only the run directory's own files")
         try:
+            size = path.stat().st_size
+            if size > MAX_CHECKPOINT_BYTES:
+                raise self._damaged(generation, f"the checkpoint has {size:,} bytes, more than "
+                                    f"any run writes ({MAX_CHECKPOINT_BYTES:,})")
+            # NaN may stand in a metrics column (no validation that generation); where it
+            # must not, _checkpoint_problem checks.
             data = json.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise RunDirError(f"{self.path}: no checkpoint of generation {generation}",
                               hint=self._generations_hint()) from None
         except (OSError, ValueError) as exc:
             raise self._damaged(generation, f"the checkpoint cannot be read ({exc})") from None
+        except RecursionError:
+            raise self._damaged(generation, "the checkpoint cannot be read (its JSON is "
+                                "nested too deep)") from None
         problem = self._checkpoint_problem(data, generation)
         if problem is not None:
             raise self._damaged(generation, f"the checkpoint {problem}")
@@ -232,9 +302,67 @@ class Run:
             return f"is damaged ({exc!r})"
         if metrics.generation != generation:
             return f"has the metrics of generation {metrics.generation}, not {generation}"
+        tables = [("fitness", fitness)]
+        for key in ("q", "traces"):
+            if key in data:
+                try:
+                    tables.append((key, np.array(data[key], dtype=np.float64)))
+                except (TypeError, ValueError) as exc:
+                    return f"is damaged ({exc!r})"
+        for key, table in tables:
+            if not np.isfinite(table).all():
+                return f"is damaged: its '{key}' holds NaN or infinity"
+        if not (isinstance(data["elapsed"], (int, float)) and math.isfinite(data["elapsed"])):
+            return "is damaged: its 'elapsed' is not a finite number"
+        if population.ndim >= 1 and population.shape[0] > self.behaviour.learning.population:
+            return (f"holds {population.shape[0]:,} individuals, more than the run's population "
+                    f"of {self.behaviour.learning.population}")
+        rng_problem = _rng_problem(data["rng"])
+        if rng_problem is not None:
+            return f"is damaged: {rng_problem}"
         problem = population_problem(population, fitness, self.behaviour.rule_count,
                                      len(self.behaviour.output.commands))
         return None if problem is None else f"is damaged: its {problem}"
+
+    # -- the lock ------------------------------------------------------------------------
+    @contextmanager
+    def lock(self) -> Iterator[None]:
+        """Hold the run's lock: :class:`RunDirError` if another process holds it (a run
+        resumed while it is still training would corrupt it)."""
+        path = self.path / LOCK_FILE
+        _refuse_links(self.path, path)
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+        except OSError as exc:
+            raise _write_error(path, exc) from None
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.read(fd, 32).decode("ascii", "replace").strip()
+                raise RunDirError(
+                    f"{self.path} is being trained by another flctool process"
+                    f"{f' (pid {holder})' if holder.isdigit() else ''}",
+                    hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()}\n".encode())
+            yield
+        finally:
+            os.close(fd)  # closing releases the lock
+
+    def is_locked(self) -> bool:
+        """Whether a process (this one included) holds the run's lock now."""
+        try:
+            fd = os.open(self.path / LOCK_FILE, os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
+            return False
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        finally:
+            os.close(fd)
+        return False
 
     def _damaged(self, generation: int, problem: str) -> RunDirError:
         path = self.checkpoint_path(generation)
@@ -328,16 +456,19 @@ class Run:
         if learner is None:
             learner = make_learner(self.behaviour, env)
         try:
-            generations = self.checkpoint_generations()
-            if generations:
-                try:
-                    learner.load_state_dict(self.checkpoint(generations[-1]))
-                except LearnError as error:  # the run's own learner: the file is damaged
-                    raise self._damaged(generations[-1], error.args[0]) from None
-            train(learner, [RunRecorder(self), *callbacks])
+            with self.lock():
+                for folder in (self.path, self.path / CHECKPOINT_DIR):
+                    remove_stale_temporaries(folder)  # of a writer killed mid-write
+                generations = self.checkpoint_generations()
+                if generations:
+                    try:
+                        learner.load_state_dict(self.checkpoint(generations[-1]))
+                    except LearnError as error:  # the run's own learner: the file is damaged
+                        raise self._damaged(generations[-1], error.args[0]) from None
+                train(learner, [RunRecorder(self), *callbacks])
+                return self.summary()
         finally:
             learner.env.close()
-        return self.summary()
 
     def summary(self) -> RunSummary:
         info = self.info()
@@ -350,10 +481,16 @@ class Run:
                           last, info.get("selection"))
 
     def info(self) -> dict[str, Any]:
+        """run.json; a run that says 'running' but whose lock nobody holds was killed (or
+        could not write its end), so it reads as 'stopped'."""
         try:
-            data: dict[str, Any] = json.loads((self.path / RUN_FILE).read_text("utf-8"))
-        except (OSError, ValueError):
+            data: Any = json.loads((self.path / RUN_FILE).read_text("utf-8"))
+        except (OSError, ValueError, RecursionError):
             return {}
+        if not isinstance(data, dict):
+            return {}
+        if data.get("status") == "running" and not self.is_locked():
+            data["status"] = "stopped"
         return data
 
     def write_info(self, status: str, best: Mapping[str, Any] | None,
@@ -368,8 +505,21 @@ class Run:
                 "generations": self.behaviour.learning.generations, "status": status,
                 "best": dict(best) if best else None,
                 "selection": dict(selection) if selection else None}
-        write_text_atomic(self.path / RUN_FILE, json.dumps(info, indent=2) + "\n",
-                          durable=durable)
+        text = json.dumps(info, indent=2) + "\n"
+        try:
+            _write(self.path, self.path / RUN_FILE, text, durable=durable)
+        except RunDirError:
+            if status == "running":
+                raise
+            # A full disk has no room for a second copy, but rewriting the small file in
+            # place frees its blocks first: the status must not be left 'running'.
+            _refuse_links(self.path, self.path / RUN_FILE)
+            try:
+                fd = os.open(self.path / RUN_FILE, os.O_WRONLY | os.O_TRUNC | os.O_NOFOLLOW)
+                with os.fdopen(fd, "w", encoding="utf-8") as handle:
+                    handle.write(text)
+            except OSError as exc:
+                raise _write_error(self.path / RUN_FILE, exc) from None
 
     def extend(self, generations: int) -> None:
         """Raise the run's generation budget (resume then continues to it)."""
@@ -378,9 +528,35 @@ class Run:
             raise RunDirError(f"{self.path} already has {done[-1] + 1} generations; "
                               f"--generations {generations} would not add any",
                               hint=f"give more than {done[-1] + 1}")
-        self.behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
-                                           "--generations")
-        write_text_atomic(self.path / BEHAVIOUR_FILE, _behaviour_text(self.behaviour))
+        behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
+                                      "--generations")
+        with self.lock():
+            _write(self.path, self.path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
+        self.behaviour = behaviour
+
+
+def _rng_problem(states: Any) -> str | None:
+    """What is wrong with the random generator states of a checkpoint, or None: a bounded
+    structure of names and integers in [0, 2^128)."""
+    if not isinstance(states, dict) or len(states) > 16:
+        return "its random generator states are not a small object"
+    pending: list[tuple[Any, int]] = [(states, 0)]
+    while pending:
+        value, depth = pending.pop()
+        if depth > 4:
+            return "its random generator states are nested too deep"
+        if isinstance(value, dict):
+            if len(value) > 16:
+                return "its random generator states hold too many fields"
+            pending += [(v, depth + 1) for v in value.values()]
+        elif isinstance(value, (bool, str)):
+            continue
+        elif isinstance(value, int):
+            if not 0 <= value < _MAX_RNG_INT:
+                return "its random generator states hold an integer outside [0, 2^128)"
+        else:
+            return f"its random generator states hold a {type(value).__name__}"
+    return None
 
 
 def _shape(value: Any) -> tuple[int, ...] | None:
@@ -401,11 +577,14 @@ SNAPSHOT_SECONDS = 1.0
 
 
 def _fsync(path: Path) -> None:
-    descriptor = os.open(path, os.O_RDONLY)
     try:
-        os.fsync(descriptor)
-    finally:
-        os.close(descriptor)
+        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+        try:
+            os.fsync(descriptor)
+        finally:
+            os.close(descriptor)
+    except OSError as exc:
+        raise _write_error(path, exc) from None
 
 
 class RunRecorder(Callback):
@@ -437,7 +616,7 @@ class RunRecorder(Callback):
         # whose checkpoint never made it, or missed rows whose checkpoint did.
         states = [run.checkpoint(g) for g in done]
         # Derived from the checkpoints (and rebuilt from them here), so never fsync'd.
-        write_text_atomic(run.path / METRICS_FILE, _metrics_text(
+        _write(run.path, run.path / METRICS_FILE, _metrics_text(
             GenerationMetrics.from_row(s["metrics"]) for s in states), durable=False)
         if learner.uses_strengths:
             shape = (learner.controller.n_rules, learner.controller.n_commands)
@@ -445,7 +624,7 @@ class RunRecorder(Callback):
                 if _shape(state.get("q")) != shape:
                     raise run._damaged(state["generation"], f"the checkpoint has no q table of "
                                        f"shape (rules, commands) = {shape}")
-            write_text_atomic(run.path / STRENGTHS_FILE, _strengths_text(
+            _write(run.path, run.path / STRENGTHS_FILE, _strengths_text(
                 ((s["generation"], s["q"]) for s in states),
                 learner.controller.command_names), durable=False)
         run.write_info("running", run.info().get("best"), durable=False)
@@ -461,13 +640,13 @@ class RunRecorder(Callback):
         now = time.monotonic()
         snapshot = now - self._snapshot_at >= SNAPSHOT_SECONDS
         checkpoint = run.checkpoint_path(metrics.generation)
-        write_text_atomic(checkpoint, json.dumps(state) + "\n", durable=snapshot)
+        _write(run.path, checkpoint, json.dumps(state) + "\n", durable=snapshot)
         self._unsynced = None if snapshot else checkpoint
         self._recorded = True
-        _append(run.path / METRICS_FILE, _metrics_text([metrics], header=False))
+        _append(run.path, run.path / METRICS_FILE, _metrics_text([metrics], header=False))
         strengths = learner.strengths()
         if strengths is not None:
-            _append(run.path / STRENGTHS_FILE, _strengths_text(
+            _append(run.path, run.path / STRENGTHS_FILE, _strengths_text(
                 [(metrics.generation, strengths.tolist())], learner.controller.command_names,
                 header=False))
         if snapshot:  # else on_end or a later generation writes them (SNAPSHOT_SECONDS)
@@ -482,7 +661,7 @@ class RunRecorder(Callback):
         return True
 
     def _write_best(self, behaviour: Behaviour, provenance: dict[str, Any]) -> None:
-        write_text_atomic(self.run.path / BEST_FILE, behaviour_to_yaml(
+        _write(self.run.path, self.run.path / BEST_FILE, behaviour_to_yaml(
             behaviour, _best_header(provenance, self.run.path.name)))
         self.best = provenance
 
@@ -540,7 +719,7 @@ def create_run(behaviour: Behaviour, out: Path | None = None) -> Run:
         raise RunDirError(f"cannot create the run directory {path}: {exc.strerror}",
                           hint="choose another --out") from None
     run = Run(path, behaviour)
-    write_text_atomic(path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
+    _write(path, path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
     run.write_info("created", None, durable=False)
     return run
 

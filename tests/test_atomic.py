@@ -50,6 +50,30 @@ def test_special_files_and_directories_are_refused(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe"]  # no temporary left behind
 
 
+def test_without_following_links_a_link_is_refused(tmp_path: Path) -> None:
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    link = tmp_path / "link.txt"
+    link.symlink_to(victim)
+    with pytest.raises(OSError, match="symbolic link"):
+        write_text_atomic(link, "new", follow_symlinks=False)
+    assert victim.read_text() == "precious" and link.is_symlink()
+
+
+def test_stale_temporaries_are_removed_and_nothing_else(tmp_path: Path) -> None:
+    from flctool.atomic import remove_stale_temporaries
+
+    stale = tmp_path / ".run.json.0a1b2c3d.tmp"
+    stale.write_text("{")
+    others = [tmp_path / "run.json", tmp_path / ".hidden", tmp_path / "x.0a1b2c3d.tmp"]
+    for other in others:
+        other.write_text("keep")
+    (tmp_path / ".dir.0a1b2c3d.tmp").mkdir()
+    assert remove_stale_temporaries(tmp_path) == [stale]
+    assert all(other.exists() for other in others)
+    assert remove_stale_temporaries(tmp_path / "missing") == []
+
+
 def test_only_durable_writes_wait_for_the_disk(tmp_path: Path,
                                                monkeypatch: pytest.MonkeyPatch) -> None:
     synced: list[int] = []

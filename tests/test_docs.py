@@ -190,7 +190,8 @@ def run_block(block: Block, cwd: Path) -> None:
             result = _run(["bash", "-o", "pipefail", "-c", command], cwd)
             assert output_matches(expected, result.stdout), (
                 f"{block.where}: `{command}` printed (exit {result.returncode}):\n"
-                f"{result.stdout}\n--- but the page shows:\n{expected}")
+                f"{result.stdout}\n--- but the page shows:\n{expected}\n--- if the new output "
+                f"is right: python -m tests.update_docs_output {_display(block.page)}")
 
 
 def _workspace(tmp_path: Path) -> Path:
@@ -297,6 +298,8 @@ def test_cli_reference_has_every_command_and_option() -> None:
         sub = command.get_command(context, name)
         assert sub is not None
         assert f"## flctool {name}" in page
+        if sub.epilog:  # examples, where a command has them
+            assert " ".join(sub.epilog.split()[1:4]) in page
         for param in sub.params:
             for opt in param.opts:
                 if opt.startswith("-"):

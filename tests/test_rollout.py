@@ -9,7 +9,7 @@ import pytest
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.envs import make_env
-from flctool.errors import EnvError
+from flctool.errors import NotDeployableError
 from flctool.rollout import (
     evaluate,
     evaluation_seeds,
@@ -74,7 +74,7 @@ def test_random_consequents_do_worse() -> None:
 
 def test_a_controller_without_rules_is_an_error() -> None:
     behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
-    with pytest.raises(EnvError, match="no rule consequents"):
+    with pytest.raises(NotDeployableError, match="no rule consequents"):
         evaluate(compile_behaviour(behaviour), make_env(behaviour), [0])
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -225,11 +226,11 @@ def test_a_stop_between_checkpoint_and_best_yaml_still_names_the_checkpoint_s_be
     real_append = runs._append
     calls = {"n": 0}
 
-    def interrupted_append(path: Path, text: str) -> None:
+    def interrupted_append(root: Path, path: Path, text: str) -> None:
         calls["n"] += 1
         if calls["n"] == 3:  # generation 2's metrics row, right after its checkpoint
             raise KeyboardInterrupt
-        real_append(path, text)
+        real_append(root, path, text)
 
     monkeypatch.setattr(runs, "_append", interrupted_append)
     run = create_run(ballchase(learner="pitt"), tmp_path / "run")
@@ -356,3 +357,149 @@ def test_a_run_stopped_between_snapshots_keeps_every_generation(
     assert [int(r["generation"]) for r in rows(run.path / METRICS_FILE)] == [0, 1, 2]
     _, provenance = open_run(run.path).behaviour_for()
     assert f"generation {provenance['generation']}," in (run.path / BEST_FILE).read_text()
+
+
+# -- hostile run directories -----------------------------------------------------------------
+def _stopped_run(tmp_path: Path, generations: int = 2) -> Path:
+    """A pitt run stopped after ``generations`` generations (of 5)."""
+    run = create_run(ballchase(learner="pitt"), tmp_path / "run")
+    run.train([StopAfter(generations - 1)])
+    return run.path
+
+
+def test_a_resume_while_the_run_trains_is_refused(tmp_path: Path) -> None:
+    path = _stopped_run(tmp_path)
+    training = open_run(path)
+    with training.lock():
+        assert json.loads((path / "run.json").read_text())["status"] == "stopped"
+        with pytest.raises(RunDirError, match=r"being trained by another flctool process "
+                           r"\(pid \d+\)"):
+            open_run(path).train()
+        with pytest.raises(RunDirError, match="being trained"):
+            open_run(path).extend(9)
+    assert open_run(path).train().status == "finished"  # once the lock is free
+
+
+def test_a_run_json_left_running_reads_as_stopped_without_the_lock(tmp_path: Path) -> None:
+    path = _stopped_run(tmp_path)
+    info = json.loads((path / "run.json").read_text())
+    (path / "run.json").write_text(json.dumps({**info, "status": "running"}))
+    run = open_run(path)
+    assert run.info()["status"] == "stopped"
+    with run.lock():
+        assert run.info()["status"] == "running"
+
+
+@pytest.mark.parametrize("planted", ["metrics.csv", "best.yaml", "run.json", "checkpoints",
+                                     "checkpoints/gen-00002.json"])
+def test_a_link_planted_in_a_run_is_never_written_through(tmp_path: Path,
+                                                          planted: str) -> None:
+    path = _stopped_run(tmp_path)
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    victim = outside / "victim.txt"
+    victim.write_text("precious\n")
+    link = path / planted
+    if planted == "checkpoints":
+        for child in link.iterdir():
+            (outside / child.name).write_bytes(child.read_bytes())
+        for child in list(link.iterdir()):
+            child.unlink()
+        link.rmdir()
+        link.symlink_to(outside, target_is_directory=True)
+    else:
+        link.unlink(missing_ok=True)
+        link.symlink_to(victim)
+    before = {p.name: p.read_bytes() for p in outside.iterdir()}
+    with pytest.raises(RunDirError, match="symbolic link"):
+        open_run(path).train()
+    assert {p.name: p.read_bytes() for p in outside.iterdir()} == before
+
+
+@pytest.mark.parametrize(("code", "hint"), [
+    (28, "free some disk space, then continue with flctool learn --resume"),  # ENOSPC
+    (13, "writable"),  # EACCES
+    (30, "writable"),  # EROFS
+])
+def test_a_failing_disk_is_one_clear_error_and_the_run_is_not_left_running(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, code: int, hint: str) -> None:
+    import os
+
+    from flctool import runs
+
+    path = _stopped_run(tmp_path)
+    real = runs.write_text_atomic
+
+    def failing(target: Path, text: str, **options: Any) -> None:
+        if Path(target).parent.name == "checkpoints":
+            raise OSError(code, os.strerror(code), str(target))
+        real(target, text, **options)
+
+    monkeypatch.setattr(runs, "write_text_atomic", failing)
+    with pytest.raises(RunDirError) as info:
+        open_run(path).train()
+    assert os.strerror(code) in str(info.value) and hint in info.value.hint
+    assert info.value.__cause__ is None
+    assert json.loads((path / "run.json").read_text())["status"] == "stopped"
+    monkeypatch.undo()
+    assert open_run(path).train().generations == 5  # nothing lost: resume continues
+
+
+def test_run_json_is_rewritten_in_place_when_no_copy_fits(tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    from flctool import runs
+
+    path = _stopped_run(tmp_path)
+
+    def full(target: Path, text: str, **options: Any) -> None:
+        raise OSError(28, "No space left on device", str(target))
+
+    monkeypatch.setattr(runs, "write_text_atomic", full)
+    run = open_run(path)
+    run.write_info("stopped", {"fitness": 1.0})
+    assert json.loads((path / "run.json").read_text())["best"] == {"fitness": 1.0}
+    with pytest.raises(RunDirError, match="No space left on device"):
+        run.write_info("running", None)
+
+
+def test_stale_temporary_files_of_a_killed_writer_are_removed(tmp_path: Path) -> None:
+    path = _stopped_run(tmp_path)
+    stale = [path / ".metrics.csv.deadbeef.tmp",
+             path / "checkpoints" / ".gen-00002.json.0123abcd.tmp"]
+    for file in stale:
+        file.write_text("half a file")
+    keep = path / "notes.tmp"
+    keep.write_text("mine")
+    open_run(path).train()
+    assert not any(file.exists() for file in stale) and keep.exists()
+
+
+def _tamper(path: Path, change: Callable[[dict[str, Any]], Any]) -> None:
+    checkpoint = path / "checkpoints" / "gen-00001.json"
+    state = json.loads(checkpoint.read_text())
+    result = change(state)
+    checkpoint.write_text(result if isinstance(result, str) else json.dumps(state))
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda s: s.update(fitness=[math.nan, *s["fitness"][1:]]),
+     "its 'fitness' holds NaN or infinity"),
+    (lambda s: s.update(fitness=[math.inf, *s["fitness"][1:]]),
+     "its 'fitness' holds NaN or infinity"),
+    (lambda s: s.update(elapsed=math.inf), "its 'elapsed' is not a finite number"),
+    (lambda s: json.dumps({**s, "elapsed": "[" * 100_000 + "]" * 100_000}).replace(
+        '"' + "[" * 100_000, "[" * 100_000).replace("]" * 100_000 + '"', "]" * 100_000),
+     "nested too deep"),
+    (lambda s: s["rng"]["ga"]["state"].update(state=10 ** 200),
+     "integer outside [0, 2^128)"),
+    (lambda s: s.update(population=s["population"] * 20_000, fitness=s["fitness"] * 20_000),
+     "holds 120,000 individuals, more than the run's population of 6"),
+])
+def test_a_tampered_checkpoint_is_refused_clearly(tmp_path: Path, change: Any,
+                                                  message: str) -> None:
+    path = _stopped_run(tmp_path)
+    _tamper(path, change)
+    with pytest.raises(RunDirError) as info:
+        open_run(path).train()
+    assert "gen-00001.json" in str(info.value) and message in str(info.value)
+    assert "delete" in info.value.hint

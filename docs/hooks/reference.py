@@ -214,6 +214,11 @@ def _help_markdown(text: str) -> list[str]:
             verbatim = True
         else:
             verbatim = any(row.lstrip().startswith("$ ") for row in rows)
+        example = re.match(r"(Examples?):\s*(flctool\b.*)", " ".join(r.strip() for r in rows),
+                           flags=re.DOTALL)
+        if example and not verbatim:
+            lines += [f"{example[1]}:", "", "```console", f"$ {example[2]}", "```", ""]
+            continue
         if verbatim:
             width = min((len(r) - len(r.lstrip()) for r in rows if r.strip()), default=0)
             lines += ["```console", *(r[width:] for r in rows), "```", ""]
@@ -256,6 +261,7 @@ def cli_reference(command: Any) -> str:
         lines += [f"## flctool {name}", "", "```text", f"flctool {name} {usage}", "```", ""]
         lines += _help_markdown(sub.help or "")
         lines += _params(sub, context)
+        lines += _help_markdown(sub.epilog or "")  # e.g. the command's examples
     return "\n".join(lines)
 
 

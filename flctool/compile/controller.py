@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.compile.membership import trapezoid
-from flctool.errors import InferenceError
+from flctool.errors import InferenceError, NotDeployableError
 from flctool.spec.models import Behaviour, Rule
 
 if TYPE_CHECKING:
@@ -257,7 +257,7 @@ class Controller:
     def _consequents(self, consequents: IntArray | None) -> IntArray:
         if consequents is None:
             if self.consequents is None:
-                raise InferenceError(
+                raise NotDeployableError(
                     "this controller has no rule consequents (its behaviour is not deployable)",
                     hint="pass consequents, or complete the rules (flctool learn)")
             return self.consequents

@@ -14,6 +14,7 @@ from typing import Protocol
 from flctool.envs.base import BatchEnv, SingleEnv, Step
 from flctool.envs.checker import check_env
 from flctool.errors import EnvError
+from flctool.plugins import registry
 from flctool.registry import Registry
 from flctool.spec.models import Behaviour
 
@@ -24,11 +25,9 @@ class EnvFactory(Protocol):
     def from_behaviour(self, behaviour: Behaviour, batch_size: int = 1) -> BatchEnv: ...
 
 
-ENVIRONMENTS: Registry[EnvFactory] = Registry("environment adapter")
-ENVIRONMENTS.register("ballchase-sim", "flctool.envs.ballchase:BallchaseSim")
-ENVIRONMENTS.register("pitch", "flctool.envs.pitch:PitchSim")
-ENVIRONMENTS.register("gymnasium", "flctool.envs.gym_adapter:GymnasiumEnv")
-ENVIRONMENTS.register("robot-link", "flctool.envs.robot_link:RobotLinkEnv")
+#: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.environments``
+#: entries).
+ENVIRONMENTS: Registry[EnvFactory] = registry("environment", "environment adapter")
 
 
 def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:

@@ -25,10 +25,11 @@ Both take sin, cos and atan2 from libm through :mod:`math`, because numpy's SIMD
 differ from libm in the last bit, so the two paths agree bit for bit.
 
 Randomness: episode ``b`` draws its start and *all* its noise from
-``numpy.random.default_rng(seeds[b])`` at reset: 5 uniforms (robot and ball placement), 3 per
-obstacle, then a (max_steps + 1, 3 + C) table of standard normals (motion forward, sideways,
-rotation; then one column per noisy channel: ball_size and pan always, then the other
-channels read, in :data:`PITCH_CHANNELS` order).
+``numpy.random.default_rng(seeds[b])`` at reset: 5 uniforms (robot and ball placement), a
+(max_steps + 1, 3 + C) table of standard normals (motion forward, sideways, rotation; then one
+column per noisy channel: ball_size and pan always, then the other channels read, in
+:data:`PITCH_CHANNELS` order), then 3 uniforms per obstacle -- so ballchase's draws are the
+first two of these.
 """
 
 from __future__ import annotations

@@ -28,6 +28,12 @@ otherwise uses the undiscounted return.
 
 JSON numbers carry floats exactly (Python writes the shortest text that reads back to the
 same double), so a simulator behind the link gives bit for bit what it gives directly.
+
+**A robot side is not trusted.** Lines are bounded (:data:`MAX_LINE`, the welcome
+:data:`MAX_WELCOME_LINE`) and so is their nesting; welcome values are type-checked (a JSON
+``true`` is not an integer) and bounded; text the robot sends is shown without terminal
+control sequences; and an episode the robot side does not end by its own ``max_steps`` is a
+fault: the robot is sent stop and the run ends, instead of running forever.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from __future__ import annotations
 import contextlib
 import json
 import math
+import re
 import socket
 import time
 from collections.abc import Callable
@@ -53,6 +60,15 @@ PROTOCOL = "flctool-robot-link"
 VERSION = 1
 #: Longest line either side accepts (a batch of 10^5 episodes of a few observations fits).
 MAX_LINE = 64 * 1024 * 1024
+#: Longest welcome a client accepts: names and singletons only.
+MAX_WELCOME_LINE = 1024 * 1024
+#: Largest ``max_steps`` and ``max_batch`` a welcome may announce, and most names in it.
+MAX_WELCOME_STEPS = 1_000_000
+MAX_WELCOME_BATCH = 100_000
+MAX_WELCOME_NAMES = 10_000
+#: Episodes x steps a reset may ask for: the reference server keeps per-step noise of every
+#: episode, so this bounds its memory (about 1 GB at the limit).
+MAX_BATCH_STEPS = 20_000_000
 #: Optional requests a robot side may support, announced in its welcome.
 FEATURES = ("fitness", "state")
 T = TypeVar("T")
@@ -74,8 +90,10 @@ def decode(line: bytes) -> dict[str, Any]:
     try:
         message = json.loads(line.decode("utf-8"), parse_constant=_no_constant)
     except (UnicodeDecodeError, ValueError) as error:
-        shown = line[:80].decode("utf-8", "replace")
+        shown = printable(line[:80].decode("utf-8", "replace"))
         raise ProtocolError(f"not a JSON line ({error}): {shown!r}") from None
+    except RecursionError:
+        raise ProtocolError("a JSON line nested too deep") from None
     if not isinstance(message, dict):
         raise ProtocolError(f"a message must be a JSON object, got {type(message).__name__}")
     if not isinstance(message.get("type"), str):
@@ -85,6 +103,20 @@ def decode(line: bytes) -> dict[str, Any]:
 
 def _no_constant(name: str) -> float:
     raise ValueError(f"{name} is not JSON")
+
+
+# Terminal control: CSI / OSC escape sequences, then any other C0 / C1 control character.
+_ESCAPES = re.compile(r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)?"
+                      r"|\x9b[0-?]*[ -/]*[@-~]")
+_CONTROL = re.compile(r"[\x00-\x08\x0a-\x1f\x7f-\x9f]")
+
+
+def printable(value: Any, limit: int = 300) -> str:
+    """Text from the other side, safe to print: no terminal escape sequences or control
+    characters (a robot's error text must not recolour or retitle the user's terminal), at
+    most ``limit`` characters."""
+    text = _CONTROL.sub("?", _ESCAPES.sub("", str(value)))
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 class Channel:
@@ -103,7 +135,7 @@ class Channel:
         self.sock.sendall(encode(message))
 
     def receive(self, timeout: float, poll: float | None = None,
-                cancelled: Any = None) -> dict[str, Any] | None:
+                cancelled: Any = None, limit: int = MAX_LINE) -> dict[str, Any] | None:
         """The next message, or None when the peer closed the connection.
 
         Raises TimeoutError after ``timeout`` seconds, :class:`ProtocolError` on a malformed
@@ -117,8 +149,8 @@ class Channel:
                 line = bytes(self._buffer[:end])
                 del self._buffer[: end + 1]
                 return decode(line)
-            if len(self._buffer) > MAX_LINE:
-                raise ProtocolError(f"a line longer than {MAX_LINE} bytes")
+            if len(self._buffer) > limit:
+                raise ProtocolError(f"a line longer than {limit:,} bytes")
             remaining = deadline - time.monotonic()
             if remaining <= 0 or (cancelled is not None and cancelled()):
                 raise TimeoutError(f"no message within {timeout:g} s")
@@ -163,15 +195,27 @@ def bool_array(value: Any, size: int, what: str) -> BoolArray:
 def string_list(value: Any, what: str) -> list[str]:
     if not (isinstance(value, list) and all(isinstance(v, str) for v in value)):
         raise ProtocolError(f"'{what}' must be a list of strings")
-    return [str(v) for v in value]
+    if len(value) > MAX_WELCOME_NAMES:
+        raise ProtocolError(f"'{what}' has more than {MAX_WELCOME_NAMES:,} entries")
+    return [printable(v, 200) for v in value]
 
 
 def _command_table(value: Any) -> dict[str, float]:
-    if not (isinstance(value, dict) and all(
+    if not (isinstance(value, dict) and len(value) <= MAX_WELCOME_NAMES and all(
             isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             for v in value.values())):
         raise ProtocolError("'commands' must map command names to finite numbers")
-    return {str(k): float(v) for k, v in value.items()}
+    return {printable(k, 200): float(v) for k, v in value.items()}
+
+
+def _bounded_int(value: Any, what: str, limit: int, optional: bool = False) -> Any:
+    """A welcome's integer: JSON true is not 1 here."""
+    if optional and value is None:
+        return None
+    if not (isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= limit):
+        raise ProtocolError(f"'{what}' must be {'null or ' if optional else ''}an integer "
+                            f"in [1, {limit:,}], got {printable(json.dumps(value), 40)}")
+    return value
 
 
 class RobotLinkEnv(BatchEnv):
@@ -198,6 +242,8 @@ class RobotLinkEnv(BatchEnv):
         self._columns: list[int] = []
         self._width = 0  # observations per episode the robot sends
         self._batch = 0  # episodes of the running reset; 0: none
+        self._steps = 0  # steps of the running reset
+        self._ended: BoolArray = np.zeros(0, dtype=bool)  # episodes that have ended
         self._success: BoolArray = np.zeros(0, dtype=bool)
         self._connect()
 
@@ -250,27 +296,31 @@ class RobotLinkEnv(BatchEnv):
         welcome = self._request(hello, self.config.connect_timeout, "welcome",
                                 hint="is the port that of a flctool robot link (and is no other "
                                 "client connected)? raise environment.connect_timeout for a "
-                                "slow bridge")
+                                "slow bridge", limit=MAX_WELCOME_LINE)
         try:
-            if welcome.get("protocol") != PROTOCOL or welcome.get("version") != VERSION:
-                raise ProtocolError(f"the robot speaks {welcome.get('protocol')!r} version "
-                                    f"{welcome.get('version')!r}, not {PROTOCOL} {VERSION}")
+            version = welcome.get("version")
+            if welcome.get("protocol") != PROTOCOL or version != VERSION or isinstance(
+                    version, bool):
+                raise ProtocolError(
+                    f"the robot speaks {printable(repr(welcome.get('protocol')), 60)} version "
+                    f"{printable(repr(version), 20)}, not {PROTOCOL} {VERSION}")
             observations = string_list(welcome.get("observations"), "observations")
             commands = _command_table(welcome.get("commands"))
-            max_steps, max_batch = welcome.get("max_steps"), welcome.get("max_batch")
-            if not (isinstance(max_steps, int) and max_steps >= 1):
-                raise ProtocolError("'max_steps' must be an integer >= 1")
-            if not (max_batch is None or (isinstance(max_batch, int) and max_batch >= 1)):
-                raise ProtocolError("'max_batch' must be null or an integer >= 1")
+            max_steps = _bounded_int(welcome.get("max_steps"), "max_steps", MAX_WELCOME_STEPS)
+            max_batch = _bounded_int(welcome.get("max_batch"), "max_batch", MAX_WELCOME_BATCH,
+                                     optional=True)
             features = string_list(welcome.get("features", []), "features")
+            robot = welcome.get("robot", "")
+            if not isinstance(robot, str):
+                raise ProtocolError("'robot' must be a string")
         except ProtocolError as error:
             raise self._fault(f"malformed welcome: {error}",
                               hint="see docs/robot-link.md") from None
         problems = self._fit_problems(observations, commands)
         if problems:
             self._abort("the behaviour does not fit the robot")
-            raise SpecError(problems, f"{self.where} (robot '{welcome.get('robot', '?')}')")
-        self.robot = str(welcome.get("robot", ""))
+            raise SpecError(problems, f"{self.where} (robot '{printable(robot, 80)}')")
+        self.robot = printable(robot, 200)
         self.max_steps, self.max_batch = max_steps, max_batch
         self.features = frozenset(features) & frozenset(FEATURES)
         self._columns = [observations.index(name) for name in self.observation_names]
@@ -328,7 +378,7 @@ class RobotLinkEnv(BatchEnv):
         return LinkError(f"{self.where}: {what}; the robot was sent stop", hint=hint)
 
     def _request(self, message: dict[str, Any], timeout: float, expect: str,
-                 hint: str = "") -> dict[str, Any]:
+                 hint: str = "", limit: int = MAX_LINE) -> dict[str, Any]:
         """Send one request, wait for its reply of type ``expect``; any fault stops the robot."""
         kind = message["type"]
         channel = self._channel
@@ -336,7 +386,7 @@ class RobotLinkEnv(BatchEnv):
             raise LinkError(f"{self.where}: not connected", hint="reset to reconnect")
         try:
             channel.send(message, timeout)
-            reply = channel.receive(timeout)
+            reply = channel.receive(timeout, limit=limit)
         except TimeoutError:
             raise self._fault(
                 f"no reply to '{kind}' within {timeout:g} s",
@@ -357,12 +407,13 @@ class RobotLinkEnv(BatchEnv):
             raise self._fault(f"the robot side closed the connection during '{kind}'",
                                "check the bridge's log; it may have crashed or timed out")
         if reply["type"] == "error":
-            code = reply.get("code", "?")
+            code = printable(reply.get("code", "?"), 40)
             raise self._fault(f"the robot side reported an error ({code}): "
-                               f"{reply.get('message', '')}",
-                               str(reply.get("hint") or "see the bridge's log"))
+                               f"{printable(reply.get('message', ''))}",
+                               printable(reply.get("hint") or "see the bridge's log"))
         if reply["type"] != expect:
-            raise self._fault(f"malformed reply to '{kind}': got a '{reply['type']}' message",
+            raise self._fault(f"malformed reply to '{kind}': got a "
+                               f"'{printable(reply['type'], 40)}' message",
                                "the bridge must answer each request with its reply, in order")
         return reply
 
@@ -387,7 +438,7 @@ class RobotLinkEnv(BatchEnv):
             self._abort(str(error))
             raise
         except Exception as error:  # the robot must stop whatever went wrong
-            raise self._fault(f"{type(error).__name__}: {error}",
+            raise self._fault(f"{type(error).__name__}: {printable(error)}",
                               "this is a bug; please report it with the message") from error
 
     # -- the protocol ------------------------------------------------------------------------
@@ -396,6 +447,10 @@ class RobotLinkEnv(BatchEnv):
         seeds = np.asarray(seeds).reshape(-1)
         if seeds.shape[0] < 1 or seeds.dtype.kind not in "iu":
             raise EnvError("reset needs at least one integer seed")
+        if seeds.shape[0] * (self.max_steps + 1) > MAX_BATCH_STEPS:
+            raise EnvError(f"{self.where}: {seeds.shape[0]:,} episodes of {self.max_steps:,} "
+                           f"steps are more than the link's limit of {MAX_BATCH_STEPS:,} "
+                           "episode steps per reset", hint="run fewer episodes at once")
         if self.max_batch is not None and seeds.shape[0] > self.max_batch:
             raise LinkError(f"{self.where}: the robot runs at most {self.max_batch} episode"
                             f"{'s' if self.max_batch > 1 else ''} at a time, asked for "
@@ -415,7 +470,8 @@ class RobotLinkEnv(BatchEnv):
             self._success = bool_array(reply.get("success", [False] * batch), batch, "success")
             return observations[:, self._columns]
         observations = self._parse("reset", parse)
-        self._batch = batch
+        self._batch, self._steps = batch, 0
+        self._ended = np.zeros(batch, dtype=bool)
         return observations, {}
 
     def step(self, actions: FloatArray) -> Step:
@@ -432,6 +488,8 @@ class RobotLinkEnv(BatchEnv):
             raise EnvError(f"step got {actions.shape[0]} actions for {batch} episodes")
         if not np.isfinite(actions).all():
             raise EnvError("an action is NaN or infinite", hint="check the controller's output")
+        if self._steps >= self.max_steps:
+            raise self._overrun()
         reply = self._request({"type": "step", "actions": actions.tolist()},
                               self.config.step_timeout, "step")
 
@@ -443,7 +501,23 @@ class RobotLinkEnv(BatchEnv):
             truncated = bool_array(reply.get("truncated"), batch, "truncated")
             self._success = bool_array(reply.get("success"), batch, "success")
             return Step(observations[:, self._columns], rewards, terminated, truncated)
-        return self._parse("step", parse)
+        step = self._parse("step", parse)
+        self._steps += 1
+        self._ended |= step.terminated | step.truncated
+        if self._steps >= self.max_steps and not self._ended.all():
+            raise self._overrun()
+        return step
+
+    def _overrun(self) -> LinkError:
+        """The robot side let an episode run past its own max_steps: stop it (a robot side
+        that never ends an episode would otherwise keep ``learn`` running forever)."""
+        running = np.flatnonzero(~self._ended)
+        shown = ", ".join(str(i) for i in running[:5]) + (", ..." if len(running) > 5 else "")
+        return self._fault(
+            f"the robot side did not end episode{'s' if len(running) > 1 else ''} {shown} "
+            f"after its max_steps = {self.max_steps} steps",
+            "the bridge must report truncated: true at the step limit it announces "
+            "(docs/robot-link.md)")
 
     def success(self) -> BoolArray:
         """(B,) success as the robot side last reported it (no round trip)."""

@@ -4,20 +4,33 @@ Tests run the link against it, ``flctool serve`` starts it, and whoever writes a
 real robot can read it as a worked example of docs/robot-link.md (or reuse it: wrap the robot
 in a :class:`~flctool.envs.base.BatchEnv` and pass ``on_stop`` to halt the motors).
 
-One client at a time (a robot has one body); others wait in the listen queue. The server
-brings the robot to a **safe stop** -- ends the running episodes and calls ``on_stop`` --
-when the client sends ``stop``, disconnects, sends nothing for ``idle_timeout`` seconds, sends
-a malformed or unexpected message, when the environment raises, or when the server itself is
-interrupted (Ctrl-C). Every fault is answered with an ``error`` message (when the client can
-still hear it) and closes the connection.
+One client controls the robot at a time (a robot has one body). Connections are accepted
+and their handshakes read concurrently, each within ``hello_timeout``, at most
+:data:`MAX_PENDING` at once (the oldest is dropped for a new one), so idle connections cannot
+lock a client out; a client that says hello while another controls the robot waits up to
+:data:`BUSY_WAIT` seconds, then gets a ``busy`` error. The controlling client is dropped when
+it sends no ``reset`` or ``step`` for ``idle_timeout`` seconds (``stop``, ``state`` and
+``fitness`` do not count), so neither can a client that only keeps sending ``stop``.
+
+The server brings the robot to a **safe stop** -- ends the running episodes and calls
+``on_stop`` -- when the client sends ``stop``, disconnects, makes no progress for
+``idle_timeout`` seconds, sends a malformed or unexpected message, when the environment
+raises, or when the server itself is interrupted (Ctrl-C; the controlling session runs in the
+thread that called :meth:`serve`). Every fault is answered with an ``error`` message (when
+the client can still hear it) and closes the connection. Requests are bounded: a reset's
+seeds times the episode length (:data:`~flctool.envs.robot_link.MAX_BATCH_STEPS`), a fitness
+request's episodes and lengths.
 """
 
 from __future__ import annotations
 
 import contextlib
+import queue
 import socket
 import sys
 import threading
+import time
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
 
@@ -26,17 +39,25 @@ import numpy as np
 from flctool.envs.base import BatchEnv
 from flctool.envs.robot_link import (
     FEATURES,
+    MAX_BATCH_STEPS,
+    MAX_WELCOME_BATCH,
+    MAX_WELCOME_LINE,
     PROTOCOL,
     VERSION,
     Channel,
     ProtocolError,
     bool_array,
     float_array,
+    printable,
 )
 from flctool.errors import EnvError, FlcError
 from flctool.spec.models import Behaviour
 
 _POLL = 0.1  # s; how often blocking waits look whether the server is shutting down
+#: Connections whose handshake is still awaited; a new one beyond this drops the oldest.
+MAX_PENDING = 64
+#: s a client that said hello waits for the one controlling the robot to finish.
+BUSY_WAIT = 2.0
 
 
 class _Fault(Exception):
@@ -59,12 +80,15 @@ class RobotServer:
                  port: int = 0, idle_timeout: float = 60.0, max_batch: int | None = None,
                  robot: str = "flctool reference server",
                  on_stop: Callable[[str], None] | None = None,
-                 log: Callable[[str], None] | None = None) -> None:
-        if idle_timeout <= 0:
-            raise EnvError(f"idle_timeout must be > 0 s, got {idle_timeout:g}")
+                 log: Callable[[str], None] | None = None,
+                 hello_timeout: float = 10.0) -> None:
+        if idle_timeout <= 0 or hello_timeout <= 0:
+            raise EnvError(f"idle_timeout and hello_timeout must be > 0 s, got "
+                           f"{idle_timeout:g} and {hello_timeout:g}")
         self.env = env
         self.commands = dict(commands)
         self.idle_timeout = idle_timeout
+        self.hello_timeout = min(hello_timeout, idle_timeout)
         self.max_batch = max_batch
         self.robot = robot
         self.on_stop = on_stop
@@ -74,6 +98,10 @@ class RobotServer:
         self.connections = 0
         self._batch = 0  # episodes of the running reset; 0: stopped
         self._closing = threading.Event()
+        self._pending: OrderedDict[int, Channel] = OrderedDict()  # awaiting their hello
+        self._pending_lock = threading.Lock()
+        self._free = threading.Semaphore(1)  # held while a client controls the robot
+        self._admitted: queue.Queue[tuple[Channel, dict[str, Any], str]] = queue.Queue()
         try:
             self._listener = socket.create_server((host, port))
         except OSError as error:
@@ -97,23 +125,91 @@ class RobotServer:
 
     # -- lifecycle ---------------------------------------------------------------------------
     def serve(self, once: bool = False) -> None:
-        """Accept clients one after another until :meth:`close` (or after one with ``once``)."""
+        """Serve clients, one controlling the robot at a time, until :meth:`close` (or after
+        the first with ``once``). The controlling session runs in the calling thread."""
+        doorman = threading.Thread(target=self._accept, daemon=True,
+                                   name=f"robot-server-accept:{self.port}")
+        doorman.start()
         try:
             while not self._closing.is_set():
                 try:
-                    conn, peer = self._listener.accept()
-                except TimeoutError:
+                    channel, hello, who = self._admitted.get(timeout=_POLL)
+                except queue.Empty:
                     continue
-                except OSError:
-                    break  # the listener was closed
-                self.connections += 1
-                self.log(f"client {peer[0]}:{peer[1]} connected")
-                self._serve_client(Channel(conn))
-                self.log(f"client {peer[0]}:{peer[1]} disconnected")
+                try:
+                    self._serve_client(channel, hello)
+                finally:
+                    self.log(f"client {who} disconnected")
+                    self._free.release()
                 if once:
                     break
         finally:
+            self._closing.set()
             self._listener.close()
+            doorman.join(timeout=1.0)
+            with self._pending_lock:
+                waiting = list(self._pending.values())
+            for channel in waiting:
+                channel.close()
+            while not self._admitted.empty():
+                self._admitted.get_nowait()[0].close()
+
+    def _accept(self) -> None:
+        """Accept connections and read each one's hello in a thread of its own."""
+        while not self._closing.is_set():
+            try:
+                conn, peer = self._listener.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return  # the listener was closed
+            self.connections += 1
+            who = f"{peer[0]}:{peer[1]}"
+            self.log(f"client {who} connected")
+            channel = Channel(conn)
+            with self._pending_lock:
+                self._pending[id(channel)] = channel
+                oldest = (self._pending.popitem(last=False)[1]
+                          if len(self._pending) > MAX_PENDING else None)
+            if oldest is not None:  # idle connections must not fill the server
+                self.log("too many connections without a handshake: dropped the oldest")
+                oldest.close()
+            threading.Thread(target=self._greet, args=(channel, who), daemon=True,
+                             name=f"robot-server-hello:{who}").start()
+
+    def _greet(self, channel: Channel, who: str) -> None:
+        """Read a connection's hello; hand it to :meth:`serve` once the robot is free."""
+        try:
+            try:
+                hello = channel.receive(self.hello_timeout, _POLL, self._closing.is_set,
+                                        limit=MAX_WELCOME_LINE)
+            except TimeoutError:
+                raise _Fault("timeout", f"no hello within {self.hello_timeout:g} s",
+                             "send hello right after connecting") from None
+            except ProtocolError as error:
+                raise _Fault("malformed", str(error), "see docs/robot-link.md") from None
+            except OSError:
+                hello = None
+            if hello is None:
+                channel.close()
+                return
+            self._check_hello(hello)
+            if not self._free.acquire(timeout=BUSY_WAIT):
+                raise _Fault("busy", "another client controls the robot",
+                             "try again when it is done")
+        except _Fault as fault:
+            self._send_quietly(channel, {"type": "error", "code": fault.code,
+                                         "message": str(fault), "hint": fault.hint})
+            channel.close()
+            return
+        finally:
+            with self._pending_lock:
+                self._pending.pop(id(channel), None)
+        if self._closing.is_set():
+            self._free.release()
+            channel.close()
+            return
+        self._admitted.put((channel, hello, who))
 
     def serve_in_background(self, once: bool = False) -> threading.Thread:
         """:meth:`serve` in a daemon thread (tests, notebooks); stop it with :meth:`close`."""
@@ -135,15 +231,15 @@ class RobotServer:
             self.on_stop(reason)
 
     # -- one client --------------------------------------------------------------------------
-    def _serve_client(self, channel: Channel) -> None:
+    def _serve_client(self, channel: Channel, hello: dict[str, Any]) -> None:
         try:
-            self._converse(channel)
+            self._converse(channel, hello)
         except _Fault as fault:
             self.safe_stop(f"{fault.code}: {fault}")
             self._send_quietly(channel, {"type": "error", "code": fault.code,
                                          "message": str(fault), "hint": fault.hint})
         except Exception as error:  # the robot must stop whatever went wrong
-            self.safe_stop(f"server error: {error}")
+            self.safe_stop(f"server error: {printable(error)}")
             hint = error.hint if isinstance(error, FlcError) else "see the server's log"
             self._send_quietly(channel, {"type": "error", "code": "robot",
                                          "message": f"{type(error).__name__}: {error}",
@@ -162,9 +258,11 @@ class RobotServer:
         with contextlib.suppress(OSError, ValueError):  # the client may be gone
             channel.send(message, _POLL * 10)
 
-    def _receive(self, channel: Channel) -> dict[str, Any] | None:
+    def _receive(self, channel: Channel, progress: float) -> dict[str, Any] | None:
+        """The next message; a timeout ``idle_timeout`` s after the last ``progress``."""
         try:
-            return channel.receive(self.idle_timeout, _POLL, self._closing.is_set)
+            return channel.receive(max(progress + self.idle_timeout - time.monotonic(), 0.0),
+                                   _POLL, self._closing.is_set)
         except TimeoutError:
             if self._closing.is_set():
                 raise _Fault("shutdown", "the server is shutting down") from None
@@ -177,34 +275,37 @@ class RobotServer:
             self.safe_stop(f"connection lost: {error}")
             return None
 
-    def _converse(self, channel: Channel) -> None:
-        hello = self._receive(channel)
-        if hello is None:
-            return
-        self._check_hello(hello)
+    def _converse(self, channel: Channel, hello: dict[str, Any]) -> None:
+        del hello  # checked when the client was admitted
         channel.send(self._welcome(), self.idle_timeout)
         handlers: dict[str, Callable[[dict[str, Any]], dict[str, Any]]] = {
             "reset": self._reset, "step": self._step, "fitness": self._fitness,
             "state": self._state, "stop": self._stop}
+        progress = time.monotonic()  # the last reset or step: what keeps a client in control
         while True:
-            message = self._receive(channel)
+            message = self._receive(channel, progress)
             if message is None:
                 if self._batch:
                     self.safe_stop("the client disconnected")
                 return
             handler = handlers.get(message["type"])
             if handler is None:
-                raise _Fault("unexpected", f"unknown message type '{message['type']}'",
+                raise _Fault("unexpected", f"unknown message type "
+                             f"'{printable(message['type'], 40)}'",
                              f"send one of: {', '.join(handlers)}")
             channel.send(handler(message), self.idle_timeout)
+            if message["type"] in ("reset", "step"):
+                progress = time.monotonic()
 
     def _check_hello(self, hello: dict[str, Any]) -> None:
         if hello["type"] != "hello":
-            raise _Fault("unexpected", f"expected 'hello' first, got '{hello['type']}'",
+            raise _Fault("unexpected", f"expected 'hello' first, got "
+                         f"'{printable(hello['type'], 40)}'",
                          "start every connection with the handshake")
         if hello.get("protocol") != PROTOCOL or hello.get("version") != VERSION:
             raise _Fault("version", f"this server speaks {PROTOCOL} version {VERSION}, the "
-                         f"client {hello.get('protocol')!r} version {hello.get('version')!r}",
+                         f"client {printable(repr(hello.get('protocol')), 60)} version "
+                         f"{printable(repr(hello.get('version')), 20)}",
                          "use a flctool release that speaks the same version")
 
     def _welcome(self) -> dict[str, Any]:
@@ -224,6 +325,10 @@ class RobotServer:
         if self.max_batch is not None and len(seeds) > self.max_batch:
             raise _Fault("batch", f"this robot runs at most {self.max_batch} episodes at a "
                          f"time, asked for {len(seeds)}", "reset fewer seeds at once")
+        if len(seeds) * (self.env.max_steps + 1) > MAX_BATCH_STEPS:
+            raise _Fault("batch", f"{len(seeds):,} episodes of {self.env.max_steps:,} steps "
+                         f"are more than {MAX_BATCH_STEPS:,} episode steps per reset",
+                         "reset fewer seeds at once")
         self._batch = 0
         observations, _ = self.env.reset(np.array(seeds, dtype=np.int64))
         self._batch = len(seeds)
@@ -246,12 +351,18 @@ class RobotServer:
     def _fitness(self, message: dict[str, Any]) -> dict[str, Any]:
         returns = message.get("returns")
         count = len(returns) if isinstance(returns, list) else -1
+        if count > MAX_WELCOME_BATCH:
+            raise _Fault("batch", f"fitness of {count:,} episodes asked, more than "
+                         f"{MAX_WELCOME_BATCH:,}", "ask for fewer at once")
         try:
             values = float_array(returns, (count,), "returns")
             lengths = float_array(message.get("lengths"), (count,), "lengths")
             success = bool_array(message.get("success"), count, "success")
         except ProtocolError as error:
             raise _Fault("malformed", str(error)) from None
+        if ((lengths < 0) | (lengths > self.env.max_steps) | (lengths != np.round(lengths))).any():
+            raise _Fault("malformed", f"'lengths' must be whole numbers of steps in "
+                         f"[0, {self.env.max_steps}]")
         fitness = self.env.episode_fitness(values, lengths.astype(np.int64), success)
         return {"type": "fitness", "fitness": np.asarray(fitness, dtype=np.float64).tolist()}
 
@@ -261,7 +372,8 @@ class RobotServer:
         return {"type": "state", "state": {k: v.tolist() for k, v in state.items()}}
 
     def _stop(self, message: dict[str, Any]) -> dict[str, Any]:
-        self.safe_stop(f"the client sent stop ({message.get('reason', 'no reason given')})")
+        reason = printable(message.get("reason", "no reason given"), 200)
+        self.safe_stop(f"the client sent stop ({reason})")
         return {"type": "stop"}
 
 

@@ -32,6 +32,7 @@ from flctool.atomic import write_text_atomic
 from flctool.compile import compile_behaviour
 from flctool.envs import make_env
 from flctool.errors import RunDirError
+from flctool.plugins import names as plugin_names
 from flctool.rollout import evaluate, evaluation_seeds
 from flctool.runs import (
     BEHAVIOUR_FILE,
@@ -43,7 +44,6 @@ from flctool.runs import (
     resolve_behaviour,
 )
 from flctool.spec import Behaviour, behaviour_to_yaml, load_behaviour
-from flctool.spec.learning import LEARNER_NAMES
 
 EXPERIMENT_FORMAT = 1
 PLAN_FILE = "experiment.json"
@@ -113,14 +113,15 @@ def run_name(learner: str, seed: int) -> str:
 
 def parse_learners(text: str) -> tuple[str, ...]:
     """``"pitt,hybrid"`` -> ``("pitt", "hybrid")``: known names, each once."""
+    known = plugin_names("learner")
     names = tuple(part.strip() for part in text.split(",") if part.strip())
     if not names:
         raise RunDirError("--learners names no learner",
-                          hint=f"give a comma-separated list of {', '.join(LEARNER_NAMES)}")
-    unknown = [n for n in names if n not in LEARNER_NAMES]
+                          hint=f"give a comma-separated list of {', '.join(known)}")
+    unknown = [n for n in names if n not in known]
     if unknown:
         raise RunDirError(f"unknown learner(s) in --learners: {', '.join(unknown)}",
-                          hint=f"use {', '.join(LEARNER_NAMES)}")
+                          hint=f"use {', '.join(known)}")
     if len(set(names)) != len(names):
         raise RunDirError(f"--learners names a learner twice: {text}",
                           hint="give each learner once")

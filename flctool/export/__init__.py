@@ -10,18 +10,14 @@ registered by its name, loaded lazily::
 
 from __future__ import annotations
 
-from flctool.export.base import Exporter, ExportOptions, Importer, require_deployable
+from flctool.export.base import Exporter, ExportOptions, Importer
 from flctool.export.source import load_source
+from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.spec import require_deployable
 
-EXPORTERS: Registry[type[Exporter]] = Registry("export format")
-EXPORTERS.register("yaml", "flctool.export.yaml_format:YamlExporter")
-EXPORTERS.register("json", "flctool.export.json_format:JsonExporter")
-EXPORTERS.register("fll", "flctool.export.fll:FllExporter")
-EXPORTERS.register("fcl", "flctool.export.fcl:FclExporter")
-EXPORTERS.register("fis", "flctool.export.fis:FisExporter")
-EXPORTERS.register("c", "flctool.export.c_source:CExporter")
-EXPORTERS.register("bundle", "flctool.export.bundle:BundleExporter")
+#: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.exporters`` entries).
+EXPORTERS: Registry[type[Exporter]] = registry("exporter", "export format")
 
 IMPORTERS: Registry[type[Importer]] = Registry("import format")
 IMPORTERS.register("fll", "flctool.export.fll:FllImporter")

@@ -24,9 +24,6 @@ from flctool.atomic import regular_target, write_text_atomic
 from flctool.errors import ExportError
 from flctool.spec import Behaviour
 
-#: How many missing rules an error message lists before it summarises the rest.
-LISTED_MISSING = 10
-
 
 @dataclass(frozen=True)
 class ExportOptions:
@@ -179,24 +176,6 @@ def check_writable(path: Path, *, force: bool) -> None:
     if not os.access(folder, os.W_OK | os.X_OK):
         raise ExportError(f"cannot write {path}: the folder {folder} is not writable",
                           hint="choose another path with -o")
-
-
-def require_deployable(behaviour: Behaviour) -> None:
-    """An exported controller needs all M rules (eq. 1); list the missing ones if not."""
-    missing = behaviour.missing_rules()
-    if not missing:
-        return
-    names = behaviour.input_names
-    listed = [" AND ".join(f"{n} IS {s}" for n, s in zip(names, sets, strict=True))
-              for sets in missing[:LISTED_MISSING]]
-    more = len(missing) - len(listed)
-    text = "".join(f"\n  IF {rule}" for rule in listed)
-    if more:
-        text += f"\n  ... and {more} more"
-    raise ExportError(
-        f"behaviour '{behaviour.name}' is not deployable: {len(missing)} of "
-        f"{behaviour.rule_count} rules have no consequent:{text}",
-        hint="learn them (flctool learn) and export the run directory, or add the rules")
 
 
 #: Line breaks and other control characters (including Unicode's line and paragraph

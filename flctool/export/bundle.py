@@ -24,10 +24,10 @@ from typing import Any
 
 from flctool import __version__
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, ExportOptions, require_deployable, write_files
+from flctool.export.base import Exporter, ExportOptions, write_files
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
-from flctool.spec import Behaviour
+from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
 
 #: The wiring file's format version.

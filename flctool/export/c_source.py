@@ -16,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, header_lines, number, require_deployable
+from flctool.export.base import Exporter, header_lines, number
 from flctool.export.float_error import check_float_error
-from flctool.spec import Behaviour
+from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
 from flctool.spec.checks import uncovered_gap
 

@@ -22,7 +22,6 @@ from flctool.export.base import (
     Exporter,
     Importer,
     header_lines,
-    require_deployable,
     sloped_quad,
 )
 from flctool.export.imported import (
@@ -42,7 +41,7 @@ from flctool.export.imported import (
     unsupported,
     zero_order_constant,
 )
-from flctool.spec import Behaviour
+from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot

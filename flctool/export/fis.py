@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 import re
 
-from flctool.export.base import Exporter, Importer, number, require_deployable, sloped_quad
+from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
     DONT_CARE_HINT,
     ImportedCommand,
@@ -29,7 +29,7 @@ from flctool.export.imported import (
     zero_order_constant,
 )
 from flctool.export.mamdani import centroid, measure
-from flctool.spec import Behaviour
+from flctool.spec import Behaviour, require_deployable
 
 
 def _vector(values: list[float]) -> str:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, Importer, header_lines, number, require_deployable
+from flctool.export.base import Exporter, Importer, header_lines, number
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
@@ -27,7 +27,7 @@ from flctool.export.imported import (
     parse_number,
     zero_order_constant,
 )
-from flctool.spec import Behaviour
+from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.

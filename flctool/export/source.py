@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 
 from flctool.errors import ExportError
-from flctool.runs import open_run
 from flctool.spec import Behaviour, load_behaviour
 
 
@@ -31,6 +30,10 @@ def load_source(path: str | Path, generation: int | None = None,
 
 def _from_run(path: Path, generation: int | None,
               individual: int | None) -> tuple[Behaviour, dict[str, object]]:
+    # Run directories are read through flctool.runs, which knows the learners' checkpoints;
+    # exporting a behaviour file must not load them.
+    from flctool.runs import open_run
+
     behaviour, provenance = open_run(path).behaviour_for(generation=generation,
                                                          individual=individual)
     return behaviour, {"source": str(path), **provenance}

@@ -11,13 +11,12 @@ from flctool.envs.base import BatchEnv
 from flctool.learners.base import TRAIN_SEED_LOW, GenerationResult, Learner, train
 from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback, StopAtFitness
 from flctool.learners.metrics import GenerationMetrics
+from flctool.plugins import registry
 from flctool.registry import Registry
 from flctool.spec.models import Behaviour
 
-LEARNERS: Registry[type[Learner]] = Registry("learner")
-LEARNERS.register("pitt", "flctool.learners.pitt:PittLearner")
-LEARNERS.register("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner")
-LEARNERS.register("hybrid", "flctool.learners.hybrid:HybridLearner")
+#: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.learners`` entries).
+LEARNERS: Registry[type[Learner]] = registry("learner", "learner")
 
 
 def make_learner(behaviour: Behaviour, env: BatchEnv | None = None) -> Learner:

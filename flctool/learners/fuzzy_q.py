@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from flctool.envs.base import BatchEnv
 from flctool.learners.base import GenerationResult, Learner
-from flctool.learners.trial import run_trial
+from flctool.learners.trial import add_in_order, run_trial
 from flctool.spec.models import Behaviour
 
 FloatArray = NDArray[np.float64]
@@ -81,13 +81,14 @@ class FuzzyQ:
     def value(self, rules: list[int], phi: list[float], commands: list[int]) -> float:
         """Q(S, a) of eq. 5 for the firing rules, their phi and chosen commands."""
         q, width = self.q, self.n_commands
-        return sum(p * q[m * width + k] for m, p, k in zip(rules, phi, commands, strict=True))
+        return add_in_order(p * q[m * width + k]
+                            for m, p, k in zip(rules, phi, commands, strict=True))
 
     def greedy_value(self, rules: list[int], phi: list[float]) -> float:
         """max_a Q(S, a) of eq. 6: each firing rule's best q, weighted by phi."""
         q, width = self.q, self.n_commands
-        return sum(p * max(q[m * width : m * width + width])
-                   for m, p in zip(rules, phi, strict=True))
+        return add_in_order(p * max(q[m * width : m * width + width])
+                            for m, p in zip(rules, phi, strict=True))
 
     def learn(self, rules: list[int], phi: list[float], commands: list[int], reward: float,
               next_rules: list[int], next_phi: list[float], terminal: bool) -> float:
@@ -146,7 +147,7 @@ class BoltzmannChooser:
             row = q[m * width : m * width + width]
             top = max(row)
             weights = [math.exp((v - top) / self.temperature) for v in row]
-            threshold = self.uniform() * sum(weights)
+            threshold = self.uniform() * add_in_order(weights)
             k, cumulative = 0, weights[0]
             while cumulative <= threshold and k < width - 1:
                 k += 1

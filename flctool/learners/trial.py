@@ -13,6 +13,7 @@ during learning bit for bit as the deployed one does.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -65,7 +66,7 @@ class SparseRules:
             width = len(sets)
             rules = [r * width + j for r in rules for j, _ in mus]
             alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
-        total = _accumulate(alphas)
+        total = add_in_order(alphas)
         if not total > 0.0:  # covered ranges fire a rule; only underflow leaves none
             raise InferenceError(f"no rule fires for the state {state}: the sets overlap too "
                                  "little to be computed in floating point",
@@ -78,7 +79,7 @@ class SparseRules:
         numerator = 0.0
         for a, k in zip(alphas, commands, strict=True):
             numerator += a * singletons[k]
-        value = numerator / _accumulate(alphas)
+        value = numerator / add_in_order(alphas)
         # within the commands, as Controller.output keeps it (rounding may step an ulp past)
         return self._low if value < self._low else self._high if value > self._high else value
 
@@ -96,9 +97,13 @@ class SparseRules:
         return self.singletons[best]
 
 
-def _accumulate(values: list[float]) -> float:
-    # Plain left-to-right addition, as the compiled kernels do (Python >= 3.12's sum() of
-    # floats is compensated, which would round differently).
+def add_in_order(values: Iterable[float]) -> float:
+    """Plain left-to-right addition from 0.0, as the compiled kernels do.
+
+    Every sum that a run's results depend on goes through here: Python >= 3.12's builtin
+    ``sum()`` of floats is compensated and rounds differently, so using it would make runs
+    differ between Python versions.
+    """
     total = 0.0
     for value in values:
         total += value

@@ -2,7 +2,14 @@
 
 from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
 from flctool.spec.load import behaviour_from_data, load_behaviour, parse_behaviour
-from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Output, Rule
+from flctool.spec.models import (
+    FORMAT_VERSION,
+    Behaviour,
+    InputVariable,
+    Output,
+    Rule,
+    require_deployable,
+)
 
 __all__ = [
     "FORMAT_VERSION",
@@ -15,4 +22,5 @@ __all__ = [
     "behaviour_to_yaml",
     "load_behaviour",
     "parse_behaviour",
+    "require_deployable",
 ]

@@ -26,6 +26,8 @@ MAX_EPISODE_STEPS = 1_000_000  # an environment's max_steps
 MAX_POPULATION_RULES = 20_000_000
 #: Steps of one generation run side by side: population x trials x max_steps.
 MAX_GENERATION_STEPS = 20_000_000
+#: Rule problems listed before the rest of the table is skipped.
+MAX_RULE_PROBLEMS = 100
 
 
 def find_problems(behaviour: Behaviour) -> list[Problem]:
@@ -153,9 +155,14 @@ def uncovered_gap(variable: InputVariable) -> tuple[float, float] | None:
 def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str],
                 rules: Iterable[tuple[int, Rule]]) -> list[Problem]:
     """Rule references against ``inputs`` (input name -> its set names) and ``commands``."""
-    problems = []
+    problems: list[Problem] = []
     seen: dict[tuple[str, ...], int] = {}
     for index, rule in rules:
+        if len(problems) >= MAX_RULE_PROBLEMS:  # a whole broken table need not be listed
+            problems.append(Problem(("rules", index), f"the rules from rules[{index}] on are "
+                                    f"not checked: {len(problems)} problems already",
+                                    "fix the rules above first"))
+            break
         path = ("rules", index)
         complete = True
         for input_name, set_name in rule.if_.items():

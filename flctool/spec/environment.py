@@ -481,8 +481,9 @@ class PitchConfig(Section):
     """A football pitch with goals, a ball, the robot and obstacles (docs/environments.md)."""
 
     adapter: Literal["pitch"]
-    max_steps: int = Field(200, ge=1, le=100_000, description=(
-        "steps before an episode ends with the timeout outcome"))
+    max_steps: int = Field(200, ge=1, le=10_000, description=(
+        "steps before an episode ends with the timeout outcome (at most 10,000: each "
+        "episode draws its noise for every step at reset)"))
     step_period: float = Field(0.25, gt=0, description=(
         "s per step; documents the units of the motion table (a step is one command)"))
     action: Literal["crisp", "nearest", "vote"] = Field("crisp", description=(
@@ -704,10 +705,3 @@ class RobotLinkConfig(Section):
         "further connection attempts after a refused or timed-out connect; steps are never "
         "retried (a step moves the robot)"))
     retry_delay: float = Field(1.0, ge=0, description="s between connection attempts")
-
-
-EnvironmentConfig = Annotated[
-    BallchaseSimConfig | PitchConfig | GymnasiumConfig | RobotLinkConfig,
-    Field(discriminator="adapter"),
-]
-ADAPTER_NAMES = ("ballchase-sim", "pitch", "gymnasium", "robot-link")

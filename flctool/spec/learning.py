@@ -9,6 +9,7 @@ from pydantic import Field, ValidationInfo, field_validator
 from flctool.registry import did_you_mean
 from flctool.spec.base import Section
 
+#: The built-in learners (flctool.plugins adds installed ones).
 LEARNER_NAMES = ("pitt", "fuzzy_q", "hybrid")
 
 
@@ -68,7 +69,8 @@ class StopConfig(Section):
 class LearningConfig(Section):
     """Defaults are the paper's protocol: population 10, pc 0.2, pm 0.1, 30 generations."""
 
-    learner: str = Field("hybrid", description="one of: " + ", ".join(LEARNER_NAMES))
+    learner: str = Field("hybrid", description=(
+        "one of: " + ", ".join(LEARNER_NAMES) + ", or an installed plugin's"))
     seed: int = Field(0, ge=0, description="seeds every random choice of the run")
     population: int = Field(10, ge=2)
     generations: int = Field(30, ge=1)
@@ -98,7 +100,10 @@ class LearningConfig(Section):
     @field_validator("learner")
     @classmethod
     def _known_learner(cls, name: str) -> str:
-        if name not in LEARNER_NAMES:
-            raise ValueError(f"unknown learner '{name}'.{did_you_mean(name, LEARNER_NAMES)} "
-                             f"Use one of: {', '.join(LEARNER_NAMES)}")
+        from flctool.plugins import names
+
+        known = names("learner")
+        if name not in known:
+            raise ValueError(f"unknown learner '{name}'.{did_you_mean(name, known)} "
+                             f"Use one of: {', '.join(known)}")
         return name

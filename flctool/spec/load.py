@@ -16,8 +16,15 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.registry import did_you_mean
 from flctool.spec.checks import check_input, check_rules, limit_problems
-from flctool.spec.environment import ADAPTER_NAMES, EnvironmentConfig
-from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
+from flctool.spec.models import (
+    ADAPTER_NAMES,
+    FORMAT_VERSION,
+    LEARNING_TAGS,
+    Behaviour,
+    EnvironmentConfig,
+    InputVariable,
+    Rule,
+)
 from flctool.spec.rules import expand_dont_care
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
@@ -171,7 +178,7 @@ def _not_a_number(value: bool | str, raw: str | None, source: SourceMap,
                               "write a number here")
     if raw is None:
         return source.problem(path, f"'{value}' is not a number",
-                              "write a number, without quotes")
+                              "write a number here (a quoted number is text)")
     if ":" in value:
         hint = "write the number itself (YAML 1.1 read 1:00 as 60; flctool reads YAML 1.2)"
     elif "_" in value:
@@ -200,7 +207,8 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     message = error["msg"]
     hint = ""
     # A discriminated union puts the chosen tag into the path; the file does not have it.
-    if len(loc) >= 2 and loc[0] == "environment" and loc[1] in ADAPTER_NAMES:
+    if len(loc) >= 2 and ((loc[0] == "environment" and loc[1] in ADAPTER_NAMES)
+                          or (loc[0] == "learning" and loc[1] in LEARNING_TAGS)):
         del loc[1]
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":

@@ -10,21 +10,67 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Union
 
 from pydantic import (
     AfterValidator,
     ConfigDict,
+    Discriminator,
     Field,
+    Tag,
     ValidationInfo,
     field_validator,
     model_validator,
 )
 
+from flctool.errors import NotDeployableError
+from flctool.plugins import names, plugins
 from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
-from flctool.spec.environment import EnvironmentConfig, default_gymnasium_ranges
+from flctool.spec.environment import default_gymnasium_ranges
 from flctool.spec.learning import LearningConfig
+
+# The sections chosen by name are unions built from the plugins (flctool.plugins): the built-in
+# learners and adapters and any an installed package adds. mypy sees the built-ins.
+ADAPTER_NAMES = names("environment")
+if TYPE_CHECKING:
+    from flctool.spec.environment import (
+        BallchaseSimConfig,
+        GymnasiumConfig,
+        PitchConfig,
+        RobotLinkConfig,
+    )
+
+    EnvironmentConfig = Annotated[
+        BallchaseSimConfig | PitchConfig | GymnasiumConfig | RobotLinkConfig,
+        Field(discriminator="adapter"),
+    ]
+    LearningSection = LearningConfig
+else:
+    EnvironmentConfig = Annotated[
+        Union[tuple(plugin.config_model() for plugin in plugins("environment"))],  # noqa: UP007
+        Field(discriminator="adapter"),
+    ]
+    _LEARNING_MODELS = {plugin.name: plugin.config_model() for plugin in plugins("learner")}
+    if set(_LEARNING_MODELS.values()) == {LearningConfig}:
+        LearningSection = LearningConfig
+    else:
+        # Built-in learners share LearningConfig; an installed learner brings its own model.
+        # A file without 'learner:' gets the default, as LearningConfig says.
+        def _learning_tag(value: Any) -> str:
+            name = (value.get("learner") if isinstance(value, dict)
+                    else getattr(value, "learner", None))
+            model = _LEARNING_MODELS.get(name) if isinstance(name, str) else None
+            return name if model is not None and model is not LearningConfig else "builtin"
+
+        _MEMBERS = (Annotated[LearningConfig, Tag("builtin")],
+                    *(Annotated[model, Tag(name)] for name, model in _LEARNING_MODELS.items()
+                      if model is not LearningConfig))
+        LearningSection = Annotated[
+            Union[_MEMBERS],  # noqa: UP007
+            Discriminator(_learning_tag),
+        ]
+LEARNING_TAGS = ("builtin", *names("learner"))
 
 FORMAT_VERSION = 1
 
@@ -97,7 +143,7 @@ class Behaviour(Section):
     output: Output
     rules: list[Rule] = Field(default_factory=list, description=(
         "rule consequents; empty or partial for a behaviour still to be learned"))
-    learning: LearningConfig = LearningConfig()
+    learning: LearningSection = LearningConfig()
     environment: EnvironmentConfig | None = None
 
     @field_validator("flctool")
@@ -149,3 +195,27 @@ class Behaviour(Section):
     @property
     def is_deployable(self) -> bool:
         return len(self.rules) == self.rule_count and not self.missing_rules()
+
+
+#: How many missing rules a :class:`NotDeployableError` lists.
+LISTED_MISSING = 10
+
+
+def require_deployable(behaviour: Behaviour, file: str | None = None) -> None:
+    """Raise :class:`NotDeployableError`, listing the missing rules, unless ``behaviour``
+    gives all M consequents of eq. 1 (``file`` names where it came from)."""
+    missing = behaviour.missing_rules()
+    if not missing:
+        return
+    names = behaviour.input_names
+    listed = [" AND ".join(f"{n} IS {s}" for n, s in zip(names, sets, strict=True))
+              for sets in missing[:LISTED_MISSING]]
+    more = len(missing) - len(listed)
+    text = "".join(f"\n  IF {rule}" for rule in listed)
+    if more:
+        text += f"\n  ... and {more} more"
+    where = f"{file}: " if file else ""
+    raise NotDeployableError(
+        f"{where}behaviour '{behaviour.name}' is not deployable: {len(missing)} of "
+        f"{behaviour.rule_count} rules have no consequent:{text}",
+        hint="learn them (flctool learn) and use the run directory, or add the rules")

@@ -108,19 +108,60 @@ class SourceMap:
     #: YAML 1.1 would have read as one (``off``, ``yes``, ``1:00``), so a message can say what
     #: the user wrote.
     raw: dict[Path, str] = field(default_factory=dict)
+    #: Whether this map is of a parsed file (then every problem has at least line 1).
+    parsed: bool = False
 
     def locate(self, path: Path) -> tuple[int | None, int | None]:
-        """The position of ``path``, or of its nearest ancestor that the file has."""
+        """The position of ``path``, or of its nearest ancestor that the file has (the start
+        of the file for an empty one)."""
         for end in range(len(path), -1, -1):
             mark = self.marks.get(tuple(path[:end]))
             if mark is not None:
                 return mark
-        return None, None
+        return (1, 1) if self.parsed else (None, None)
 
     def problem(self, path: Path, message: str, hint: str = "") -> Problem:
         line, column = self.locate(path)
         return Problem(path=tuple(path), message=message, hint=hint, file=self.file, line=line,
                        column=column)
+
+
+# Large files are parsed by libyaml (PyYAML's C parser) when it is installed: the pure-Python
+# parser needs tens of seconds for a file of a few megabytes.
+_LIBYAML_FROM = 64 * 1024
+_CParser: Any
+try:
+    from yaml._yaml import CParser as _CParser
+except ImportError:  # pragma: no cover - PyYAML built without libyaml
+    _CParser = None
+
+
+if _CParser is not None:
+    class _CLoader(_CParser, _CoreResolver):  # type: ignore[misc]
+        """libyaml's composer with the YAML 1.2 core resolver."""
+
+        def __init__(self, stream: str) -> None:
+            _CParser.__init__(self, stream)
+            _CoreResolver.__init__(self)
+
+
+def _check_depth(text: str) -> None:
+    """Refuse nesting past MAX_DEPTH before libyaml's (recursive) composer sees it; walking
+    the events needs no recursion."""
+    parser = _CParser(text)
+    depth = 0
+    while True:
+        event = parser.get_event()
+        if isinstance(event, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+            depth += 1
+            if depth > MAX_DEPTH:
+                mark: Any = event.start_mark
+                raise yaml.composer.ComposerError(
+                    None, None, f"lists and maps are nested more than {MAX_DEPTH} deep", mark)
+        elif isinstance(event, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+            depth -= 1
+        elif isinstance(event, yaml.StreamEndEvent):
+            return
 
 
 def _mark(node: yaml.Node) -> tuple[int, int]:
@@ -277,14 +318,18 @@ def read_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     YAML, duplicate keys, object-building or misplaced tags, recursive aliases and files past
     the bounds MAX_DEPTH, MAX_VALUES, MAX_INT_DIGITS and MAX_FILE_CHARS.
     """
-    source = SourceMap(file)
+    source = SourceMap(file, parsed=True)
     if len(text) > MAX_FILE_CHARS:
         raise SpecError([Problem((), f"the file has {len(text):,} characters, more than the "
                                  f"{MAX_FILE_CHARS:,} a behaviour file may have", file=file)],
                         file)
-    loader = None
+    loader: Any = None
     try:
-        loader = _Loader(text)
+        if len(text) > _LIBYAML_FROM and _CParser is not None:
+            _check_depth(text)
+            loader = _CLoader(text)
+        else:
+            loader = _Loader(text)
         node = loader.get_single_node()
     except yaml.MarkedYAMLError as exc:
         raise SpecError([_syntax_problem(exc, text, file)], file) from None
@@ -325,6 +370,8 @@ def _syntax_problem(exc: yaml.MarkedYAMLError, text: str, file: str) -> Problem:
     column = mark.column + 1 if mark else None
     what = exc.problem or "malformed YAML"
     hint = "check the indentation and punctuation on this line and the one before"
+    if "nesting depth" in what:  # libyaml's own limit, past ours
+        what = f"lists and maps are nested more than {MAX_DEPTH} deep"
     if "nested more than" in what:
         hint = "a behaviour file needs only a few levels; flatten the value"
     if mark is not None:

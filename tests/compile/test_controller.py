@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flctool import compile_behaviour, load_behaviour, with_rules
-from flctool.errors import InferenceError
+from flctool.errors import InferenceError, NotDeployableError
 from flctool.spec import behaviour_from_data, parse_behaviour
 
 from .reference import random_behaviour_data, reference_output
@@ -94,7 +94,7 @@ def test_wrong_shapes_and_missing_consequents(minimal_text: str) -> None:
         controller.output(np.zeros((3, 1)), np.array([0, 2]))
     learning = compile_behaviour(parse_behaviour(minimal_text.split("rules:")[0]))
     assert learning.consequents is None
-    with pytest.raises(InferenceError, match="not deployable"):
+    with pytest.raises(NotDeployableError, match="not deployable"):
         learning.output(np.zeros((1, 1)))
 
 

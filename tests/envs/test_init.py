@@ -11,7 +11,7 @@ from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError
 from flctool.registry import UnknownNameError
 from flctool.spec import behaviour_from_data, behaviour_to_data
-from flctool.spec.environment import ADAPTER_NAMES
+from flctool.spec.models import ADAPTER_NAMES
 
 from ..conftest import BEHAVIOURS, MINIMAL
 

@@ -346,3 +346,90 @@ def test_a_second_robot_version_is_refused() -> None:
 def test_the_link_config_is_validated(minimal_text: str, environment: str, field: str) -> None:
     with pytest.raises(SpecError, match=field.replace(".", r"\.")):
         parse_behaviour(minimal_text + f"environment: {environment}\n")
+
+
+# -- a robot side that is not to be trusted ---------------------------------------------------
+def _welcome_bridge(**fields: Any) -> ScriptedBridge:
+    bridge = ScriptedBridge(reset_reply)
+    base = bridge.welcome
+
+    def welcome() -> bytes:
+        message = json.loads(base())
+        message.update(fields)
+        return (json.dumps(message) + "\n").encode()
+
+    bridge.welcome = welcome  # type: ignore[method-assign]
+    return bridge
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    ({"max_steps": True}, "'max_steps' must be an integer in [1, 1,000,000], got true"),
+    ({"max_steps": 10**9}, "'max_steps' must be an integer in [1, 1,000,000]"),
+    ({"max_batch": False}, "'max_batch' must be null or an integer in [1, 100,000], got false"),
+    ({"version": True}, "not flctool-robot-link 1"),
+    ({"robot": {"name": 1}}, "'robot' must be a string"),
+    ({"observations": ["x"] * 10_001}, "'observations' has more than 10,000 entries"),
+])
+def test_welcome_values_are_type_checked_and_bounded(fields: dict[str, Any],
+                                                     message: str) -> None:
+    bridge = _welcome_bridge(**fields)
+    with pytest.raises(LinkError, match="malformed welcome") as info:
+        make_env(link_behaviour(HANDMADE, bridge.port))
+    assert message in str(info.value)
+    assert bridge.got_stop.wait(2)
+    bridge.close()
+
+
+def test_a_robot_name_with_escapes_is_shown_without_them() -> None:
+    bridge = _welcome_bridge(robot="\x1b]0;owned\x07AIBO\x1b[5m", observations=["size", "pan"])
+    with pytest.raises(SpecError) as info:
+        make_env(link_behaviour(HANDMADE, bridge.port))
+    assert "robot 'AIBO'" in str(info.value) and "\x1b" not in str(info.value)
+    bridge.close()
+
+
+def test_an_episode_the_robot_never_ends_is_stopped_at_its_max_steps() -> None:
+    def endless(message: dict[str, Any]) -> bytes | None:
+        if message["type"] == "reset":
+            return b'{"type":"reset","observations":[[0.2,10.0]],"success":[false]}\n'
+        return (b'{"type":"step","observations":[[0.2,10.0]],"rewards":[0],'
+                b'"terminated":[false],"truncated":[false],"success":[false]}\n')
+
+    bridge = ScriptedBridge(endless)
+    env = make_env(link_behaviour(HANDMADE, bridge.port))
+    env.reset(np.array([1]))
+    for _ in range(env.max_steps - 1):
+        env.step(np.zeros(1))
+    with pytest.raises(LinkError, match="did not end episode 0 after its max_steps = 50"):
+        env.step(np.zeros(1))
+    assert bridge.got_stop.wait(2)
+    assert sum(m["type"] == "step" for m in bridge.received) == 50
+    bridge.close()
+
+
+def test_a_reset_past_the_link_s_episode_step_limit_is_refused() -> None:
+    bridge = ScriptedBridge(reset_reply)
+    bridge_welcome = json.loads(bridge.welcome())
+    assert bridge_welcome["max_batch"] == 1
+    env = make_env(link_behaviour(HANDMADE, bridge.port))
+    with pytest.raises(EnvError, match="episode steps per reset"):
+        env.reset(np.arange(1_000_000))
+    env.close()
+    bridge.close()
+
+
+@pytest.mark.parametrize(("text", "shown"), [
+    ("plain", "plain"), ("\x1b[31mred\x1b[0m", "red"), ("\x1b]0;title\x07x", "x"),
+    ("a\x00b\nc", "a?b?c"), ("\x9b2Jz", "z"), ("x" * 400, "x" * 300 + "..."),
+])
+def test_printable_strips_terminal_control(text: str, shown: str) -> None:
+    from flctool.envs.robot_link import printable
+
+    assert printable(text) == shown
+
+
+def test_deeply_nested_json_is_a_protocol_error() -> None:
+    from flctool.envs.robot_link import ProtocolError, decode
+
+    with pytest.raises(ProtocolError, match="nested too deep"):
+        decode(b"[" * 100_000 + b"]" * 100_000)

@@ -136,7 +136,10 @@ def test_a_bad_message_is_answered_with_an_error_and_a_stop(
     assert reply is not None and reply["type"] == "error" and reply["code"] == code
     assert text in reply["message"]
     assert client.receive() is None
-    assert server.stops and server.stops[-1].startswith(code)
+    if len(messages) == 1:  # refused at the handshake: it never controlled the robot
+        assert server.stops == []
+    else:
+        assert server.stops and server.stops[-1].startswith(code)
 
 
 def test_a_client_that_disconnects_mid_episode_stops_the_robot(server: RobotServer) -> None:
@@ -274,3 +277,82 @@ def test_ctrl_c_mid_episode_stops_the_robot_before_the_server_ends() -> None:
     assert replies == [{"type": "error", "code": "shutdown",
                         "message": "the robot server was interrupted",
                         "hint": "start the server again, then reconnect"}]
+
+
+# -- hostile clients -------------------------------------------------------------------------
+def test_idle_connections_do_not_lock_out_a_client() -> None:
+    from flctool.envs.robot_server import MAX_PENDING
+
+    for server in start(idle_timeout=5.0):
+        idle = [socket.create_connection(("127.0.0.1", server.port)) for _ in range(200)]
+        good = Client(server.port)
+        welcome = good.ask(HELLO)
+        assert welcome is not None and welcome["type"] == "welcome"
+        assert good.ask({"type": "reset", "seeds": [3]}) is not None
+        good.close()
+        assert server.connections == 201 and len(server._pending) <= MAX_PENDING
+        for sock in idle:
+            sock.close()
+
+
+def test_a_connection_without_a_hello_is_dropped() -> None:
+    for server in start(idle_timeout=5.0, hello_timeout=0.2):
+        quiet = Client(server.port)
+        reply = quiet.receive()
+        assert reply is not None and reply["code"] == "timeout"
+        assert "no hello within 0.2 s" in reply["message"]
+        assert server.stops == []  # it never controlled the robot
+        quiet.close()
+
+
+def test_a_second_client_is_told_the_robot_is_busy(monkeypatch: pytest.MonkeyPatch) -> None:
+    from flctool.envs import robot_server
+
+    monkeypatch.setattr(robot_server, "BUSY_WAIT", 0.2)
+    for server in start(idle_timeout=5.0):
+        first = Client(server.port)
+        assert first.ask(HELLO) is not None
+        second = Client(server.port)
+        reply = second.ask(HELLO)
+        assert reply is not None and reply["code"] == "busy"
+        assert first.ask({"type": "reset", "seeds": [1]}) is not None  # undisturbed
+        first.close()
+        second.close()
+
+
+def test_a_client_that_only_sends_stop_loses_control_after_the_idle_timeout() -> None:
+    for server in start(idle_timeout=0.5):
+        spammer = Client(server.port)
+        assert spammer.ask(HELLO) is not None
+        reply: dict[str, Any] | None = {"type": "stop"}
+        while reply is not None and reply["type"] == "stop":
+            reply = spammer.ask({"type": "stop", "reason": "spam"})
+        assert reply is not None and reply["code"] == "timeout"
+        spammer.close()
+        good = Client(server.port)
+        welcome = good.ask(HELLO)
+        assert welcome is not None and welcome["type"] == "welcome"
+        good.close()
+
+
+@pytest.mark.parametrize(("message", "code", "text"), [
+    ({"type": "reset", "seeds": list(range(1_000_000))}, "batch",
+     "1,000,000 episodes of 200 steps are more than 20,000,000 episode steps per reset"),
+    ({"type": "fitness", "returns": [1.0], "lengths": [-5], "success": [True]}, "malformed",
+     "'lengths' must be whole numbers of steps in [0, 200]"),
+    ({"type": "fitness", "returns": [1.0], "lengths": [1e300], "success": [True]}, "malformed",
+     "'lengths' must be whole numbers of steps in [0, 200]"),
+    ({"type": "fitness", "returns": [1.0] * 100_001, "lengths": [1] * 100_001,
+      "success": [True] * 100_001}, "batch", "fitness of 100,001 episodes asked"),
+    ({"type": "stop", "reason": "\x1b[2Jcleared"}, None, ""),
+])
+def test_requests_are_bounded(server: RobotServer, client: Client, message: dict[str, Any],
+                              code: str | None, text: str) -> None:
+    client.ask(HELLO)
+    reply = client.ask(message)
+    assert reply is not None
+    if code is None:
+        assert reply == {"type": "stop"}
+        assert server.stops == ["the client sent stop (cleared)"]
+    else:
+        assert reply["code"] == code and text in reply["message"]

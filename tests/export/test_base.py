@@ -10,12 +10,12 @@ from pathlib import Path
 import pytest
 
 from flctool import load_behaviour
-from flctool.errors import ExportError
+from flctool.errors import ExportError, NotDeployableError
 from flctool.export import EXPORTERS, IMPORTERS, ExportOptions
-from flctool.export.base import check_writable, header_lines, replace_all, require_deployable
+from flctool.export.base import check_writable, header_lines, replace_all
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
-from flctool.spec import parse_behaviour
+from flctool.spec import parse_behaviour, require_deployable
 
 from ..conftest import BEHAVIOURS
 from .roundtrip import SHIPPED
@@ -23,7 +23,7 @@ from .roundtrip import SHIPPED
 
 def test_require_deployable_lists_the_missing_rules() -> None:
     require_deployable(load_behaviour(SHIPPED[0]))
-    with pytest.raises(ExportError) as error:
+    with pytest.raises(NotDeployableError) as error:
         require_deployable(load_behaviour(BEHAVIOURS / "ballchase.yaml"))
     text = str(error.value)
     assert "15 of 15 rules" in text

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from flctool import load_behaviour, parse_behaviour
-from flctool.errors import ExportError
+from flctool.errors import NotDeployableError
 from flctool.export import EXPORTERS, IMPORTERS, Exporter, Importer
 from flctool.registry import UnknownNameError
 from flctool.spec import Behaviour, behaviour_from_data
@@ -73,7 +73,19 @@ def test_random_controllers_round_trip(format: str) -> None:
 @pytest.mark.parametrize("format", sorted(EXPORTERS.names()))
 def test_every_exporter_refuses_missing_rules(format: str) -> None:
     incomplete = load_behaviour(Path(SHIPPED[0]).parent / "ballchase.yaml")
-    with pytest.raises(ExportError, match=r"15 of 15 rules have no consequent") as error:
+    with pytest.raises(NotDeployableError, match=r"15 of 15 rules have no consequent") as error:
         EXPORTERS.get(format)().to_string(incomplete)
     assert "IF ball_size IS small AND pan IS far_right" in str(error.value)
     assert "... and 5 more" in str(error.value)
+
+
+def test_importing_export_loads_no_learner() -> None:
+    import subprocess
+    import sys
+
+    code = ("import sys, flctool.export; "
+            "print(sorted(m for m in sys.modules if m.startswith('flctool.learners') "
+            "or m == 'flctool.runs'))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            timeout=120, check=True)
+    assert result.stdout.strip() == "[]"

@@ -113,3 +113,12 @@ def test_no_rule_firing_is_an_error_not_a_division_by_zero() -> None:
     rules = SparseRules(compile_behaviour(behaviour_from_data(data)))
     with pytest.raises(InferenceError, match="no rule fires"):
         rules.fire([5e-324])
+
+
+def test_sums_add_left_to_right_on_every_python() -> None:
+    # 1e16 + 1 + 1 rounds to 1e16 twice when added in order; a compensated sum (Python 3.12's
+    # builtin sum of floats) gives 1e16 + 2, so results would depend on the Python version.
+    from flctool.learners.trial import add_in_order
+
+    assert add_in_order([1e16, 1.0, 1.0]) == 1e16
+    assert add_in_order(iter([0.1, 0.2, 0.3])) == (0.1 + 0.2) + 0.3

@@ -42,3 +42,14 @@ def test_two_commands_with_the_same_value_are_a_warning() -> None:
         (("output", "commands", "also_left"),
          "commands 'left' and 'also_left' have the same value 1")]
     assert command_warnings({"a": 0.0, "b": 1.0}) == []
+
+
+def test_a_broken_rule_table_is_reported_up_to_a_limit() -> None:
+    from flctool.spec.checks import MAX_RULE_PROBLEMS, check_rules
+    from flctool.spec.models import Rule
+
+    rule = Rule.model_validate({"if": {"x": "nowhere"}, "then": "up"})
+    problems = check_rules({"x": ("low", "high")}, ("up",), enumerate([rule] * 10_000))
+    assert len(problems) == MAX_RULE_PROBLEMS + 1
+    assert problems[-1].message == (f"the rules from rules[{MAX_RULE_PROBLEMS}] on are not "
+                                    f"checked: {MAX_RULE_PROBLEMS} problems already")

@@ -92,3 +92,18 @@ def test_plain_aliases_still_work() -> None:
 def test_a_control_character_is_refused_with_its_line(character: str) -> None:
     line, message = _refusal(f"x: 1\na: b{character}c\n")
     assert line == 2 and f"U+{ord(character):04X}" in message
+
+
+def test_a_large_file_reads_like_a_small_one() -> None:
+    from flctool.spec import yaml_source
+
+    body = "".join(f"k{i}: [{i}, yes, 010, 1:00, ~, true, 0x10]\n" for i in range(3000))
+    assert len(body) > yaml_source._LIBYAML_FROM  # read by libyaml, where installed
+    data, source = read_yaml(body, "big.yaml")
+    assert data["k2999"] == [2999, "yes", 10, "1:00", None, True, 16]
+    assert source.marks[("k2999", 1)] == (3000, 15)
+    for bad, message in (("x: " + "[" * 100 + "]" * 100, f"nested more than {MAX_DEPTH} deep"),
+                         ("x: &a [1, *a]", "refers to the list or map that contains it"),
+                         ("x: !!int abc", "'abc' is not an integer")):
+        line, got = _refusal(body + bad + "\n")
+        assert line == 3001 and message in got

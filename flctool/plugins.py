@@ -1,0 +1,162 @@
+"""Plugins: the one place that describes each learner, environment adapter and export format.
+
+A :class:`Plugin` is a name, the model of the behaviour-file section it reads (learners and
+adapters) and a lazy ``"module:Class"`` implementation. The registries
+(:data:`flctool.learners.LEARNERS`, :data:`flctool.envs.ENVIRONMENTS`,
+:data:`flctool.export.EXPORTERS`) and the behaviour-file models (``learning:`` chosen by
+``learner``, ``environment:`` by ``adapter``) are all built from these lists, so adding a
+learner is one module plus one entry.
+
+Installed packages add entries through the entry-point groups ``flctool.learners``,
+``flctool.environments`` and ``flctool.exporters``; each entry point names a :class:`Plugin`
+object (docs/plugins.md). Only packages the user installed are loaded this way: nothing a
+behaviour file says makes flctool import a module.
+"""
+
+from __future__ import annotations
+
+import importlib
+import warnings
+from dataclasses import dataclass
+from functools import cache
+from importlib.metadata import entry_points
+from typing import Any
+
+from pydantic import BaseModel
+
+from flctool.registry import Registry
+
+GROUPS = {"learner": "flctool.learners", "environment": "flctool.environments",
+          "exporter": "flctool.exporters"}
+
+
+@dataclass(frozen=True)
+class Plugin:
+    """One learner, environment adapter or export format.
+
+    ``config`` is the model of the section the plugin reads: for a learner
+    :class:`~flctool.spec.learning.LearningConfig` itself, or a subclass adding the learner's
+    own keys whose ``learner`` is ``Literal[name]``; for an adapter a
+    :class:`~flctool.spec.base.Section` whose ``adapter`` is ``Literal[name]``; ``None`` for an
+    export format. ``config`` may be given lazily as a
+    ``"module:Class"`` string too (the built-ins are, so that this module imports no model);
+    ``target`` is imported only when used.
+    """
+
+    name: str
+    target: str
+    config: type[BaseModel] | str | None = None
+
+    def config_model(self) -> type[BaseModel]:
+        """The section model, imported if it was given as ``"module:Class"``."""
+        if self.config is None:
+            raise TypeError(f"the plugin '{self.name}' reads no section of a behaviour file")
+        loaded = load_attribute(self.config) if isinstance(self.config, str) else self.config
+        if not (isinstance(loaded, type) and issubclass(loaded, BaseModel)):
+            raise TypeError(f"the config of plugin '{self.name}' is not a pydantic model")
+        return loaded
+
+
+def load_attribute(target: str) -> Any:
+    """The attribute that ``"package.module:attr"`` names, importing its module."""
+    module_name, _, attr = target.partition(":")
+    return getattr(importlib.import_module(module_name), attr)
+
+
+class PluginWarning(UserWarning):
+    """An installed plugin that cannot be used (it is skipped)."""
+
+
+_LEARNING = "flctool.spec.learning:LearningConfig"
+_ENVIRONMENT = "flctool.spec.environment"
+
+BUILTIN: dict[str, tuple[Plugin, ...]] = {
+    "learner": (
+        Plugin("pitt", "flctool.learners.pitt:PittLearner", _LEARNING),
+        Plugin("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner", _LEARNING),
+        Plugin("hybrid", "flctool.learners.hybrid:HybridLearner", _LEARNING),
+    ),
+    "environment": (
+        Plugin("ballchase-sim", "flctool.envs.ballchase:BallchaseSim",
+               f"{_ENVIRONMENT}:BallchaseSimConfig"),
+        Plugin("pitch", "flctool.envs.pitch:PitchSim", f"{_ENVIRONMENT}:PitchConfig"),
+        Plugin("gymnasium", "flctool.envs.gym_adapter:GymnasiumEnv",
+               f"{_ENVIRONMENT}:GymnasiumConfig"),
+        Plugin("robot-link", "flctool.envs.robot_link:RobotLinkEnv",
+               f"{_ENVIRONMENT}:RobotLinkConfig"),
+    ),
+    "exporter": (
+        Plugin("yaml", "flctool.export.yaml_format:YamlExporter"),
+        Plugin("json", "flctool.export.json_format:JsonExporter"),
+        Plugin("fll", "flctool.export.fll:FllExporter"),
+        Plugin("fcl", "flctool.export.fcl:FclExporter"),
+        Plugin("fis", "flctool.export.fis:FisExporter"),
+        Plugin("c", "flctool.export.c_source:CExporter"),
+        Plugin("bundle", "flctool.export.bundle:BundleExporter"),
+    ),
+}
+
+
+@cache
+def plugins(kind: str) -> tuple[Plugin, ...]:
+    """The built-in plugins of ``kind`` ("learner", "environment" or "exporter"), then the
+    installed ones, in entry-point name order. A broken installed plugin is skipped with a
+    :class:`PluginWarning` saying which package to fix or uninstall."""
+    found = list(BUILTIN[kind])
+    taken = {plugin.name for plugin in found}
+    for point in sorted(entry_points(group=GROUPS[kind]), key=lambda p: p.name):
+        where = f"entry point '{point.name}' = '{point.value}' in group {GROUPS[kind]}"
+        try:
+            plugin = point.load()
+        except Exception as error:  # a third party's import error must not stop flctool
+            warnings.warn(f"skipped the {kind} plugin of {where}: it does not import "
+                          f"({type(error).__name__}: {error}); fix or uninstall its package",
+                          PluginWarning, stacklevel=2)
+            continue
+        problem = _problem(kind, plugin, taken)
+        if problem:
+            warnings.warn(f"skipped the {kind} plugin of {where}: {problem}", PluginWarning,
+                          stacklevel=2)
+            continue
+        found.append(plugin)
+        taken.add(plugin.name)
+    return tuple(found)
+
+
+def names(kind: str) -> tuple[str, ...]:
+    """The names of every plugin of ``kind``, built-in first."""
+    return tuple(plugin.name for plugin in plugins(kind))
+
+
+def _problem(kind: str, plugin: object, taken: set[str]) -> str | None:
+    if not isinstance(plugin, Plugin):
+        return f"it names a {type(plugin).__name__}, not a flctool.plugins.Plugin"
+    if plugin.name in taken:
+        return f"the name '{plugin.name}' is taken"
+    if ":" not in plugin.target:
+        return f"target '{plugin.target}' is not 'module:attribute'"
+    if kind == "exporter":
+        return None
+    from flctool.spec.learning import LearningConfig
+
+    try:
+        config = plugin.config_model()
+    except Exception as error:  # a third party's config that does not import or is no model
+        return f"its config cannot be used ({type(error).__name__}: {error})"
+    if kind == "learner" and not issubclass(config, LearningConfig):
+        return "a learner's config must extend flctool.spec.learning.LearningConfig"
+    if kind == "learner" and config is LearningConfig:
+        return None  # the common keys alone, as the built-in learners read them
+    tag = "learner" if kind == "learner" else "adapter"
+    field = config.model_fields.get(tag)
+    if field is None or getattr(field.annotation, "__args__", None) != (plugin.name,):
+        return f"its config must declare {tag}: Literal['{plugin.name}']"
+    return None
+
+
+def registry(kind: str, label: str) -> Registry[Any]:
+    """A registry of every plugin of ``kind`` by name, each loaded when first used."""
+    found: Registry[Any] = Registry(label)
+    for plugin in plugins(kind):
+        found.register(plugin.name, plugin.target)
+    return found

@@ -1,0 +1,121 @@
+"""Plugins: every entry honours the contract, and an installed third-party package's learner
+and environment are used from a behaviour file without touching flctool."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import typing
+from pathlib import Path
+
+import pytest
+
+from flctool.envs import ENVIRONMENTS
+from flctool.export import EXPORTERS, Exporter
+from flctool.learners import LEARNERS, Learner
+from flctool.plugins import BUILTIN, Plugin, _problem, plugins
+from flctool.spec.learning import LearningConfig
+
+PACKAGE = Path(__file__).parent / "plugin_package"
+
+DEMO = """\
+flctool: 1
+name: line-demo
+inputs:
+  x:
+    range: [0, 10]
+    sets: {low: [0, 0, 2, 6], mid: [2, 5, 5, 8], high: [4, 8, 10, 10]}
+output:
+  name: u
+  commands: {down: -1, stay: 0, up: 1}
+learning:
+  learner: random_search
+  keep: 2
+  population: 6
+  generations: 4
+  selection: {candidates: 2, episodes: 5}
+environment:
+  adapter: line
+  max_steps: 15
+"""
+
+
+@pytest.mark.parametrize("plugin", plugins("learner"), ids=lambda p: p.name)
+def test_every_learner_entry_loads_a_learner_reading_learning_config(plugin: Plugin) -> None:
+    assert issubclass(LEARNERS.get(plugin.name), Learner)
+    assert issubclass(plugin.config_model(), LearningConfig)
+    assert _problem("learner", plugin, set()) is None
+
+
+@pytest.mark.parametrize("plugin", plugins("environment"), ids=lambda p: p.name)
+def test_every_environment_entry_loads_a_factory_tagged_by_its_name(plugin: Plugin) -> None:
+    assert callable(ENVIRONMENTS.get(plugin.name).from_behaviour)
+    annotation = plugin.config_model().model_fields["adapter"].annotation
+    assert typing.get_args(annotation) == (plugin.name,)
+    assert _problem("environment", plugin, set()) is None
+
+
+@pytest.mark.parametrize("plugin", plugins("exporter"), ids=lambda p: p.name)
+def test_every_exporter_entry_loads_an_exporter(plugin: Plugin) -> None:
+    assert issubclass(EXPORTERS.get(plugin.name), Exporter)
+
+
+def test_registries_hold_exactly_the_plugins() -> None:
+    for kind, registry in (("learner", LEARNERS), ("environment", ENVIRONMENTS),
+                           ("exporter", EXPORTERS)):
+        assert registry.names() == tuple(p.name for p in plugins(kind))
+        assert set(p.name for p in BUILTIN[kind]) <= set(registry.names())
+
+
+@pytest.mark.parametrize(("plugin", "problem"), [
+    (object(), "not a flctool.plugins.Plugin"),
+    (Plugin("pitt", "x:Y", LearningConfig), "the name 'pitt' is taken"),
+    (Plugin("mine", "no_colon", LearningConfig), "is not 'module:attribute'"),
+    (Plugin("mine", "x:Y", "no.such.module:Config"), "its config cannot be used"),
+    (Plugin("mine", "x:Y", "flctool.spec.environment:PitchConfig"), "must extend"),
+    (Plugin("mine", "x:Y", type("Mine", (LearningConfig,), {})),
+     "must declare learner: Literal['mine']"),
+])
+def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem: str) -> None:
+    found = _problem("learner", plugin, {"pitt"})
+    assert found is not None and problem in found
+
+
+def _flctool(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(PACKAGE), *filter(None, [os.environ.get("PYTHONPATH")])])}
+    return subprocess.run([sys.executable, "-m", "flctool", *args], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_an_installed_learner_and_environment_run_from_a_behaviour_file(tmp_path: Path) -> None:
+    (tmp_path / "demo.yaml").write_text(DEMO)
+    validated = _flctool(tmp_path, "validate", "demo.yaml")
+    assert validated.returncode == 0, validated.stderr
+    learned = _flctool(tmp_path, "learn", "demo.yaml", "--out", "run")
+    assert learned.returncode == 0, learned.stderr
+    assert (tmp_path / "run" / "best.yaml").is_file()
+    assert "learner: random_search" in (tmp_path / "run" / "best.yaml").read_text()
+    evaluated = _flctool(tmp_path, "evaluate", "run/best.yaml", "--episodes", "20")
+    assert evaluated.returncode == 0, evaluated.stderr
+
+
+def test_a_plugins_own_keys_are_checked_and_located(tmp_path: Path) -> None:
+    (tmp_path / "demo.yaml").write_text(DEMO.replace("  keep: 2", "  kepp: 2")
+                                        .replace("max_steps: 15", "max_steps: -1"))
+    result = _flctool(tmp_path, "validate", "demo.yaml")
+    assert result.returncode == 1
+    assert "demo.yaml:12:3: learning.kepp: unknown key 'kepp'. Did you mean 'keep'?" in (
+        result.stderr)
+    assert ("demo.yaml:18:3: environment.max_steps: input should be greater than or equal to 1"
+            in result.stderr)
+
+
+def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:
+    (tmp_path / "demo.yaml").write_text(DEMO)
+    result = subprocess.run([sys.executable, "-m", "flctool", "validate", "demo.yaml"],
+                            cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1
+    assert "unknown adapter 'line'" in result.stderr
+    assert "unknown learner 'random_search'" in result.stderr
