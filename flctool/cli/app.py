@@ -355,20 +355,11 @@ def controller_file(path: Path) -> Path:
 def load_controller(path: Path) -> tuple[Behaviour, Path]:
     """The deployable behaviour a controller argument names (see :func:`controller_file`),
     and the file it was read from. One with rules still to learn is a clear error."""
-    from flctool.errors import Problem
-    from flctool.spec import load_behaviour
+    from flctool.spec import load_behaviour, require_deployable
 
     source = controller_file(path)
     behaviour = load_behaviour(source)
-    missing = behaviour.missing_rules()
-    if missing:
-        first = ", ".join(f"{name}={value}" for name, value
-                          in zip(behaviour.input_names, missing[0], strict=True))
-        raise SpecError([Problem(
-            ("rules",), f"{len(missing)} of {behaviour.rule_count} rules are missing, so "
-            f"this controller cannot run (first missing: {first})",
-            "learn them (flctool learn) or complete the rule table", file=str(source))],
-            str(source))
+    require_deployable(behaviour, str(source))
     return behaviour, source
 
 

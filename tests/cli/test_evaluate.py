@@ -69,7 +69,7 @@ def test_trace_creates_its_folder_and_is_replaced_only_with_force(tmp_path: Path
 def test_non_deployable_controller_lists_missing_rules() -> None:
     result = runner.invoke(app, ["evaluate", str(BEHAVIOURS / "ballchase.yaml")])
     assert result.exit_code == 1
-    assert "15 of 15 rules are missing" in result.output
+    assert "15 of 15 rules have no consequent" in result.output
     assert "Traceback" not in result.output
 
 

@@ -186,7 +186,7 @@ def test_infer_on_a_behaviour_still_to_learn() -> None:
         result = runner.invoke(app, ["infer", str(BEHAVIOURS / "ballchase.yaml")],
                                input=states)
         assert result.exit_code == 1
-        assert "15 of 15 rules are missing, so this controller cannot run" in result.output
+        assert "is not deployable: 15 of 15 rules have no consequent" in result.output
 
 
 def test_infer_file_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
