@@ -46,6 +46,8 @@ class Plugin:
     name: str
     target: str
     config: type[BaseModel] | str | None = None
+    #: For an export format: the file suffixes that name it (``export -o x.fll``).
+    suffixes: tuple[str, ...] = ()
 
     def config_model(self) -> type[BaseModel]:
         """The section model, imported if it was given as ``"module:Class"``."""
@@ -86,12 +88,12 @@ BUILTIN: dict[str, tuple[Plugin, ...]] = {
                f"{_ENVIRONMENT}:RobotLinkConfig"),
     ),
     "exporter": (
-        Plugin("yaml", "flctool.export.yaml_format:YamlExporter"),
-        Plugin("json", "flctool.export.json_format:JsonExporter"),
-        Plugin("fll", "flctool.export.fll:FllExporter"),
-        Plugin("fcl", "flctool.export.fcl:FclExporter"),
-        Plugin("fis", "flctool.export.fis:FisExporter"),
-        Plugin("c", "flctool.export.c_source:CExporter"),
+        Plugin("yaml", "flctool.export.yaml_format:YamlExporter", suffixes=(".yaml", ".yml")),
+        Plugin("json", "flctool.export.json_format:JsonExporter", suffixes=(".json",)),
+        Plugin("fll", "flctool.export.fll:FllExporter", suffixes=(".fll",)),
+        Plugin("fcl", "flctool.export.fcl:FclExporter", suffixes=(".fcl",)),
+        Plugin("fis", "flctool.export.fis:FisExporter", suffixes=(".fis",)),
+        Plugin("c", "flctool.export.c_source:CExporter", suffixes=(".c", ".h")),
         Plugin("bundle", "flctool.export.bundle:BundleExporter"),
     ),
 }
@@ -136,7 +138,8 @@ def _problem(kind: str, plugin: object, taken: set[str]) -> str | None:
     if ":" not in plugin.target:
         return f"target '{plugin.target}' is not 'module:attribute'"
     if kind == "exporter":
-        return None
+        bad = [s for s in plugin.suffixes if not (s.startswith(".") and len(s) > 1)]
+        return f"suffixes {bad} must each be '.' and a name" if bad else None
     from flctool.spec.learning import LearningConfig
 
     try:
@@ -152,6 +155,15 @@ def _problem(kind: str, plugin: object, taken: set[str]) -> str | None:
     if field is None or getattr(field.annotation, "__args__", None) != (plugin.name,):
         return f"its config must declare {tag}: Literal['{plugin.name}']"
     return None
+
+
+def export_suffixes() -> dict[str, str]:
+    """Suffix -> export format, from the exporters' entries (the first to claim one keeps it)."""
+    found: dict[str, str] = {}
+    for plugin in plugins("exporter"):
+        for suffix in plugin.suffixes:
+            found.setdefault(suffix.lower(), plugin.name)
+    return found
 
 
 def registry(kind: str, label: str) -> Registry[Any]:

@@ -20,11 +20,8 @@ from flctool.cli.app import (
     user_errors,
 )
 from flctool.errors import FlcError
+from flctool.plugins import export_suffixes
 
-#: The format each output suffix names (``export -o x.fll`` writes FLL). A format registered
-#: later adds its suffix here.
-EXPORT_SUFFIXES = {".yaml": "yaml", ".yml": "yaml", ".json": "json", ".fll": "fll",
-                   ".fcl": "fcl", ".fis": "fis", ".c": "c", ".h": "c"}
 IMPORT_SUFFIXES = {".fll": "fll", ".fcl": "fcl", ".fis": "fis"}
 
 
@@ -62,7 +59,7 @@ def export_controller(
     from flctool.export import EXPORTERS, ExportOptions, load_source
 
     with user_errors():
-        name = output_format(output, format, EXPORT_SUFFIXES, "yaml")
+        name = output_format(output, format, export_suffixes(), "yaml")
         exporter_class = EXPORTERS.get(name)
         if name != "c" and (single or prefix is not None):
             raise FlcError("--float and --prefix apply to the c format only",
@@ -108,7 +105,7 @@ def import_controller(
         if output is not None:
             # import writes a behaviour file: YAML, whatever -o is called, but not under the
             # name of another format
-            implied = EXPORT_SUFFIXES.get(output.suffix.lower())
+            implied = export_suffixes().get(output.suffix.lower())
             if implied not in (None, "yaml"):
                 raise FlcError(f"import writes a behaviour file (YAML), but {output} has the "
                                f"suffix of {implied}",
