@@ -304,7 +304,7 @@ def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[Generati
             selection.usage.training_episodes += result.episodes
             selection.usage.training_steps += result.steps
             selection.offer(learner.population, learner.fitness, generation)
-            selection.validate_leader(learner.controller, learner.env, generation)
+            selection.validate_leader(learner.rules, learner.env, generation)
             learner.elapsed = before + time.perf_counter() - started
             if selection.reached_target():
                 selection.stop_reason = "target"
@@ -312,7 +312,7 @@ def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[Generati
                 selection.stop_reason = selection.budget_exhausted(per_generation,
                                                                    learner.elapsed)
             if learner.finished and selection.stop_reason != "target":
-                selection.finalize(learner.controller, learner.env, generation,
+                selection.finalize(learner.rules, learner.env, generation,
                                    learner.elite_candidates())
                 learner.elapsed = before + time.perf_counter() - started
             metrics = GenerationMetrics.from_fitness(

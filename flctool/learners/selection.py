@@ -34,10 +34,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from flctool.compile import Controller
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
-from flctool.rollout import Estimate, evaluate, mean_interval
+from flctool.learners.trial import SparseRules, run_trial
+from flctool.rollout import Estimate, mean_interval
 from flctool.spec.learning import SelectionConfig, StopConfig
 
 IntArray = NDArray[np.intp]
@@ -212,25 +212,33 @@ class Selection:
         return sorted(candidates, key=lambda c: -c.fitness)
 
     # -- validation ------------------------------------------------------------------------
-    def validate(self, candidate: Candidate, controller: Controller, env: BatchEnv,
+    def validate(self, candidate: Candidate, rules: SparseRules, env: BatchEnv,
                  generation: int) -> None:
-        """Run ``candidate`` on the validation episodes and record the result."""
-        result = evaluate(controller, env, self.seeds, candidate.consequents)
-        candidate.validation = mean_interval(result.fitness)
+        """Run ``candidate`` on the validation episodes and record the result.
+
+        Episodes run one after another on the learner's batch-of-one ``env`` through the
+        training loop's own inference (the same bits as the deployed controller, and no
+        compiled kernels to load for a small job)."""
+        consequents = candidate.consequents.tolist()
+        trials = [run_trial(env, rules, int(seed), consequents) for seed in self.seeds]
+        lengths = np.array([t.length for t in trials], dtype=np.int64)
+        fitness = env.episode_fitness(np.array([t.ret for t in trials], dtype=np.float64),
+                                      lengths, np.array([t.success for t in trials]))
+        candidate.validation = mean_interval(fitness)
         candidate.validated_at = generation
-        self.usage.selection_episodes += result.episodes
-        self.usage.selection_steps += int(result.lengths.sum())
+        self.usage.selection_episodes += len(trials)
+        self.usage.selection_steps += int(lengths.sum())
         self.validated.append(candidate.record())
         if self.best is None or candidate.validation.value > self.best.validation_value():
             self.best = candidate
 
-    def validate_leader(self, controller: Controller, env: BatchEnv, generation: int) -> None:
+    def validate_leader(self, rules: SparseRules, env: BatchEnv, generation: int) -> None:
         """Validate the hall's leader if it has not been (every generation)."""
         ranked = self.ranked()
         if ranked and ranked[0].validation is None and self.fits(1):
-            self.validate(ranked[0], controller, env, generation)
+            self.validate(ranked[0], rules, env, generation)
 
-    def finalize(self, controller: Controller, env: BatchEnv, generation: int,
+    def finalize(self, rules: SparseRules, env: BatchEnv, generation: int,
                  elites: list[Candidate]) -> None:
         """Validate the remaining candidates (the hall's top and ``elites``) the budget
         allows, best ranked first: the run is ending."""
@@ -243,7 +251,7 @@ class Selection:
         for candidate in pending:
             if not self.fits(1):
                 break
-            self.validate(candidate, controller, env, generation)
+            self.validate(candidate, rules, env, generation)
         self.finalized = True
 
     def candidate_for(self, consequents: IntArray) -> Candidate | None:
