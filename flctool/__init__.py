@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.1.0"
 
 if TYPE_CHECKING:
-    from flctool.compile import Controller, compile_behaviour, with_rules
+    from flctool.compile import Controller, compile_behaviour
     from flctool.errors import (
         EnvError,
         ExportError,
@@ -27,6 +27,7 @@ if TYPE_CHECKING:
         InferenceError,
         LearnError,
         LinkError,
+        NotDeployableError,
         SpecError,
     )
     from flctool.spec import (
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
         load_behaviour,
         parse_behaviour,
     )
+    from flctool.spec.rules import with_rules
 
 # public name -> the module that defines it
 _LAZY = {
@@ -51,7 +53,8 @@ _LAZY = {
     "compile_behaviour": "flctool.compile",
     "load_behaviour": "flctool.spec",
     "parse_behaviour": "flctool.spec",
-    "with_rules": "flctool.compile",
+    "with_rules": "flctool.spec.rules",
+    "NotDeployableError": "flctool.errors",
 }
 
 __all__ = [
@@ -63,6 +66,7 @@ __all__ = [
     "InferenceError",
     "LearnError",
     "LinkError",
+    "NotDeployableError",
     "SpecError",
     "__version__",
     "behaviour_to_yaml",

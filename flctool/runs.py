@@ -51,7 +51,6 @@ import numpy as np
 
 from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
-from flctool.compile import with_rules
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
@@ -64,6 +63,7 @@ from flctool.spec import (
     behaviour_to_yaml,
     load_behaviour,
 )
+from flctool.spec.rules import with_rules
 from flctool.spec.yaml_source import SourceMap
 
 RUN_FORMAT = 1

@@ -1,6 +1,6 @@
 """Compiling a behaviour into frozen arrays, and inference (eq. 1-3)."""
 
-from flctool.compile.controller import Controller, compile_behaviour, with_rules
+from flctool.compile.controller import Controller, compile_behaviour
 from flctool.compile.membership import trapezoid
 
-__all__ = ["Controller", "compile_behaviour", "trapezoid", "with_rules"]
+__all__ = ["Controller", "compile_behaviour", "trapezoid"]

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from flctool.compile.membership import trapezoid
 from flctool.errors import InferenceError, NotDeployableError
-from flctool.spec.models import Behaviour, Rule
+from flctool.spec.models import Behaviour
 
 if TYPE_CHECKING:
     from flctool.compile.kernels import Layout
@@ -319,15 +319,3 @@ def compile_behaviour(behaviour: Behaviour) -> Controller:
         singletons=_frozen(np.array(list(behaviour.output.commands.values()), dtype=np.float64)),
         consequents=consequents,
     )
-
-
-def with_rules(behaviour: Behaviour, consequents: IntArray) -> Behaviour:
-    """The behaviour with a complete rule table from (M,) consequent indices (grid order)."""
-    commands = tuple(behaviour.output.commands)
-    table = np.asarray(consequents)
-    if table.shape != (behaviour.rule_count,):
-        raise InferenceError(f"consequents must have shape ({behaviour.rule_count},)")
-    rules = [Rule.model_validate({"if": dict(zip(behaviour.input_names, sets, strict=True)),
-                                  "then": commands[int(k)]})
-             for sets, k in zip(behaviour.antecedents(), table, strict=True)]
-    return behaviour.model_copy(update={"rules": rules})

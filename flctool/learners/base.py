@@ -20,7 +20,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,8 +34,17 @@ from flctool.learners.selection import Candidate, Selection
 from flctool.learners.trial import SparseRules
 from flctool.spec.models import Behaviour
 
-if TYPE_CHECKING:  # fuzzy_q.py builds on this module
-    from flctool.learners.fuzzy_q import FuzzyQ
+
+class RuleStrengths(Protocol):
+    """What the template loop needs of a learner's rule strengths (eq. 4-9): the q table for
+    metrics and plots, and its state for checkpoints. :class:`~flctool.learners.fuzzy_q.FuzzyQ`
+    is one; the base class knows no learner."""
+
+    def table(self) -> FloatArray: ...
+
+    def state_dict(self) -> dict[str, Any]: ...
+
+    def load_state_dict(self, state: dict[str, Any]) -> None: ...
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -64,7 +73,7 @@ class Learner(ABC):
 
     name: ClassVar[str]
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
-    fuzzy_q: FuzzyQ | None = None
+    fuzzy_q: RuleStrengths | None = None
     #: How the hall of fame ranks candidates (see :class:`Selection`).
     rank_by: ClassVar[str] = "fitness"
 

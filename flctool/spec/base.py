@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from typing import Annotated, Any, NoReturn
 
 from pydantic import BaseModel, ConfigDict, StringConstraints, model_validator
+from typing_extensions import Self
 
 
 class FrozenDict(dict[Any, Any]):
@@ -48,13 +50,24 @@ class Section(BaseModel):
 
     @model_validator(mode="after")
     def _freeze_containers(self) -> Any:
-        for name in type(self).model_fields:
-            value = getattr(self, name)
-            if type(value) is dict:
-                object.__setattr__(self, name, FrozenDict(value))
-            elif type(value) is list:
-                object.__setattr__(self, name, FrozenList(value))
+        _freeze(self)
         return self
+
+    def model_copy(self, *, update: Mapping[str, Any] | None = None,
+                   deep: bool = False) -> Self:
+        """A copy with ``update`` applied (not validated, as pydantic's), frozen as well."""
+        copy = super().model_copy(update=update, deep=deep)
+        _freeze(copy)
+        return copy
+
+
+def _freeze(section: BaseModel) -> None:
+    for name in type(section).model_fields:
+        value = getattr(section, name)
+        if type(value) is dict:
+            object.__setattr__(section, name, FrozenDict(value))
+        elif type(value) is list:
+            object.__setattr__(section, name, FrozenList(value))
 
 
 # Names become identifiers in FLL, FCL, FIS and C exports, so they are kept to identifiers.

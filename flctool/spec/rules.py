@@ -17,10 +17,12 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import Any
+from collections.abc import Iterable
+from typing import Any, SupportsInt
 
-from flctool.errors import PathPart, Problem
+from flctool.errors import FlcError, PathPart, Problem
 from flctool.spec.checks import MAX_RULES
+from flctool.spec.models import Behaviour, Rule
 from flctool.spec.yaml_source import SourceMap
 
 
@@ -117,3 +119,20 @@ def _renumbered(source: SourceMap, origin: list[int]) -> SourceMap:
             renumbered: tuple[PathPart, ...] = ("rules", k, *rest)
             marks[renumbered] = mark
     return SourceMap(source.file, marks, raw)
+
+
+def with_rules(behaviour: Behaviour, consequents: Iterable[SupportsInt]) -> Behaviour:
+    """The behaviour with a complete rule table from (M,) consequent indices (grid order,
+    eq. 1): how a learned consequent vector becomes a behaviour file."""
+    commands = tuple(behaviour.output.commands)
+    try:
+        table = [int(k) for k in consequents]
+    except TypeError:
+        table = []
+    if len(table) != behaviour.rule_count or not all(0 <= k < len(commands) for k in table):
+        raise FlcError(f"consequents must be {behaviour.rule_count} command indices in "
+                       f"0..{len(commands) - 1}", hint="give one command index per rule")
+    rules = [Rule.model_validate({"if": dict(zip(behaviour.input_names, sets, strict=True)),
+                                  "then": commands[k]})
+             for sets, k in zip(behaviour.antecedents(), table, strict=True)]
+    return behaviour.model_copy(update={"rules": rules})
