@@ -18,7 +18,7 @@ The server brings the robot to a **safe stop** -- ends the running episodes and 
 raises, or when the server itself is interrupted (Ctrl-C; the controlling session runs in the
 thread that called :meth:`serve`). Every fault is answered with an ``error`` message (when
 the client can still hear it) and closes the connection. Requests are bounded: a reset's
-seeds times the episode length (:data:`~flctool.envs.robot_link.MAX_BATCH_STEPS`), a fitness
+seeds times the episode length (:data:`~flctool.envs.robot_protocol.MAX_BATCH_STEPS`), a fitness
 request's episodes and lengths.
 """
 
@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from flctool.envs.base import BatchEnv
-from flctool.envs.robot_link import (
+from flctool.envs.robot_protocol import (
     FEATURES,
     MAX_BATCH_STEPS,
     MAX_WELCOME_BATCH,

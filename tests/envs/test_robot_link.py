@@ -15,7 +15,8 @@ import pytest
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.envs import check_env, make_env
-from flctool.envs.robot_link import PROTOCOL, VERSION, RobotLinkEnv
+from flctool.envs.robot_link import RobotLinkEnv
+from flctool.envs.robot_protocol import PROTOCOL, VERSION
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError, LinkError, SpecError
 from flctool.rollout import evaluate, evaluation_seeds, trace_episode
@@ -416,20 +417,3 @@ def test_a_reset_past_the_link_s_episode_step_limit_is_refused() -> None:
         env.reset(np.arange(1_000_000))
     env.close()
     bridge.close()
-
-
-@pytest.mark.parametrize(("text", "shown"), [
-    ("plain", "plain"), ("\x1b[31mred\x1b[0m", "red"), ("\x1b]0;title\x07x", "x"),
-    ("a\x00b\nc", "a?b?c"), ("\x9b2Jz", "z"), ("x" * 400, "x" * 300 + "..."),
-])
-def test_printable_strips_terminal_control(text: str, shown: str) -> None:
-    from flctool.envs.robot_link import printable
-
-    assert printable(text) == shown
-
-
-def test_deeply_nested_json_is_a_protocol_error() -> None:
-    from flctool.envs.robot_link import ProtocolError, decode
-
-    with pytest.raises(ProtocolError, match="nested too deep"):
-        decode(b"[" * 100_000 + b"]" * 100_000)
