@@ -36,10 +36,10 @@ class Plugin:
 
     ``config`` is the model of the section the plugin reads: for a learner
     :class:`~flctool.spec.learning.LearningConfig` itself, or a subclass adding the learner's
-    own keys whose ``learner`` is ``Literal[name]``; for an adapter a
-    :class:`~flctool.spec.base.Section` whose ``adapter`` is ``Literal[name]``; ``None`` for an
-    export format. ``config`` may be given lazily as a
-    ``"module:Class"`` string too (the built-ins are, so that this module imports no model);
+    own keys whose ``learner`` is ``Literal[name]``; for an adapter a subclass of
+    :class:`~flctool.spec.environment.AdapterConfig` whose ``adapter`` is ``Literal[name]``;
+    ``None`` for an export format. ``config`` may be given lazily as a ``"module:Class"``
+    string too (the built-ins are, so that this module imports no model);
     ``target`` is imported only when used.
     """
 
@@ -140,12 +140,15 @@ def _problem(kind: str, plugin: object, taken: set[str]) -> str | None:
     if kind == "exporter":
         bad = [s for s in plugin.suffixes if not (s.startswith(".") and len(s) > 1)]
         return f"suffixes {bad} must each be '.' and a name" if bad else None
+    from flctool.spec.environment import AdapterConfig
     from flctool.spec.learning import LearningConfig
 
     try:
         config = plugin.config_model()
     except Exception as error:  # a third party's config that does not import or is no model
         return f"its config cannot be used ({type(error).__name__}: {error})"
+    if kind == "environment" and not issubclass(config, AdapterConfig):
+        return "an adapter's config must extend flctool.spec.environment.AdapterConfig"
     if kind == "learner" and not issubclass(config, LearningConfig):
         return "a learner's config must extend flctool.spec.learning.LearningConfig"
     if kind == "learner" and config is LearningConfig:

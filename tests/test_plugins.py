@@ -74,6 +74,7 @@ def test_registries_hold_exactly_the_plugins() -> None:
     (Plugin("mine", "no_colon", LearningConfig), "is not 'module:attribute'"),
     (Plugin("mine", "x:Y", "no.such.module:Config"), "its config cannot be used"),
     (Plugin("mine", "x:Y", "flctool.spec.environment:PitchConfig"), "must extend"),
+    (Plugin("mine", "x:Y", "flctool.spec.base:Section"), "must extend"),
     (Plugin("mine", "x:Y", type("Mine", (LearningConfig,), {})),
      "must declare learner: Literal['mine']"),
 ])
@@ -119,3 +120,8 @@ def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "unknown adapter 'line'" in result.stderr
     assert "unknown learner 'random_search'" in result.stderr
+
+
+def test_an_adapter_plugin_must_extend_adapter_config() -> None:
+    found = _problem("environment", Plugin("mine", "x:Y", "flctool.spec.base:Section"), set())
+    assert found is not None and "must extend flctool.spec.environment.AdapterConfig" in found

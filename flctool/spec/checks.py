@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from flctool.errors import Problem
 from flctool.registry import did_you_mean
+from flctool.spec.environment import AdapterConfig
 
 if TYPE_CHECKING:
     from flctool.spec.models import Behaviour, InputVariable, Rule
@@ -43,7 +44,7 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
     problems += check_rules({name: tuple(v.sets) for name, v in behaviour.inputs.items()},
                             behaviour.output.commands, enumerate(behaviour.rules))
     environment = behaviour.environment
-    if environment is not None and hasattr(environment, "fit_problems"):
+    if isinstance(environment, AdapterConfig):
         problems += environment.fit_problems(behaviour.input_names,
                                              tuple(behaviour.output.commands))
     return problems

@@ -149,7 +149,19 @@ def command_table_problems(motion: dict[str, Motion], noise: dict[str, MotionNoi
     return problems
 
 
-class BallchaseSimConfig(Section):
+class AdapterConfig(Section):
+    """Base of every ``environment:`` section; its ``adapter`` names the plugin that reads it
+    (flctool.plugins)."""
+
+    def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
+        """What does not fit between this environment and the behaviour's input and command
+        names (an observation it does not have, a command it cannot execute); none unless the
+        adapter says."""
+        del inputs, commands
+        return []
+
+
+class BallchaseSimConfig(AdapterConfig):
     """The ballchase simulator of paper Sec. IV (see docs/environments.md)."""
 
     adapter: Literal["ballchase-sim"]
@@ -477,7 +489,7 @@ def _default_outcomes() -> list[Outcome]:
             Outcome(when="ball_lost", reward=-1.0), Outcome(when="off_pitch", reward=-1.0)]
 
 
-class PitchConfig(Section):
+class PitchConfig(AdapterConfig):
     """A football pitch with goals, a ball, the robot and obstacles (docs/environments.md)."""
 
     adapter: Literal["pitch"]
@@ -598,7 +610,7 @@ class PitchConfig(Section):
         return problems
 
 
-class GymnasiumConfig(Section):
+class GymnasiumConfig(AdapterConfig):
     """Any Gymnasium environment with a Box observation and a Discrete or Box action space."""
 
     adapter: Literal["gymnasium"]
@@ -681,7 +693,7 @@ def default_gymnasium_ranges(data: Any) -> Any:
     return {**data, "inputs": filled}
 
 
-class RobotLinkConfig(Section):
+class RobotLinkConfig(AdapterConfig):
     """A real robot, or its bridge, over TCP (protocol: docs/robot-link.md).
 
     The robot side owns the episode: its observations, commands and ``max_steps`` are checked

@@ -16,6 +16,7 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.registry import did_you_mean
 from flctool.spec.checks import check_input, check_rules, limit_problems
+from flctool.spec.environment import AdapterConfig
 from flctool.spec.models import (
     ADAPTER_NAMES,
     FORMAT_VERSION,
@@ -134,7 +135,7 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
             config = _ENVIRONMENT.validate_python(environment)
         except ValidationError:
             return problems
-        if hasattr(config, "fit_problems"):
+        if isinstance(config, AdapterConfig):
             problems += config.fit_problems(tuple(inputs), tuple(commands))
     return problems
 

@@ -9,7 +9,7 @@ from typing import Literal
 from pydantic import Field
 
 from flctool.plugins import Plugin
-from flctool.spec.base import Section
+from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import LearningConfig
 
 
@@ -20,7 +20,7 @@ class RandomSearchConfig(LearningConfig):
     keep: int = Field(1, ge=1, description="best controllers kept into the next generation")
 
 
-class LineConfig(Section):
+class LineConfig(AdapterConfig):
     """``environment:`` of the line world."""
 
     adapter: Literal["line"]
