@@ -24,6 +24,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from flctool.errors import PluginWarning
 from flctool.registry import Registry
 
 GROUPS = {"learner": "flctool.learners", "environment": "flctool.environments",
@@ -63,10 +64,6 @@ def load_attribute(target: str) -> Any:
     """The attribute that ``"package.module:attr"`` names, importing its module."""
     module_name, _, attr = target.partition(":")
     return getattr(importlib.import_module(module_name), attr)
-
-
-class PluginWarning(UserWarning):
-    """An installed plugin that cannot be used (it is skipped)."""
 
 
 _LEARNING = "flctool.spec.learning:LearningConfig"

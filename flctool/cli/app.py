@@ -335,6 +335,17 @@ def user_errors() -> Iterator[None]:
 
 
 # -- input -----------------------------------------------------------------------------------
+def command_line_labels(assignments: list[str],
+                        options: dict[str, str] | None = None) -> dict[str, str]:
+    """Where each override came from, for messages: ``--set key=value`` gives
+    ``command line (--set key)``; ``options`` maps keys set by an option to the option
+    (``{"seed": "--seed"}``)."""
+    labels = {key: f"command line (--set {key})"
+              for key in (text.partition("=")[0].strip() for text in assignments)}
+    labels.update({key: f"command line ({option})" for key, option in (options or {}).items()})
+    return labels
+
+
 def controller_file(path: Path) -> Path:
     """The behaviour file a controller argument names: the file itself, or a run directory's
     ``best.yaml``. A missing path or a run without a best controller is a clear error."""

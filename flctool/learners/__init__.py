@@ -13,6 +13,7 @@ from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback,
 from flctool.learners.metrics import GenerationMetrics
 from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.spec.located import located
 from flctool.spec.models import Behaviour
 
 #: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.learners`` entries).
@@ -27,7 +28,8 @@ def make_learner(behaviour: Behaviour, env: BatchEnv | None = None) -> Learner:
         from flctool.envs import make_env
 
         env = make_env(behaviour, 1)
-    return learner_class(behaviour, env)
+    with located(behaviour):  # the learner's checks name fields; this adds file and line
+        return learner_class(behaviour, env)
 
 
 __all__ = [

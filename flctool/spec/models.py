@@ -17,6 +17,7 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
+    PrivateAttr,
     Tag,
     ValidationInfo,
     field_validator,
@@ -29,6 +30,7 @@ from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
 from flctool.spec.environment import default_gymnasium_ranges
 from flctool.spec.learning import LearningConfig
+from flctool.spec.located import SourceRef
 
 # The sections chosen by name are unions built from the plugins (flctool.plugins): the built-in
 # learners and adapters and any an installed package adds. mypy sees the built-ins.
@@ -145,6 +147,8 @@ class Behaviour(Section):
         "rule consequents; empty or partial for a behaviour still to be learned"))
     learning: LearningSection = LearningConfig()
     environment: EnvironmentConfig | None = None
+    #: Where each field was written (:mod:`flctool.spec.located`); not part of the value.
+    _source: SourceRef = PrivateAttr(default_factory=SourceRef)
 
     @field_validator("flctool")
     @classmethod
