@@ -24,12 +24,18 @@ def make_learner(behaviour: Behaviour, env: BatchEnv | None = None) -> Learner:
     """The learner ``behaviour.learning.learner``, on ``env`` or on a batch-of-one
     environment built from the behaviour's ``environment:`` section."""
     learner_class = LEARNERS.get(behaviour.learning.learner)
+    built = env is None
     if env is None:
         from flctool.envs import make_env
 
         env = make_env(behaviour, 1)
-    with located(behaviour):  # the learner's checks name fields; this adds file and line
-        return learner_class(behaviour, env)
+    try:
+        with located(behaviour):  # the learner's checks name fields; this adds file and line
+            return learner_class(behaviour, env)
+    except BaseException:
+        if built:
+            env.close()  # built here for this learner: nobody else will close it
+        raise
 
 
 __all__ = [

@@ -55,7 +55,7 @@ class SourceRef:
 def source_of(behaviour: Behaviour) -> SourceMap:
     """The source map of ``behaviour``: its file's, or an empty one if it was built in
     Python."""
-    ref = behaviour._source
+    ref = getattr(behaviour, "_source", None)  # None: e.g. built with model_construct
     return ref.source if isinstance(ref, SourceRef) and ref.source is not None \
         else UNKNOWN_SOURCE
 

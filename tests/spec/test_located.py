@@ -9,15 +9,19 @@ from pathlib import Path
 import pytest
 
 from flctool import SpecError, load_behaviour
-from flctool.envs import make_env
+from flctool.envs import BatchEnv, make_env
+from flctool.envs.robot_server import RobotServer
 from flctool.errors import Problem
+from flctool.learners import LEARNERS, make_learner
+from flctool.learners.pitt import PittLearner
 from flctool.runs import resolve_behaviour
-from flctool.spec import behaviour_from_data, behaviour_to_data, parse_behaviour
+from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
 from flctool.spec.located import locate, locate_error, located, source_of
 
 from ..conftest import BEHAVIOURS
 
 CARTPOLE = BEHAVIOURS / "cartpole.yaml"
+BALLCHASE = BEHAVIOURS / "ballchase.yaml"
 
 
 def _line_of(file: Path, text: str) -> int:
@@ -84,3 +88,32 @@ def test_the_source_map_changes_neither_equality_nor_pickling() -> None:
     assert source_of(from_file.model_copy()).file == str(CARTPOLE)
     with pytest.raises(TypeError):
         from_file.inputs["x"] = from_file.inputs["cart_position"]  # type: ignore[index]
+
+
+class _Refusing(PittLearner):
+    """A learner whose own checks refuse the behaviour, naming a field only."""
+
+    def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
+        raise SpecError([Problem(("learning", "population"), "too many for this learner")])
+
+
+def test_a_learners_complaint_is_located_and_the_env_built_for_it_closed() -> None:
+    server = RobotServer.from_behaviour(load_behaviour(BALLCHASE), idle_timeout=5.0)
+    thread = server.serve_in_background(once=True)
+    saved = LEARNERS._entries["pitt"]
+    try:
+        behaviour = resolve_behaviour(load_behaviour(BALLCHASE), {
+            "learner": "pitt", "environment": {"adapter": "robot-link", "port": server.port,
+                                               "connect_timeout": 5, "retries": 0}})
+        LEARNERS._entries["pitt"] = _Refusing
+        with pytest.raises(SpecError) as caught:
+            make_learner(behaviour)
+        problem = caught.value.problems[0]
+        # the file gives no population: the problem is placed at its section
+        assert (problem.file, problem.line) == (str(BALLCHASE), _line_of(BALLCHASE, "learning:"))
+        thread.join(timeout=5)  # --once: it ends when the client disconnects
+        assert server.stops == ["the client sent stop (close)"]
+    finally:
+        LEARNERS._entries["pitt"] = saved
+        server.close()
+        thread.join(timeout=5)
