@@ -136,8 +136,8 @@ def new_budget(run: Run, generations: int | None, overrides: dict[str, Any],
                                    {"generations": override_label(where, key)}
                                    ).learning.generations
         if generations is not None and generations != budget:
-            raise RunDirError(f"the generations {generations} (--generations) and {key}={value} "
-                              "(--set) ask for different budgets", hint="give the new total once")
+            raise RunDirError(f"a budget of {generations} generations and {key}={value} ask "
+                              "for different budgets", hint="give the new total once")
         generations = budget
     return generations
 
