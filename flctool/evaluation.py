@@ -176,20 +176,27 @@ def episode_seeds(seeds: list[int] | None = None, seed: int | None = None,
                             DEFAULT_EPISODES if episodes is None else episodes)
 
 
+def batch_size(episodes: int) -> int:
+    """The batch an environment for an evaluation of ``episodes`` is built for."""
+    return min(episodes, CHUNK_EPISODES)
+
+
 def evaluate_behaviour(behaviour: Behaviour, seeds: list[int] | None = None, *,
                        seed: int | None = None, episodes: int | None = None,
-                       controller: Controller | None = None,
+                       controller: Controller | None = None, env: BatchEnv | None = None,
                        on_chunk: ChunkDone | None = None) -> Evaluation:
     """Run a deployable ``behaviour`` in its environment, one episode per seed (see
     :func:`episode_seeds`), in chunks (:func:`evaluate_in_chunks`). ``controller`` is the
-    behaviour compiled, if the caller has it already."""
+    behaviour compiled and ``env`` its environment (built for :func:`batch_size`), if the
+    caller has them already; the environment is closed at the end."""
     from flctool.compile import compile_behaviour
     from flctool.envs import make_env
 
     drawn = episode_seeds(seeds, seed, episodes)
     if controller is None:
         controller = compile_behaviour(behaviour)
-    env = make_env(behaviour, min(len(drawn), CHUNK_EPISODES))
+    if env is None:
+        env = make_env(behaviour, batch_size(len(drawn)))
     try:
         result = evaluate_in_chunks(controller, env, drawn, on_chunk=on_chunk)
     finally:

@@ -83,6 +83,7 @@ def evaluate_command(
     from flctool.evaluation import (
         DEFAULT_EPISODES,
         TRAINING_SEEDS_FROM,
+        batch_size,
         defines_success,
         evaluate_behaviour,
         parse_seeds,
@@ -110,6 +111,7 @@ def evaluate_command(
             controller.output(controller.ranges[:, 0][None, :])
         total = len(listed) if listed is not None else (episodes or DEFAULT_EPISODES)
         success = defines_success(behaviour)
+        env = make_env(behaviour, batch_size(total))  # its errors come before the progress bar
         with Progress("episodes", total, terminal=not json_output) as progress:
 
             def chunk_done(done: int, successes: int) -> None:
@@ -119,7 +121,8 @@ def evaluate_command(
                     progress.update(done)
 
             evaluation = evaluate_behaviour(behaviour, listed, seed=seed, episodes=episodes,
-                                            controller=controller, on_chunk=chunk_done)
+                                            controller=controller, env=env,
+                                            on_chunk=chunk_done)
         first_seed = int(evaluation.result.seeds[0])
         if trace is not None:
             single = make_env(behaviour, 1)
