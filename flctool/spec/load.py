@@ -17,7 +17,7 @@ from flctool.errors import PathPart, Problem, SpecError
 from flctool.registry import did_you_mean
 from flctool.spec.checks import check_input, check_rules, limit_problems
 from flctool.spec.environment import AdapterConfig
-from flctool.spec.located import SourceRef
+from flctool.spec.located import attach_source
 from flctool.spec.models import (
     ADAPTER_NAMES,
     FORMAT_VERSION,
@@ -80,7 +80,7 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None) -> Behaviour
     problems += [source.problem(p.path, p.message, p.hint) for p in semantic]
     if problems:
         raise SpecError(_in_file_order(problems), source.file)
-    behaviour._source = SourceRef(source)  # later layers locate their errors with it
+    attach_source(behaviour, source)  # later layers locate their errors with it
     return behaviour
 
 

@@ -52,6 +52,14 @@ class SourceRef:
         return f"SourceRef({self.source.file if self.source else None!r})"
 
 
+def attach_source(behaviour: Behaviour, source: SourceMap) -> None:
+    """Give a behaviour just validated from ``source`` its source map (the loader does; a
+    behaviour refuses to have it set as an attribute, like its fields)."""
+    private: dict[str, object] | None = behaviour.__pydantic_private__
+    if private is not None:
+        private["_source"] = SourceRef(source)
+
+
 def source_of(behaviour: Behaviour) -> SourceMap:
     """The source map of ``behaviour``: its file's, or an empty one if it was built in
     Python."""

@@ -147,8 +147,15 @@ class Behaviour(Section):
         "rule consequents; empty or partial for a behaviour still to be learned"))
     learning: LearningSection = LearningConfig()
     environment: EnvironmentConfig | None = None
-    #: Where each field was written (:mod:`flctool.spec.located`); not part of the value.
+    #: Where each field was written (:mod:`flctool.spec.located`); not part of the value,
+    #: set once by the loader (:func:`flctool.spec.located.attach_source`).
     _source: SourceRef = PrivateAttr(default_factory=SourceRef)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "_source":  # the fields are frozen by pydantic; the source map is too
+            raise TypeError("a validated behaviour cannot be changed; its source map is "
+                            "set when it is loaded")
+        super().__setattr__(name, value)
 
     @field_validator("flctool")
     @classmethod

@@ -88,6 +88,8 @@ def test_the_source_map_changes_neither_equality_nor_pickling() -> None:
     assert source_of(from_file.model_copy()).file == str(CARTPOLE)
     with pytest.raises(TypeError):
         from_file.inputs["x"] = from_file.inputs["cart_position"]  # type: ignore[index]
+    with pytest.raises(TypeError, match="cannot be changed"):
+        from_file._source = source_of(from_data)  # type: ignore[assignment]
 
 
 class _Refusing(PittLearner):
