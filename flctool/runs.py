@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from flctool import __version__
-from flctool.atomic import remove_stale_temporaries, write_text_atomic
+from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
@@ -578,11 +578,7 @@ SNAPSHOT_SECONDS = 1.0
 
 def _fsync(path: Path) -> None:
     try:
-        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
-        try:
-            os.fsync(descriptor)
-        finally:
-            os.close(descriptor)
+        sync_file(path, follow_symlinks=False)
     except OSError as exc:
         raise _write_error(path, exc) from None
 
