@@ -89,7 +89,7 @@ def atomic_writer(path: str | Path, *, durable: bool = True,
 @contextmanager
 def atomic_text_writer(path: str | Path, *, durable: bool = True,
                        follow_symlinks: bool = True) -> Iterator[TextIO]:
-    """:func:`atomic_writer` as UTF-8 text with ``\n`` line ends."""
+    """:func:`atomic_writer` as UTF-8 text, each line ended by a newline alone."""
     with atomic_writer(path, durable=durable, follow_symlinks=follow_symlinks) as raw:
         text = io.TextIOWrapper(raw, encoding="utf-8", newline="\n")
         try:
