@@ -63,6 +63,7 @@ from flctool.spec import (
     behaviour_to_yaml,
     load_behaviour,
 )
+from flctool.spec.learning import keep_keys_read_by
 from flctool.spec.rules import with_rules
 from flctool.spec.yaml_source import SourceMap
 
@@ -99,8 +100,14 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
 
     Keys are dotted paths under ``learning:`` (``seed``, ``q.temperature``), or start with
     ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``.
+    Overriding ``learner`` drops the keys of the behaviour's learner that the new one does
+    not read; keys the overrides give must be the new learner's.
     """
     data = behaviour_to_data(behaviour)
+    learner = next((value for key, value in overrides.items()
+                    if override_path(key) == ("learning", "learner")), None)
+    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
+        data["learning"] = keep_keys_read_by(data["learning"], learner)
     for key, value in overrides.items():
         path = list(override_path(key))
         node = data

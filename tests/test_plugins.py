@@ -77,6 +77,9 @@ def test_registries_hold_exactly_the_plugins() -> None:
     (Plugin("mine", "x:Y", "flctool.spec.base:Section"), "must extend"),
     (Plugin("mine", "x:Y", type("Mine", (LearningConfig,), {})),
      "must declare learner: Literal['mine']"),
+    (Plugin("mine", "x:Y", LearningConfig), "must declare learner: Literal['mine']"),
+    (Plugin("mine", "x:Y", "flctool.spec.learning:PittConfig"),
+     "must declare learner: Literal['mine']"),
 ])
 def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem: str) -> None:
     found = _problem("learner", plugin, {"pitt"})

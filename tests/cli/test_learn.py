@@ -62,7 +62,12 @@ def test_learn_reports_progress_and_the_best_controller(tmp_path: Path) -> None:
     (["--set", "q.gamma=1.2"], "learning.q.gamma"),
     (["--set", "q.alpha=0"], "learning.q.alpha"),
     (["--learner", "hybird"], "learning.learner"),
-    (["--set", "exploration.epsilon=2"], "learning.exploration.epsilon"),
+    (["--learner", "fuzzy_q", "--set", "exploration.epsilon=2"], "learning.exploration.epsilon"),
+    (["--set", "exploration.epsilon=0.2"],
+     "learning.exploration: 'exploration' is read by the fuzzy_q learner only; remove it or "
+     "set learner: fuzzy_q"),
+    (["--learner", "fuzzy_q", "--set", "crossover=0.3"], "learning.crossover: 'crossover' is "
+     "read by the pitt and hybrid learners, not by fuzzy_q"),
     (["--set", "q.temprature=0.2"], "learning.q.temprature"),
     (["--set", "nonsense"], "--set"),
 ])
