@@ -116,6 +116,21 @@ def test_a_plugins_own_keys_are_checked_and_located(tmp_path: Path) -> None:
             in result.stderr)
 
 
+def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
+        tmp_path: Path) -> None:
+    (tmp_path / "demo.yaml").write_text(DEMO.replace("  keep: 2", "  crossover: 0.3"))
+    result = _flctool(tmp_path, "validate", "demo.yaml")
+    assert result.returncode == 1
+    assert ("demo.yaml:12:3: learning.crossover: 'crossover' is read by the pitt and hybrid "
+            "learners, not by random_search") in " ".join(result.stderr.split())
+    (tmp_path / "pitt.yaml").write_text(DEMO.replace("learner: random_search\n  keep: 2",
+                                                     "learner: pitt\n  mutation: 0.2"))
+    switched = _flctool(tmp_path, "learn", "pitt.yaml", "--learner", "random_search",
+                        "--out", "run", "--json")
+    assert switched.returncode == 0, switched.stderr
+    assert "keep: 1" in (tmp_path / "run" / "behaviour.yaml").read_text()
+
+
 def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)
     result = subprocess.run([sys.executable, "-m", "flctool", "validate", "demo.yaml"],
