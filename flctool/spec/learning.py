@@ -126,7 +126,8 @@ class GeneticConfig(LearningConfig):
 class PittConfig(GeneticConfig):
     """``learner: pitt``: the GA alone, learning from fitness only."""
 
-    learner: Literal["pitt"] = "pitt"
+    learner: Literal["pitt"] = Field("pitt", description=(
+        "the Pitt approach: a GA over whole controllers"))
     pitt_crossover: Literal["uniform", "one_point"] = Field("uniform", description=(
         "how two parents make a child: each gene from either (uniform) or one cut point"))
 
@@ -134,7 +135,7 @@ class PittConfig(GeneticConfig):
 class FuzzyQConfig(LearningConfig):
     """``learner: fuzzy_q``: fuzzy Q-learning of one controller (eq. 4-9)."""
 
-    learner: Literal["fuzzy_q"] = "fuzzy_q"
+    learner: Literal["fuzzy_q"] = Field("fuzzy_q", description="fuzzy Q-learning of one controller")
     q: QConfig = QConfig()
     exploration: ExplorationConfig = ExplorationConfig()
 
@@ -142,7 +143,8 @@ class FuzzyQConfig(LearningConfig):
 class HybridConfig(GeneticConfig):
     """``learner: hybrid``, the paper's method: the GA guided by fuzzy-Q rule strengths."""
 
-    learner: Literal["hybrid"] = "hybrid"
+    learner: Literal["hybrid"] = Field("hybrid", description=(
+        "the paper's method: the GA guided by fuzzy-Q rule strengths (the default)"))
     q: QConfig = QConfig()
 
 
