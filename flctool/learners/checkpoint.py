@@ -35,6 +35,8 @@ DAMAGED_HINT = ("delete the damaged checkpoint (and any later ones) to resume fr
                 "before")
 #: Random generator states hold 128-bit integers (PCG64); anything larger is tampering.
 _MAX_RNG_INT = 1 << 128
+#: No run reaches this many generations (-1: before the first).
+_MAX_GENERATION = 1 << 31
 
 
 @dataclass(frozen=True)
@@ -102,7 +104,7 @@ def read_checkpoint(data: Any, expected: Expected) -> Checkpoint:
     if not isinstance(learner, str):
         raise damaged("is damaged: its 'learner' is not a name")
     generation = data["generation"]
-    if not _is_int(generation) or generation < -1:
+    if not _is_int(generation) or not -1 <= generation < _MAX_GENERATION:
         raise damaged("is damaged: its 'generation' is not a generation number")
     if expected.generation is not None and generation != expected.generation:
         raise damaged(f"is of generation {generation!r}, not {expected.generation}")

@@ -63,6 +63,7 @@ def _deep(depth: int) -> Any:
     ({"traces": [[1e400] * 3] * 3}, "its 'traces' holds NaN or infinity"),
     ({"learner": 3}, "is of learner '3', not 'fuzzy_q'"),
     ({"elapsed": True}, "'elapsed' is not a finite number"),
+    ({"generation": 2**70}, "'generation' is not a generation number"),
     ({"selection": {"hall": "?"}}, "selection record is damaged"),
     ({"selection": []}, "selection record is damaged"),
 ])
