@@ -61,6 +61,7 @@ from flctool.spec import (
     behaviour_to_yaml,
     load_behaviour,
 )
+from flctool.spec.learning import keep_keys_read_by
 from flctool.spec.located import source_of
 from flctool.spec.rules import with_rules
 
@@ -103,9 +104,14 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
     about an overridden field is placed where the override was given -- ``where``, a label
     for all of them (``"overrides"`` reads ``overrides (q.alpha)``) or one per key (the
     command line says ``command line (--set q.alpha)``) -- and any other at its line in the
-    behaviour's file.
+    behaviour's file. Overriding ``learner`` drops the keys of the behaviour's learner that
+    the new one does not read; keys the overrides give must be the new learner's.
     """
     data = behaviour_to_data(behaviour)
+    learner = next((value for key, value in overrides.items()
+                    if override_path(key) == ("learning", "learner")), None)
+    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
+        data["learning"] = keep_keys_read_by(data["learning"], learner)
     given: dict[tuple[PathPart, ...], str] = {}
     for key, value in overrides.items():
         path = list(override_path(key))

@@ -21,6 +21,7 @@ from flctool.cli.app import (
 )
 from flctool.cli.progress import Progress
 from flctool.errors import RunDirError
+from flctool.plugins import names
 
 if TYPE_CHECKING:
     from flctool.runs import RunSummary
@@ -35,7 +36,8 @@ def learn(
     file: Annotated[Path | None, typer.Argument(
         help="The behaviour file (YAML); optional with --resume.")] = None,
     learner: Annotated[str | None, typer.Option(
-        "--learner", "-l", help="pitt, fuzzy_q or hybrid (default: the file's).")] = None,
+        "--learner", "-l", help=f"{', '.join(names('learner'))} (default: the file's).")]
+    = None,
     seed: Annotated[int | None, typer.Option("--seed", "-s", help="Random seed.")] = None,
     generations: Annotated[int | None, typer.Option(
         "--generations", "-g", help="Generations to run (with --resume: the new total).")]
