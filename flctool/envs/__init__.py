@@ -5,18 +5,31 @@
 
 The protocol is :class:`flctool.envs.base.BatchEnv`; :func:`check_env` checks an adapter
 against it.
+
+The protocol and the checker (which need numpy) load on first use (PEP 562 module
+``__getattr__``), so that importing a module of this package, e.g. ``flctool validate``'s
+preflight, does not import numpy.
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+import importlib
+from typing import TYPE_CHECKING, Any, Protocol
 
-from flctool.envs.base import BatchEnv, SingleEnv, Step
-from flctool.envs.checker import check_env
 from flctool.errors import EnvError
 from flctool.plugins import registry
 from flctool.registry import Registry
+
+# Before the registry below: an installed adapter's module imports the behaviour models, which
+# load the plugins in turn, so the models must be complete before the plugins are loaded here.
 from flctool.spec.models import Behaviour
+
+if TYPE_CHECKING:
+    from flctool.envs.base import BatchEnv, SingleEnv, Step
+    from flctool.envs.checker import check_env
+
+_LAZY = {"BatchEnv": "flctool.envs.base", "SingleEnv": "flctool.envs.base",
+         "Step": "flctool.envs.base", "check_env": "flctool.envs.checker"}
 
 
 class EnvFactory(Protocol):
@@ -45,6 +58,15 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
         raise EnvError(f"batch_size must be at least 1, got {batch_size}")
     factory = ENVIRONMENTS.get(behaviour.environment.adapter)
     return factory.from_behaviour(behaviour, batch_size)
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'flctool.envs' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
 
 
 __all__ = ["ENVIRONMENTS", "BatchEnv", "EnvFactory", "SingleEnv", "Step", "check_env",
