@@ -150,6 +150,16 @@ class Controller:
                 and states.ndim == 2 and states.shape[1] == n_inputs):
             states = self._as_states(states)
         count = states.shape[0]
+        if count == 1 and consequents is None:
+            # One state: the one-state kernel (output_one's, the same bits) costs less than a
+            # batch of one, whose arrays and arguments cost more than its arithmetic.
+            one_floats, one_ints, one = self._one
+            value = one(one_floats, one_ints, states[0])
+            if value != value:  # a NaN input, or no rule fires
+                self._raise_undefined(states, 0)
+            out = np.empty(1)
+            out[0] = value
+            return out
         population = tables.shape[0]
         out = np.empty(population * count)  # (P, B) flat
         if threads > 1 and count >= THREADED_STATES:
