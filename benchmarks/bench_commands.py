@@ -61,12 +61,12 @@ def run_once(command: list[str], env: dict[str, str] | None = None,
              stdin: Path | None = None) -> Figure:
     """One run of ``command``; its own CPU time and peak memory (not its siblings').
 
-    Through GNU time when the system has it: a child forked from this (large) Python process
-    would count this process's memory in its peak until it execs. Without it, ``os.wait4``
-    of the child, whose peak then has this process's size as a floor.
+    CPU from ``os.wait4``. The peak through GNU time when the system has it: a child forked
+    from this (large) Python process would count this process's memory in its peak until it
+    execs. Without it, the child's own, which then has this process's size as a floor.
     """
     with tempfile.NamedTemporaryFile("r") as report, open(stdin or os.devnull, "rb") as source:
-        timed = ([str(GNU_TIME), "-f", "%U %S %M", "-o", report.name, *command]
+        timed = ([str(GNU_TIME), "-f", "%M", "-o", report.name, *command]
                  if GNU_TIME.exists() else command)
         process = subprocess.Popen(timed, stdin=source, stdout=subprocess.DEVNULL,
                                    stderr=subprocess.PIPE, env=env, cwd=ROOT)
@@ -77,11 +77,14 @@ def run_once(command: list[str], env: dict[str, str] | None = None,
         if process.returncode != 0:
             raise SystemExit(f"{' '.join(command)} failed:\n"
                              f"{errors.decode(errors='replace')}")
+        # CPU from wait4, to the microsecond (GNU time prints hundredths); it counts the
+        # command and GNU time, which waited for it (about a millisecond).
+        cpu = usage.ru_utime + usage.ru_stime
         if GNU_TIME.exists():
-            user, system, peak_kib = report.read().split()[-3:]
-            return Figure(float(user) + float(system), int(peak_kib) * 1024 / 1e6)
+            peak_kib = report.read().split()[-1]
+            return Figure(cpu, int(peak_kib) * 1024 / 1e6)
     # ru_maxrss is in KiB on Linux
-    return Figure(usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024 / 1e6)
+    return Figure(cpu, usage.ru_maxrss * 1024 / 1e6)
 
 
 def median_of(command: list[str], repeats: int, env: dict[str, str] | None = None,
