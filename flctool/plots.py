@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
+from flctool.compile.membership import trapezoid
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
 from flctool.runs import Run
 from flctool.spec import Behaviour
@@ -230,9 +231,9 @@ def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
         variable = behaviour.inputs[name]
         low, high = variable.range
         for set_name, quad in variable.sets.items():
-            pa, pb, pc, pd = (float(v) for v in quad)
-            xs = np.clip([pa, pb, pc, pd], low, high)
-            axes.plot(xs, [0.0 if pa < pb else 1.0, 1, 1, 0.0 if pc < pd else 1.0],
+            # the membership is linear between the corners: drawn through them
+            xs = np.clip(np.array(quad, dtype=np.float64), low, high)
+            axes.plot(xs, trapezoid(xs, np.array([quad], dtype=np.float64))[:, 0],
                       label=set_name)
         axes.set_xlim(low, high)
         axes.set_ylim(-0.05, 1.1)

@@ -289,13 +289,48 @@ def test_a_damaged_earlier_checkpoint_says_to_delete_the_later_ones_too(
         run.behaviour_for(generation=0)
 
 
+@pytest.mark.parametrize(("damage", "message"), [
+    (lambda state: {**state, "selection": {**state["selection"], "best": {
+        **state["selection"]["best"], "consequents": [7] * 15}}},
+     "selection record holds a controller that is not one of this behaviour"),
+    (lambda state: {**state, "fitness": [1e400] * len(state["fitness"])},
+     "its 'fitness' holds NaN or infinity"),
+    (lambda state: {**state, "population": [[2**70] * 15] * len(state["population"])},
+     "its 'population' is not a table of whole numbers"),
+])
+def test_every_reader_of_a_run_refuses_a_damaged_checkpoint_alike(
+        tmp_path: Path, damage: Callable[[dict[str, Any]], object], message: str) -> None:
+    # One validation (flctool.learners.checkpoint) behind the summary, the best controller
+    # and the resume: each names the file and the same problem.
+    run = create_run(ballchase(generations=3), tmp_path / "run")
+    run.train([StopAfter(1)])
+    path = write_checkpoint(run.path, 1, damage(run.checkpoint(1)))
+    for read in (lambda: open_run(run.path).behaviour_for(), lambda: open_run(run.path).train()):
+        with pytest.raises(RunDirError, match=message) as caught:
+            read()
+        assert str(caught.value).startswith(f"{path}: ")
+
+
+def test_a_resume_needs_the_q_table_of_a_learner_with_strengths(tmp_path: Path) -> None:
+    run = create_run(ballchase(generations=3), tmp_path / "run")  # hybrid keeps a q table
+    run.train([StopAfter(1)])
+    state = run.checkpoint(1)
+    path = write_checkpoint(run.path, 1, {k: v for k, v in state.items() if k != "q"})
+    assert open_run(run.path).behaviour_for()[1]["generation"] == 1  # needs no q table
+    with pytest.raises(RunDirError, match=r"the checkpoint has no 'q' table of shape "
+                                          r"\(rules, commands\) = \(15, 5\)") as caught:
+        open_run(run.path).train()
+    assert str(caught.value).startswith(f"{path}: ")
+
+
 def test_a_damaged_earlier_q_table_is_found_when_the_tables_are_rebuilt(
         tmp_path: Path) -> None:
     run = create_run(ballchase(generations=3), tmp_path / "run")
     run.train([StopAfter(1)])
     path = write_checkpoint(run.path, 0, {**run.checkpoint(0), "q": [[0.0]]})
-    with pytest.raises(RunDirError, match=r"gen-00000\.json: the checkpoint has no q table "
-                                          r"of shape \(rules, commands\) = \(15, 5\)"):
+    with pytest.raises(RunDirError, match=r"gen-00000\.json: the checkpoint is damaged: its "
+                                          r"'q' table has shape \(1, 1\), not \(rules, "
+                                          r"commands\) = \(15, 5\)"):
         open_run(run.path).train()
     assert json.loads((run.path / "run.json").read_text())["status"] == "stopped"
     assert path.exists()

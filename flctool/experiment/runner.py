@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from flctool import __version__
-from flctool.atomic import write_text_atomic
+from flctool.atomic import remove_stale_temporaries, write_text_atomic
 from flctool.compile import compile_behaviour
 from flctool.envs import make_env
 from flctool.errors import RunDirError
@@ -153,11 +153,10 @@ def _clear_unstarted(directory: Path) -> None:
     the folder with its own message."""
     if not directory.is_dir():
         return
-    for entry in directory.iterdir():
-        if entry.name == CHECKPOINT_DIR and entry.is_dir() and not any(entry.iterdir()):
-            entry.rmdir()
-        elif entry.is_file() and entry.name.startswith(".") and entry.name.endswith(".tmp"):
-            entry.unlink()
+    remove_stale_temporaries(directory)  # no writer runs there: the job is not started
+    checkpoints = directory / CHECKPOINT_DIR
+    if checkpoints.is_dir() and not checkpoints.is_symlink() and not any(checkpoints.iterdir()):
+        checkpoints.rmdir()
 
 
 def heldout_evaluation(run: Run, seed: int, episodes: int) -> dict[str, Any]:

@@ -27,8 +27,8 @@ from numpy.typing import NDArray
 
 from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
-from flctool.errors import LearnError
 from flctool.learners.callbacks import Callback, CallbackList
+from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate, Selection
 from flctool.learners.trial import SparseRules
@@ -51,8 +51,6 @@ IntArray = NDArray[np.intp]
 
 TRAIN_SEED_LOW = 2**32
 TRAIN_SEED_HIGH = 2**62
-STREAMS = ("ga", "env", "explore")
-_DAMAGED = "delete the damaged checkpoint (and any later ones) to resume from the one before"
 
 
 @dataclass(frozen=True)
@@ -190,81 +188,19 @@ class Learner(ABC):
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore what :meth:`state_dict` saved; :class:`LearnError` if it is damaged or of
-        another learner or behaviour."""
-        if not isinstance(state, dict):
-            raise LearnError(f"a checkpoint is a JSON object, not {type(state).__name__}",
-                             hint=_DAMAGED)
-        if state.get("learner") != self.name:
-            raise LearnError(f"the checkpoint is of learner '{state.get('learner')}', "
-                             f"not '{self.name}'",
-                             hint="resume with the learner the run was started with")
-        rng = state.get("rng")
-        if not isinstance(rng, dict):
-            rng = {}
-        missing = [name for name in STREAMS if name not in rng]
-        if missing:
-            raise LearnError(f"the checkpoint has no state of the random generator(s) "
-                             f"{', '.join(missing)}", hint=_DAMAGED)
-        try:
-            generation = int(state["generation"])
-            elapsed = float(state["elapsed"])
-            population = np.array(state["population"], dtype=np.intp)
-            fitness = np.array(state["fitness"], dtype=np.float64)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise LearnError(f"the checkpoint is incomplete or damaged ({exc!r})",
-                             hint=_DAMAGED) from None
+        """Restore what :meth:`state_dict` saved; :class:`LearnError` (and the learner left
+        as it was) if it is damaged or of another learner or behaviour (the checks are
+        :func:`~flctool.learners.checkpoint.read_checkpoint`'s)."""
         controller = self.controller
-        if population.ndim == 2 and population.shape[1] != controller.n_rules:
-            raise LearnError(f"the checkpoint's controllers have {population.shape[1]} "
-                             f"rules, the behaviour {controller.n_rules}",
-                             hint="resume with the behaviour the run was started with")
-        problem = population_problem(population, fitness, controller.n_rules,
-                                     controller.n_commands)
-        if problem is not None:
-            raise LearnError(f"the checkpoint's {problem}", hint=_DAMAGED)
-        if self.fuzzy_q is not None:
-            shape = (controller.n_rules, controller.n_commands)
-            for key in ("q", "traces"):
-                try:
-                    table = np.array(state.get(key), dtype=np.float64)
-                except (TypeError, ValueError):
-                    table = np.zeros(0)
-                if table.shape != shape:
-                    raise LearnError(f"the checkpoint's '{key}' table has shape {table.shape}, "
-                                     f"not (rules, commands) = {shape}", hint=_DAMAGED)
-        saved = {name: generator.bit_generator.state for name, generator in self.rngs.items()}
-        try:
-            for name, generator in self.rngs.items():
-                generator.bit_generator.state = rng[name]
-        except (KeyError, TypeError, ValueError) as exc:
-            for name, generator in self.rngs.items():  # leave the learner as it was
-                generator.bit_generator.state = saved[name]
-            raise LearnError(f"the checkpoint's random generator states are damaged ({exc!r})",
-                             hint=_DAMAGED) from None
-        self.selection.load_state_dict(state.get("selection"), controller.n_rules,
-                                       controller.n_commands)
-        self.generation, self.elapsed = generation, elapsed
-        self.population, self.fitness = population, fitness
+        checkpoint = read_checkpoint(state, Expected(
+            controller.n_rules, controller.n_commands, learner=self.name,
+            max_population=self.config.population, strengths=self.uses_strengths))
+        for name, generator in self.rngs.items():
+            generator.bit_generator.state = checkpoint.rng[name]
+        self.selection.restore(checkpoint.selection)
+        self.generation, self.elapsed = checkpoint.generation, checkpoint.elapsed
+        self.population, self.fitness = checkpoint.population, checkpoint.fitness
         self.load_extra_state(state)
-
-
-def population_problem(population: IntArray, fitness: FloatArray, n_rules: int,
-                       n_commands: int) -> str | None:
-    """What is wrong with a checkpoint's ``population (P, M)`` and ``fitness (P,)``, or None.
-
-    Values must be command indices 0..K-1: anything else would index past the singletons.
-    """
-    if population.ndim != 2 or population.shape[0] < 1 or population.shape[1] != n_rules:
-        return (f"population has shape {population.shape}, not (individuals, rules) with "
-                f"{n_rules} rules")
-    if population.min() < 0 or population.max() >= n_commands:
-        return (f"population holds command indices {population.min()}..{population.max()}, "
-                f"outside 0..{n_commands - 1}")
-    if fitness.shape != population.shape[:1]:
-        return (f"fitness has shape {fitness.shape}, not ({population.shape[0]},) as its "
-                "population")
-    return None
 
 
 def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:

@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from flctool.compile import Controller
+from flctool.compile.defuzzify import centre_of_area
+from flctool.compile.membership import firing_sets
 from flctool.envs.base import BatchEnv
 from flctool.errors import InferenceError
 
@@ -52,17 +54,7 @@ class SparseRules:
                                      f"'{self._names[i]}'",
                                      hint="NaN has no membership; fix the adapter's sensor")
             s = low if value < low else high if value > high else value  # clip to the range
-            mus = []
-            for j, (pa, pb, pc, pd) in enumerate(sets):
-                # trapezoid_scalar inlined (the same operations, so the same bits)
-                if s > pc:
-                    mu = (pd - s) / (pd - pc) if pd > pc else 0.0
-                elif s < pb:
-                    mu = (s - pa) / (pb - pa) if pb > pa else 0.0
-                else:
-                    mu = 1.0
-                if mu > 0.0:
-                    mus.append((j, mu))
+            mus = firing_sets(s, sets)
             width = len(sets)
             rules = [r * width + j for r in rules for j, _ in mus]
             alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
@@ -75,11 +67,8 @@ class SparseRules:
 
     def output(self, alphas: list[float], commands: list[int]) -> float:
         """Crisp output of eq. 3 from the firing rules' activations and command indices."""
-        singletons = self.singletons
-        numerator = 0.0
-        for a, k in zip(alphas, commands, strict=True):
-            numerator += a * singletons[k]
-        value = numerator / add_in_order(alphas)
+        value = centre_of_area(zip(alphas, map(self.singletons.__getitem__, commands),
+                                   strict=True), 0.0)
         # within the commands, as Controller.output keeps it (rounding may step an ulp past)
         return self._low if value < self._low else self._high if value > self._high else value
 

@@ -163,14 +163,21 @@ def damage(state: dict[str, object], **changes: object) -> dict[str, object]:
     ({"population": [[0, -1, 2]] * 6}, r"command indices -1\.\.2"),
     ({"population": [0, 1, 2]}, r"population has shape \(3,\)"),
     ({"population": [[0, 1]] * 6}, "controllers have 2 rules, the behaviour 3"),
-    ({"population": [[0, 1], [2]]}, "incomplete or damaged"),
+    ({"population": [[0, 1], [2]]}, "its 'population' is not a table of whole numbers"),
     ({"fitness": [0.5]}, r"fitness has shape \(1,\), not \(6,\)"),
     ({"q": [[0.0] * 3] * 2}, r"'q' table has shape \(2, 3\), not \(rules, commands\) = "
                             r"\(3, 3\)"),
-    ({"traces": None}, r"'traces' table has shape \(\)"),
+    ({"traces": None}, r"has no 'traces' table of shape \(rules, commands\) = \(3, 3\)"),
     ({"rng": {"ga": {}}}, "no state of the random generator.*env, explore"),
-    ({"rng": {"ga": {}, "env": {}, "explore": {}}}, "random generator states are damaged"),
-    ({"generation": None}, "incomplete or damaged"),
+    ({"rng": {"ga": {}, "env": {}, "explore": {}}}, "random generator states cannot be "
+                                                  "restored"),
+    ({"generation": None}, "has no 'generation'"),
+    ({"generation": "1"}, "its 'generation' is not a generation number"),
+    ({"population": [[0.5, 1, 2]] * 6}, "not a table of whole numbers"),
+    ({"fitness": [float("nan")] * 6}, "its 'fitness' holds NaN or infinity"),
+    ({"elapsed": "soon"}, "its 'elapsed' is not a finite number"),
+    ({"learner": "pitt"}, "is of learner 'pitt', not 'hybrid'"),
+    ({"rng": {"ga": {"x": 2**200}, "env": {}, "explore": {}}}, r"outside \[0, 2\^128\)"),
 ])
 def test_a_damaged_checkpoint_is_refused_and_leaves_the_learner_as_it_was(
         changes: dict[str, object], message: str) -> None:
@@ -185,7 +192,7 @@ def test_a_damaged_checkpoint_is_refused_and_leaves_the_learner_as_it_was(
 
 def test_a_checkpoint_that_is_not_an_object_is_refused() -> None:
     learner = make_learner(line_behaviour(learner="pitt"), LineEnv())
-    with pytest.raises(LearnError, match="a checkpoint is a JSON object, not list"):
+    with pytest.raises(LearnError, match="the checkpoint holds a JSON list, not an object"):
         learner.load_state_dict([1, 2])  # type: ignore[arg-type]
 
 
