@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.errors import RunDirError, SpecError
@@ -143,6 +144,43 @@ def test_resume_ends_where_an_uninterrupted_run_ends(tmp_path: Path, learner: st
     for state in (a, b):
         state.pop("elapsed"), state["metrics"].pop("wall_time")
     assert a == b
+
+
+#: What versions with one flat ``learning:`` model wrote for the keys a learner does not read.
+EARLIER_DEFAULTS = {"crossover": 0.2, "mutation": 0.1, "pitt_crossover": "uniform",
+                    "elites": 1, "common_starts": False,
+                    "q": {"alpha": 0.1, "gamma": 0.9, "lambda": 0.7, "temperature": 0.15,
+                          "initial": 0.0},
+                    "exploration": {"policy": "boltzmann", "epsilon": 0.1, "decay": 1.0,
+                                    "minimum": 0.0}}
+
+
+def as_an_earlier_version_wrote_it(path: Path) -> None:
+    """Rewrite the behaviour file ``path`` with every learning key of every learner."""
+    text = path.read_text(encoding="utf-8")
+    header = "".join(line + "\n" for line in text.splitlines() if line.startswith("#"))
+    data = yaml.safe_load(text)
+    data["learning"] = {**EARLIER_DEFAULTS, **data["learning"]}
+    path.write_text(header + yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+
+
+@pytest.mark.parametrize("learner", ["pitt", "fuzzy_q", "hybrid"])
+def test_a_run_an_earlier_version_recorded_still_resumes(tmp_path: Path, learner: str) -> None:
+    behaviour = ballchase(learner=learner, seed=3, generations=4)
+    whole = create_run(behaviour, tmp_path / "a" / "run")
+    whole.train()
+    part = create_run(behaviour, tmp_path / "b" / "run")
+    part.train([StopAfter(1)])
+    for name in ("behaviour.yaml", BEST_FILE):
+        as_an_earlier_version_wrote_it(part.path / name)
+        assert "pitt_crossover" in (part.path / name).read_text()
+    assert load_behaviour(part.path / BEST_FILE).learning.learner == learner
+    reopened = open_run(part.path)
+    assert reopened.behaviour == behaviour
+    assert reopened.train().status == "finished"
+    assert without_wall_time(part.path / METRICS_FILE) == without_wall_time(
+        whole.path / METRICS_FILE)
+    assert (part.path / BEST_FILE).read_text() == (whole.path / BEST_FILE).read_text()
 
 
 def test_resume_can_extend_a_finished_run(tmp_path: Path) -> None:

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from flctool.errors import EnvError
 from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.spec.located import located
 
 # Before the registry below: an installed adapter's module imports the behaviour models, which
 # load the plugins in turn, so the models must be complete before the plugins are loaded here.
@@ -48,8 +49,9 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
 
     ``batch_size`` is a hint (adapters that hold one world per episode build that many up
     front); the number of seeds given to ``reset`` decides B. Raises :class:`SpecError`
-    naming the field when the environment does not fit the behaviour,
-    :class:`MissingDependencyError` when the adapter's optional package is missing.
+    naming the field (at its line in the behaviour's file) when the environment does not fit
+    the behaviour, :class:`MissingDependencyError` when the adapter's optional package is
+    missing.
     """
     if behaviour.environment is None:
         raise EnvError(f"behaviour '{behaviour.name}' has no 'environment' section",
@@ -57,7 +59,8 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
     if batch_size < 1:
         raise EnvError(f"batch_size must be at least 1, got {batch_size}")
     factory = ENVIRONMENTS.get(behaviour.environment.adapter)
-    return factory.from_behaviour(behaviour, batch_size)
+    with located(behaviour):  # the adapter's checks name fields; this adds file and line
+        return factory.from_behaviour(behaviour, batch_size)
 
 
 def __getattr__(name: str) -> Any:

@@ -29,11 +29,9 @@ from typing import Any
 
 from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
-from flctool.compile import compile_behaviour
-from flctool.envs import make_env
 from flctool.errors import RunDirError
+from flctool.evaluation import evaluate_behaviour
 from flctool.plugins import names as plugin_names
-from flctool.rollout import evaluate, evaluation_seeds
 from flctool.runs import (
     BEHAVIOUR_FILE,
     BEST_FILE,
@@ -162,13 +160,9 @@ def _clear_unstarted(directory: Path) -> None:
 def heldout_evaluation(run: Run, seed: int, episodes: int) -> dict[str, Any]:
     """The run's best.yaml on ``episodes`` held-out episodes drawn from ``seed``: success
     count and rate, mean fitness, and the episodes and steps the test cost."""
-    best = load_behaviour(run.path / BEST_FILE)
-    controller = compile_behaviour(best)
-    env = make_env(best, episodes)
-    try:
-        result = evaluate(controller, env, evaluation_seeds(seed, episodes))
-    finally:
-        env.close()
+    # what `flctool evaluate --seed SEED --episodes EPISODES` reports
+    result = evaluate_behaviour(load_behaviour(run.path / BEST_FILE), seed=seed,
+                                episodes=episodes).result
     return {"seed": seed, "episodes": result.episodes,
             "successes": int(result.success.sum()),
             "success_rate": float(result.success.mean()),

@@ -27,11 +27,13 @@ from numpy.typing import NDArray
 
 from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
+from flctool.errors import LearnError
 from flctool.learners.callbacks import Callback, CallbackList
 from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate, Selection
 from flctool.learners.trial import SparseRules
+from flctool.spec.learning import LearningConfig
 from flctool.spec.models import Behaviour
 
 
@@ -65,11 +67,14 @@ class GenerationResult:
 class Learner(ABC):
     """Base of every learner; subclasses supply :meth:`evaluate` and :meth:`advance`.
 
-    Attributes: ``population (P, M)`` command indices, ``fitness (P,)`` of the last evaluated
-    generation, ``generation`` (-1 before the first), ``elapsed`` seconds of training so far.
+    Attributes: ``config``, the behaviour's ``learning:`` section, of the model the learner's
+    plugin entry names (a subclass declares it: ``config: PittConfig``); ``population (P,
+    M)`` command indices, ``fitness (P,)`` of the last evaluated generation, ``generation``
+    (-1 before the first), ``elapsed`` seconds of training so far.
     """
 
     name: ClassVar[str]
+    config: LearningConfig
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
     fuzzy_q: RuleStrengths | None = None
     #: How the hall of fame ranks candidates (see :class:`Selection`).
@@ -77,7 +82,14 @@ class Learner(ABC):
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         self.behaviour = behaviour
-        self.config = behaviour.learning
+        learning = behaviour.learning
+        if learning.learner != self.name:
+            raise LearnError(f"the {self.name} learner cannot learn a behaviour whose "
+                             f"learning section is the {learning.learner} learner's",
+                             hint=f"set learning.learner: {self.name}, or use make_learner")
+        # The section's model is chosen by 'learner' among the plugins' models, so it is
+        # the one this learner's entry names: the type a subclass declares for config.
+        self.config = learning
         self.controller = compile_behaviour(behaviour)
         self.rules = SparseRules(self.controller)
         self.env = env
@@ -146,9 +158,13 @@ class Learner(ABC):
         index, consequents, fitness = self.best()
         return self.generation, index, consequents, fitness, None
 
+    def elite_count(self) -> int:
+        """How many of a generation's best are its elites (at least 1); a GA's ``elites``."""
+        return 1
+
     def elite_candidates(self) -> list[Candidate]:
         """The last generation's elites (at least its best) as hall-of-fame candidates."""
-        count = max(1, self.config.elites) if self.population.shape[0] > 1 else 1
+        count = self.elite_count() if self.population.shape[0] > 1 else 1
         order = np.argsort(-self.fitness, kind="stable")[:count]
         found = [self.selection.candidate_for(self.population[i]) for i in order]
         return [c for c in found if c is not None]
