@@ -384,7 +384,8 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         marks[("rules", index)] = (rule.line, 1)
     data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command}
                      for rule in imported.rules]
-    # A rule check that names another rule names it by line, as the file does.
+    # A rule check that names another rule names it by line, as the file does. No rule is
+    # expanded as a don't-care (those were refused above), so index k is the file's k-th.
     return behaviour_from_data(data, SourceMap(file, marks),
                                rule_names=lambda index: imported.rules[index].named())
 
