@@ -27,6 +27,7 @@ from flctool.spec.learning import (
     keep_keys_read_by,
     readers_of,
 )
+from flctool.spec.load import read_behaviour_text
 from flctool.spec.located import source_of
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
@@ -81,16 +82,7 @@ def read_experiment_behaviour(file: str | Path, learners: Sequence[str],
     """Read the behaviour file ``file`` for an experiment comparing ``learners``, with
     ``overrides`` applied (keys and ``where`` as for :func:`flctool.runs.resolve_behaviour`).
     :class:`SpecError` lists every problem, each placed in the file or at its override."""
-    path = Path(file)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpecError([Problem((), "no such file", "check the path", file=str(path))],
-                        str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SpecError([Problem((), f"cannot read the file: {exc}", file=str(path))],
-                        str(path)) from None
-    data, source = read_yaml(text, str(path))
+    data, source = read_yaml(read_behaviour_text(file), str(file))
     return experiment_behaviour(data, source, learners, overrides, where)
 
 

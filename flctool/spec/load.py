@@ -40,16 +40,20 @@ from flctool.spec.yaml_source import SourceMap, read_yaml
 
 def load_behaviour(path: str | Path) -> Behaviour:
     """Read and validate a behaviour file; raises :class:`SpecError` listing every problem."""
+    return parse_behaviour(read_behaviour_text(path), str(path))
+
+
+def read_behaviour_text(path: str | Path) -> str:
+    """The text of a behaviour file; a missing or unreadable one is a :class:`SpecError`."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise SpecError([Problem((), "no such file", "check the path", file=str(path))],
                         str(path)) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SpecError([Problem((), f"cannot read the file: {exc}", file=str(path))],
                         str(path)) from None
-    return parse_behaviour(text, str(path))
 
 
 def parse_behaviour(text: str, file: str = "<string>") -> Behaviour:
