@@ -90,7 +90,8 @@ def children_cpu() -> float:
 def cpu(command: list[str], cwd: Path) -> float:
     """CPU seconds of one command run as a child."""
     before = children_cpu()
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, cwd=cwd)
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                   cwd=cwd)
     return children_cpu() - before
 
 
