@@ -159,19 +159,21 @@ class Trial:
 
 
 def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int] | None,
-              chooser: Chooser | None = None, td: TemporalDifference | None = None) -> Trial:
+              chooser: Chooser | None = None, td: TemporalDifference | None = None,
+              acted: set[int] | None = None) -> Trial:
     """Run one episode from ``seed`` on a batch-of-one ``env``.
 
     The commands come from the fixed ``consequents (M,)`` (pitt, hybrid) or, step by step, from
     ``chooser`` (fuzzy_q). With ``td``, every step updates the q table (eq. 4-9): trial after
     trial, never summed over simultaneous episodes. A terminal step does not bootstrap; a
-    truncated one does (the time limit is not part of the task).
+    truncated one does (the time limit is not part of the task). ``acted`` collects the rules
+    that fired in a state the controller acted on: only their commands shaped the episode.
     """
     if chooser is None:
         if consequents is None:
             raise ValueError("run_trial needs consequents or a chooser")
         if td is None and not env.votes:
-            return _fixed_trial(env, rules, seed, consequents)
+            return _fixed_trial(env, rules, seed, consequents, acted)
     if td is not None:
         td.reset_traces()
     # The B = 1 fast path of the adapter protocol: the same results as reset/step on arrays
@@ -183,6 +185,8 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
     ret = 0.0
     steps = 0
     while True:
+        if acted is not None:
+            acted.update(active)
         if chooser is not None:
             commands = chooser.choose(active)
         else:
@@ -206,7 +210,8 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
         active, alphas, phi = next_active, next_alphas, next_phi
 
 
-def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int]) -> Trial:
+def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int],
+                 acted: set[int] | None) -> Trial:
     """:func:`run_trial` with fixed consequents, no q update and eq. 3 (pitt's trials and
     every validation episode): the same operations with less bookkeeping per step."""
     # each rule's command singleton, so eq. 3's numerator needs no command list
@@ -216,6 +221,8 @@ def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list
     ret = 0.0
     steps = 0
     while True:
+        if acted is not None:
+            acted.update(active)
         numerator = 0.0
         for a, m in zip(alphas, active, strict=True):
             numerator += a * singletons[m]
