@@ -222,8 +222,8 @@ def lockstep(repeats: int) -> dict[str, Any]:
         together[:] = 0
         while running.any():
             for b in np.flatnonzero(running).tolist():
-                active, alphas, total = rules.activations(observations[b].tolist())
-                actions[b] = rules.crisp(alphas, [consequents[m] for m in active], total)
+                active, alphas, _ = rules.activations(observations[b].tolist())
+                actions[b] = rules.output(alphas, [consequents[m] for m in active])
             together[:] += running
             out = batch.step(actions)
             observations, running = out.observations, ~(out.terminated | out.truncated)

@@ -5,6 +5,11 @@ The public API::
     behaviour = flctool.load_behaviour("behaviours/ballchase-handmade.yaml")
     controller = flctool.compile_behaviour(behaviour)
     controller.output(states)   # (B, N) -> (B,), eq. 1-3
+    flctool.start_run(behaviour, {"seed": 3}, out="runs/first").train()
+    flctool.evaluate_behaviour(flctool.load_behaviour("runs/first/best.yaml")).rows()
+
+Every exception flctool raises on purpose is a :class:`FlcError` (:mod:`flctool.errors`, all
+exported here).
 
 The names below are loaded on first use (PEP 562 module ``__getattr__``), so that
 ``import flctool`` -- and with it ``flctool --version`` -- does not pay for numpy, numba and
@@ -27,9 +32,16 @@ if TYPE_CHECKING:
         InferenceError,
         LearnError,
         LinkError,
+        MissingDependencyError,
         NotDeployableError,
+        PluginWarning,
+        Problem,
+        ProtocolError,
+        RunDirError,
         SpecError,
+        UnknownNameError,
     )
+    from flctool.evaluation import evaluate_behaviour
     from flctool.spec import (
         Behaviour,
         behaviour_to_yaml,
@@ -37,6 +49,7 @@ if TYPE_CHECKING:
         parse_behaviour,
     )
     from flctool.spec.rules import with_rules
+    from flctool.training import resume_run, start_run
 
 # public name -> the module that defines it
 _LAZY = {
@@ -48,13 +61,22 @@ _LAZY = {
     "InferenceError": "flctool.errors",
     "LearnError": "flctool.errors",
     "LinkError": "flctool.errors",
+    "MissingDependencyError": "flctool.errors",
+    "NotDeployableError": "flctool.errors",
+    "PluginWarning": "flctool.errors",
+    "Problem": "flctool.errors",
+    "ProtocolError": "flctool.errors",
+    "RunDirError": "flctool.errors",
     "SpecError": "flctool.errors",
+    "UnknownNameError": "flctool.errors",
     "behaviour_to_yaml": "flctool.spec",
     "compile_behaviour": "flctool.compile",
+    "evaluate_behaviour": "flctool.evaluation",
     "load_behaviour": "flctool.spec",
     "parse_behaviour": "flctool.spec",
+    "resume_run": "flctool.training",
+    "start_run": "flctool.training",
     "with_rules": "flctool.spec.rules",
-    "NotDeployableError": "flctool.errors",
 }
 
 __all__ = [
@@ -66,13 +88,22 @@ __all__ = [
     "InferenceError",
     "LearnError",
     "LinkError",
+    "MissingDependencyError",
     "NotDeployableError",
+    "PluginWarning",
+    "Problem",
+    "ProtocolError",
+    "RunDirError",
     "SpecError",
+    "UnknownNameError",
     "__version__",
     "behaviour_to_yaml",
     "compile_behaviour",
+    "evaluate_behaviour",
     "load_behaviour",
     "parse_behaviour",
+    "resume_run",
+    "start_run",
     "with_rules",
 ]
 

@@ -1,7 +1,22 @@
-"""One exception tree for flctool.
+"""One exception tree for flctool: every exception (and warning) a user can see is defined here
+and exported from :mod:`flctool`.
 
 Every message says what is wrong, where (file, line, field path) and how to fix it.
 The library raises these; only the CLI turns them into exit codes and coloured text.
+
+    FlcError
+      SpecError            an input file (or a --set) is invalid: located problems
+      InferenceError       inference asked something it cannot answer
+      EnvError             an environment adapter could not be built or misbehaved
+        LinkError          the connection to a robot failed
+      LearnError           a learner could not start, resume or finish
+      RunDirError          a run directory is missing, damaged or does not match
+      ExportError          a controller cannot be written or read in a format
+      NotDeployableError   rules are missing where a complete controller is needed
+      UnknownNameError     no learner, adapter or format of that name
+      MissingDependencyError  an optional package is not installed
+    ProtocolError (ValueError)   a robot-link line that is not a protocol message
+    PluginWarning (UserWarning)  an installed plugin is skipped
 """
 
 from __future__ import annotations
@@ -106,6 +121,20 @@ class ExportError(FlcError):
 class NotDeployableError(FlcError):
     """A behaviour lacks rule consequents where a complete controller is needed (running,
     evaluating or exporting it); raised by :func:`flctool.spec.require_deployable`."""
+
+
+class UnknownNameError(FlcError):
+    """A name was looked up that no one registered (a learner, an adapter, a format); the
+    message says which names are known and the closest one."""
+
+
+class ProtocolError(ValueError):
+    """A line from a robot link that is not a message of the protocol (not JSON, not an
+    object, no type). The robot link turns it into a :class:`LinkError` naming the robot."""
+
+
+class PluginWarning(UserWarning):
+    """An installed plugin that cannot be used (it is skipped)."""
 
 
 class MissingDependencyError(FlcError):

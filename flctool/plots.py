@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
+from flctool.compile.membership import trapezoid
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
 from flctool.runs import Run
 from flctool.spec import Behaviour
@@ -230,9 +231,9 @@ def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
         variable = behaviour.inputs[name]
         low, high = variable.range
         for set_name, quad in variable.sets.items():
-            pa, pb, pc, pd = (float(v) for v in quad)
-            xs = np.clip([pa, pb, pc, pd], low, high)
-            axes.plot(xs, [0.0 if pa < pb else 1.0, 1, 1, 0.0 if pc < pd else 1.0],
+            # the membership is linear between the corners: drawn through them
+            xs = np.clip(np.array(quad, dtype=np.float64), low, high)
+            axes.plot(xs, trapezoid(xs, np.array([quad], dtype=np.float64))[:, 0],
                       label=set_name)
         axes.set_xlim(low, high)
         axes.set_ylim(-0.05, 1.1)
@@ -444,3 +445,102 @@ def plot_controller(behaviour: Behaviour, folder: Path, seed: int, title: str) -
     written += plot_trajectory(trace, folder / "trajectory.png",
                                f"{title}: episode seed {seed}", pitch_of(behaviour))
     return written
+
+
+# -- deciding what to draw from what was given ------------------------------------------------
+#: One drawn figure: its files (PNG and SVG) and a note for the person (e.g. which rule).
+Drawn = tuple[list[Path], str]
+
+
+def default_folder(sources: Sequence[Path]) -> Path:
+    """Where the figures of ``sources`` go unless told: the folder of a trace, else the
+    experiment or first run directory. A source that does not exist is an error."""
+    _check_exist(sources)
+    return sources[0].parent if sources[0].is_file() else sources[0]
+
+
+def _check_exist(sources: Sequence[Path]) -> None:
+    if not sources:
+        raise FlcError("nothing to plot", hint="give an experiment, run directories, or one "
+                       "trace CSV")
+    for source in sources:
+        if not source.exists():
+            raise FlcError(f"{source}: no such file or directory",
+                           hint="give an experiment, run directories, or one trace CSV")
+
+
+def plot_sources(sources: Sequence[Path], folder: Path, rule: int | None = None
+                 ) -> list[Drawn]:
+    """Draw into ``folder`` every figure ``sources`` call for: one trace CSV (its
+    trajectory); one experiment directory (learning curves, held-out success, one rule's
+    strengths, the best controller); or run directories (their learning curves overlaid and,
+    for one run, its strengths and best controller). ``rule`` picks the rule whose strengths
+    are drawn (default: the one whose strengths moved most)."""
+    from flctool.experiment import is_experiment
+    from flctool.runs import open_run
+
+    _check_exist(sources)
+    if len(sources) == 1 and sources[0].is_file():
+        trace = sources[0]
+        return [(plot_trajectory(read_trace(trace), folder / f"{trace.stem}.png",
+                                 f"trajectory: {trace.name}"), "")]
+    if any(s.is_file() for s in sources):
+        raise FlcError("give run directories, or a single trace CSV",
+                       hint="plot traces one at a time")
+    if any(is_experiment(s) for s in sources):
+        if len(sources) > 1:
+            raise FlcError("give one experiment directory at a time",
+                           hint="plot each experiment on its own")
+        return _plot_experiment(sources[0], folder, rule)
+    runs = [open_run(s) for s in sources]
+    # the checkpoints say whether the learner kept rule strengths (hybrid, fuzzy_q)
+    strengths = len(runs) == 1 and "q" in (runs[0].last_checkpoint() or {})
+    if rule is not None and not strengths:
+        raise FlcError("--rule picks the rule of one run whose learner keeps strengths "
+                       "(hybrid, fuzzy_q)", hint="plot that run on its own")
+    drawn: list[Drawn] = [(plot_fitness(runs, folder / "fitness.png"), "")]
+    if strengths:
+        drawn.append(_strengths(runs[0], folder, rule))
+    if len(runs) == 1 and (runs[0].path / "best.yaml").is_file():
+        drawn.append(_best(runs[0].path / "best.yaml", folder,
+                           f"{runs[0].path.name} best.yaml"))
+    return drawn
+
+
+def _strengths(run: Run, folder: Path, rule: int | None) -> Drawn:
+    plotted = plot_strengths(run, folder / "strengths.png", rule)
+    return [folder / "strengths.png", folder / "strengths.svg"], f" (rule {plotted})"
+
+
+def _best(best: Path, folder: Path, title: str) -> Drawn:
+    from flctool.rollout import evaluation_seeds
+    from flctool.spec import load_behaviour
+
+    # the first episode of 'flctool evaluate --episodes 1': never a training start
+    seed = int(evaluation_seeds(0, 1)[0])
+    return plot_controller(load_behaviour(best), folder, seed, title), ""
+
+
+def _plot_experiment(path: Path, folder: Path, rule: int | None) -> list[Drawn]:
+    from flctool.experiment import open_experiment, read_summary
+    from flctool.runs import open_run
+
+    experiment = open_experiment(path)
+    summary = read_summary(path)
+    drawn: list[Drawn] = [
+        (plot_experiment_learning(summary, folder / "learning.png"), ""),
+        (plot_heldout(summary, folder / "heldout.png"), "")]
+    # Fig. 7 from the first seed of a learner that keeps strengths (the hybrid first)
+    keeping = [n for n in ("hybrid", "fuzzy_q") if n in experiment.plan.learners]
+    if keeping:
+        drawn.append(_strengths(open_run(experiment.runs_dir / f"{keeping[0]}-seed0"),
+                                folder, rule))
+    elif rule is not None:
+        raise FlcError("--rule needs a learner that keeps strengths (hybrid, fuzzy_q)",
+                       hint="leave out --rule")
+    best = summary["best_run"]
+    name = f"{best['learner']}-seed{best['seed']}"
+    drawn.append(_best(experiment.runs_dir / name / "best.yaml", folder,
+                       f"best controller ({name}, held-out success "
+                       f"{best['success_rate']:.3f})"))
+    return drawn

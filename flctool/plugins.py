@@ -24,6 +24,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from flctool.errors import PluginWarning
 from flctool.registry import Registry
 
 GROUPS = {"learner": "flctool.learners", "environment": "flctool.environments",
@@ -34,9 +35,9 @@ GROUPS = {"learner": "flctool.learners", "environment": "flctool.environments",
 class Plugin:
     """One learner, environment adapter or export format.
 
-    ``config`` is the model of the section the plugin reads: for a learner
-    :class:`~flctool.spec.learning.LearningConfig` itself, or a subclass adding the learner's
-    own keys whose ``learner`` is ``Literal[name]``; for an adapter a subclass of
+    ``config`` is the model of the section the plugin reads: for a learner a subclass of
+    :class:`~flctool.spec.learning.LearningConfig` adding the learner's own keys whose
+    ``learner`` is ``Literal[name]``; for an adapter a subclass of
     :class:`~flctool.spec.environment.AdapterConfig` whose ``adapter`` is ``Literal[name]``;
     ``None`` for an export format. ``config`` may be given lazily as a ``"module:Class"``
     string too (the built-ins are, so that this module imports no model);
@@ -65,18 +66,15 @@ def load_attribute(target: str) -> Any:
     return getattr(importlib.import_module(module_name), attr)
 
 
-class PluginWarning(UserWarning):
-    """An installed plugin that cannot be used (it is skipped)."""
-
-
-_LEARNING = "flctool.spec.learning:LearningConfig"
+_LEARNING = "flctool.spec.learning"
 _ENVIRONMENT = "flctool.spec.environment"
 
 BUILTIN: dict[str, tuple[Plugin, ...]] = {
     "learner": (
-        Plugin("pitt", "flctool.learners.pitt:PittLearner", _LEARNING),
-        Plugin("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner", _LEARNING),
-        Plugin("hybrid", "flctool.learners.hybrid:HybridLearner", _LEARNING),
+        Plugin("pitt", "flctool.learners.pitt:PittLearner", f"{_LEARNING}:PittConfig"),
+        Plugin("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner",
+               f"{_LEARNING}:FuzzyQConfig"),
+        Plugin("hybrid", "flctool.learners.hybrid:HybridLearner", f"{_LEARNING}:HybridConfig"),
     ),
     "environment": (
         Plugin("ballchase-sim", "flctool.envs.ballchase:BallchaseSim",
@@ -106,7 +104,13 @@ def plugins(kind: str) -> tuple[Plugin, ...]:
     :class:`PluginWarning` saying which package to fix or uninstall."""
     found = list(BUILTIN[kind])
     taken = {plugin.name for plugin in found}
-    for point in sorted(entry_points(group=GROUPS[kind]), key=lambda p: p.name):
+    points = sorted(entry_points(group=GROUPS[kind]), key=lambda p: p.name)
+    if points and kind != "exporter":
+        # An installed learner's or adapter's config extends a model of flctool.spec, whose
+        # behaviour model is built from these lists: built first, so that loading the plugin
+        # does not come back here halfway through (and see a half-imported plugin).
+        importlib.import_module("flctool.spec.models")
+    for point in points:
         where = f"entry point '{point.name}' = '{point.value}' in group {GROUPS[kind]}"
         try:
             plugin = point.load()
@@ -151,8 +155,6 @@ def _problem(kind: str, plugin: object, taken: set[str]) -> str | None:
         return "an adapter's config must extend flctool.spec.environment.AdapterConfig"
     if kind == "learner" and not issubclass(config, LearningConfig):
         return "a learner's config must extend flctool.spec.learning.LearningConfig"
-    if kind == "learner" and config is LearningConfig:
-        return None  # the common keys alone, as the built-in learners read them
     tag = "learner" if kind == "learner" else "adapter"
     field = config.model_fields.get(tag)
     if field is None or getattr(field.annotation, "__args__", None) != (plugin.name,):

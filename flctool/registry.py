@@ -11,19 +11,17 @@ import importlib
 from collections.abc import Iterator
 from typing import Generic, TypeVar
 
-from flctool.errors import FlcError
+from flctool.errors import FlcError, UnknownNameError
 
 T = TypeVar("T")
+
+__all__ = ["Registry", "UnknownNameError", "did_you_mean"]
 
 
 def did_you_mean(name: str, choices: list[str] | tuple[str, ...]) -> str:
     """``" Did you mean 'x'?"`` for the closest choice, or ``""`` when nothing is close."""
     close = difflib.get_close_matches(name, list(choices), n=1, cutoff=0.5)
     return f" Did you mean '{close[0]}'?" if close else ""
-
-
-class UnknownNameError(FlcError):
-    """A name was looked up that no one registered."""
 
 
 class Registry(Generic[T]):

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from flctool.compile import Controller
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray
-from flctool.errors import EnvError, NotDeployableError
+from flctool.errors import EnvError
 
 Z95 = 1.959963984540054  # two-sided 95 % quantile of the standard normal
 
@@ -150,9 +150,7 @@ def evaluation_seeds(seed: int, episodes: int) -> NDArray[np.int64]:
 def _controller(controller: Controller, consequents: NDArray[np.integer] | None) -> Controller:
     if consequents is not None:
         return controller.with_consequents(np.asarray(consequents, dtype=np.intp))
-    if controller.consequents is None:
-        raise NotDeployableError("this controller has no rule consequents to evaluate",
-                       hint="pass consequents, or evaluate a deployable behaviour")
+    controller.require_consequents()  # the controller's one "not deployable" check
     return controller
 
 

@@ -36,7 +36,6 @@ import errno
 import fcntl
 import io
 import json
-import math
 import os
 import re
 import time
@@ -50,12 +49,11 @@ from typing import Any
 import numpy as np
 
 from flctool import __version__
-from flctool.atomic import remove_stale_temporaries, write_text_atomic
+from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
 from flctool.envs.base import BatchEnv
-from flctool.errors import FlcError, LearnError, RunDirError, SpecError
+from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
-from flctool.learners.base import population_problem
-from flctool.learners.selection import Candidate
+from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
 from flctool.spec import (
     Behaviour,
     behaviour_from_data,
@@ -63,8 +61,9 @@ from flctool.spec import (
     behaviour_to_yaml,
     load_behaviour,
 )
+from flctool.spec.learning import keep_keys_read_by
+from flctool.spec.located import source_of
 from flctool.spec.rules import with_rules
-from flctool.spec.yaml_source import SourceMap
 
 RUN_FORMAT = 1
 BEHAVIOUR_FILE = "behaviour.yaml"
@@ -77,12 +76,7 @@ LOCK_FILE = "run.lock"
 #: A checkpoint larger than this is not read (the largest run flctool accepts, population x
 #: rules = 20 million consequents, writes about 200 MB).
 MAX_CHECKPOINT_BYTES = 1 << 30
-#: Random generator states hold 128-bit integers (PCG64); anything larger is tampering.
-_MAX_RNG_INT = 1 << 128
 _CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
-# What every checkpoint holds (learners with rule strengths add "q" and "traces").
-_CHECKPOINT_KEYS = ("learner", "generation", "elapsed", "population", "fitness", "rng",
-                    "metrics")
 
 
 # -- resolving a behaviour for a run ------------------------------------------------------
@@ -93,26 +87,46 @@ def override_path(key: str) -> tuple[str, ...]:
     return path if path[0] in ("learning", "environment") else ("learning", *path)
 
 
+def override_label(where: str | Mapping[str, str], key: str) -> str:
+    """Where the override ``key`` was given: ``where`` names the place of every override
+    (``overrides (q.alpha)``), or each key's own (``command line (--set q.alpha)``)."""
+    if isinstance(where, str):
+        return f"{where} ({key})"
+    return where.get(key, f"overrides ({key})")
+
+
 def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
-                      source: str = "command line") -> Behaviour:
+                      where: str | Mapping[str, str] = "overrides") -> Behaviour:
     """The behaviour with ``overrides`` applied and validated like the file itself.
 
     Keys are dotted paths under ``learning:`` (``seed``, ``q.temperature``), or start with
-    ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``.
+    ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``; one
+    about an overridden field is placed where the override was given -- ``where``, a label
+    for all of them (``"overrides"`` reads ``overrides (q.alpha)``) or one per key (the
+    command line says ``command line (--set q.alpha)``) -- and any other at its line in the
+    behaviour's file. Overriding ``learner`` drops the keys of the behaviour's learner that
+    the new one does not read; keys the overrides give must be the new learner's.
     """
     data = behaviour_to_data(behaviour)
+    learner = next((value for key, value in overrides.items()
+                    if override_path(key) == ("learning", "learner")), None)
+    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
+        data["learning"] = keep_keys_read_by(data["learning"], learner)
+    given: dict[tuple[PathPart, ...], str] = {}
     for key, value in overrides.items():
         path = list(override_path(key))
         node = data
         for depth, part in enumerate(path[:-1]):
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
-                raise SpecError([SourceMap(source).problem(
+                raise SpecError([Problem(
                     tuple(path[: depth + 1]), f"'{'.'.join(path[: depth + 1])}' is a value, "
-                    f"not a section, so '{key}' cannot be set", "set the value itself")], source)
+                    f"not a section, so '{key}' cannot be set", "set the value itself",
+                    file=override_label(where, key))], override_label(where, key))
             node = child
         node[path[-1]] = value
-    return behaviour_from_data(data, SourceMap(source))
+        given[tuple(path)] = override_label(where, key)
+    return behaviour_from_data(data, source_of(behaviour).with_overrides(given))
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -257,9 +271,14 @@ class Run:
     def checkpoint_path(self, generation: int) -> Path:
         return self.path / CHECKPOINT_DIR / f"gen-{generation:05d}.json"
 
-    def checkpoint(self, generation: int) -> dict[str, Any]:
-        """The checkpoint of ``generation``, checked to be whole: :class:`RunDirError` naming
-        the file if it is missing or damaged."""
+    def checkpoint(self, generation: int, strengths: bool | None = None) -> dict[str, Any]:
+        """The checkpoint of ``generation``, checked to be whole (by
+        :func:`~flctool.learners.checkpoint.read_checkpoint`; ``strengths``: it must hold a
+        q table): :class:`RunDirError` naming the file if it is missing or damaged."""
+        return self._read_checkpoint(generation, strengths)[0]
+
+    def _read_checkpoint(self, generation: int, strengths: bool | None = None,
+                         ) -> tuple[dict[str, Any], Checkpoint]:
         path = self.checkpoint_path(generation)
         if path.is_symlink():
             raise self._damaged(generation, "the checkpoint is a symbolic link; flctool reads "
@@ -269,8 +288,6 @@ class Run:
             if size > MAX_CHECKPOINT_BYTES:
                 raise self._damaged(generation, f"the checkpoint has {size:,} bytes, more than "
                                     f"any run writes ({MAX_CHECKPOINT_BYTES:,})")
-            # NaN may stand in a metrics column (no validation that generation); where it
-            # must not, _checkpoint_problem checks.
             data = json.loads(path.read_text(encoding="utf-8"))
         except FileNotFoundError:
             raise RunDirError(f"{self.path}: no checkpoint of generation {generation}",
@@ -280,49 +297,15 @@ class Run:
         except RecursionError:
             raise self._damaged(generation, "the checkpoint cannot be read (its JSON is "
                                 "nested too deep)") from None
-        problem = self._checkpoint_problem(data, generation)
-        if problem is not None:
-            raise self._damaged(generation, f"the checkpoint {problem}")
-        checked: dict[str, Any] = data
-        return checked
-
-    def _checkpoint_problem(self, data: Any, generation: int) -> str | None:
-        if not isinstance(data, dict):
-            return f"holds a JSON {type(data).__name__}, not an object"
-        missing = [key for key in _CHECKPOINT_KEYS if key not in data]
-        if missing:
-            return f"has no {', '.join(repr(key) for key in missing)}"
-        if data["generation"] != generation:
-            return f"is of generation {data['generation']!r}, not {generation}"
+        behaviour = self.behaviour
         try:
-            metrics = GenerationMetrics.from_row(data["metrics"])
-            population = np.array(data["population"], dtype=np.intp)
-            fitness = np.array(data["fitness"], dtype=np.float64)
-        except (KeyError, TypeError, ValueError) as exc:
-            return f"is damaged ({exc!r})"
-        if metrics.generation != generation:
-            return f"has the metrics of generation {metrics.generation}, not {generation}"
-        tables = [("fitness", fitness)]
-        for key in ("q", "traces"):
-            if key in data:
-                try:
-                    tables.append((key, np.array(data[key], dtype=np.float64)))
-                except (TypeError, ValueError) as exc:
-                    return f"is damaged ({exc!r})"
-        for key, table in tables:
-            if not np.isfinite(table).all():
-                return f"is damaged: its '{key}' holds NaN or infinity"
-        if not (isinstance(data["elapsed"], (int, float)) and math.isfinite(data["elapsed"])):
-            return "is damaged: its 'elapsed' is not a finite number"
-        if population.ndim >= 1 and population.shape[0] > self.behaviour.learning.population:
-            return (f"holds {population.shape[0]:,} individuals, more than the run's population "
-                    f"of {self.behaviour.learning.population}")
-        rng_problem = _rng_problem(data["rng"])
-        if rng_problem is not None:
-            return f"is damaged: {rng_problem}"
-        problem = population_problem(population, fitness, self.behaviour.rule_count,
-                                     len(self.behaviour.output.commands))
-        return None if problem is None else f"is damaged: its {problem}"
+            checkpoint = read_checkpoint(data, Expected(
+                behaviour.rule_count, len(behaviour.output.commands), generation=generation,
+                max_population=behaviour.learning.population, strengths=strengths,
+                metrics=True))
+        except LearnError as error:
+            raise self._damaged(generation, error.args[0]) from None
+        return data, checkpoint
 
     # -- the lock ------------------------------------------------------------------------
     @contextmanager
@@ -414,9 +397,8 @@ class Run:
         if generation not in done:
             raise RunDirError(f"{self.path}: no generation {generation} in this run",
                               hint=self._generations_hint())
-        state = self.checkpoint(generation)
-        population = np.array(state["population"], dtype=np.intp)
-        fitness = np.array(state["fitness"], dtype=np.float64)
+        checkpoint = self._read_checkpoint(generation)[1]
+        population, fitness = checkpoint.population, checkpoint.fitness
         if individual is None:
             individual = int(np.argmax(fitness))
         elif not 0 <= individual < len(population):
@@ -429,17 +411,11 @@ class Run:
 
     def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
-        record = self.checkpoint(generation).get("selection")
-        best = record.get("best") if isinstance(record, dict) else None
-        if best is None:
+        selection = self._read_checkpoint(generation)[1].selection
+        candidate = selection.best if selection is not None else None
+        if candidate is None:
             return None
-        try:
-            candidate = Candidate.from_dict(best)
-            consequents = candidate.consequents
-            behaviour = with_rules(self.behaviour, consequents)
-        except (KeyError, TypeError, ValueError, IndexError, FlcError) as exc:
-            raise self._damaged(generation, f"the checkpoint's selection record is damaged "
-                                f"({exc!r})") from None
+        behaviour = with_rules(self.behaviour, candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
                                       candidate.fitness, validation)
@@ -529,41 +505,10 @@ class Run:
                               f"--generations {generations} would not add any",
                               hint=f"give more than {done[-1] + 1}")
         behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
-                                      "--generations")
+                                      {"generations": "the new generation budget"})
         with self.lock():
             _write(self.path, self.path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
         self.behaviour = behaviour
-
-
-def _rng_problem(states: Any) -> str | None:
-    """What is wrong with the random generator states of a checkpoint, or None: a bounded
-    structure of names and integers in [0, 2^128)."""
-    if not isinstance(states, dict) or len(states) > 16:
-        return "its random generator states are not a small object"
-    pending: list[tuple[Any, int]] = [(states, 0)]
-    while pending:
-        value, depth = pending.pop()
-        if depth > 4:
-            return "its random generator states are nested too deep"
-        if isinstance(value, dict):
-            if len(value) > 16:
-                return "its random generator states hold too many fields"
-            pending += [(v, depth + 1) for v in value.values()]
-        elif isinstance(value, (bool, str)):
-            continue
-        elif isinstance(value, int):
-            if not 0 <= value < _MAX_RNG_INT:
-                return "its random generator states hold an integer outside [0, 2^128)"
-        else:
-            return f"its random generator states hold a {type(value).__name__}"
-    return None
-
-
-def _shape(value: Any) -> tuple[int, ...] | None:
-    try:
-        return tuple(np.shape(value))
-    except ValueError:  # a ragged list
-        return None
 
 
 def _behaviour_text(behaviour: Behaviour) -> str:
@@ -578,11 +523,7 @@ SNAPSHOT_SECONDS = 1.0
 
 def _fsync(path: Path) -> None:
     try:
-        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
-        try:
-            os.fsync(descriptor)
-        finally:
-            os.close(descriptor)
+        sync_file(path, follow_symlinks=False)
     except OSError as exc:
         raise _write_error(path, exc) from None
 
@@ -614,16 +555,11 @@ class RunRecorder(Callback):
         done = [g for g in run.checkpoint_generations() if g <= learner.generation]
         # Rebuild the tables from the checkpoints: a kill may have left rows of a generation
         # whose checkpoint never made it, or missed rows whose checkpoint did.
-        states = [run.checkpoint(g) for g in done]
+        states = [run.checkpoint(g, strengths=learner.uses_strengths) for g in done]
         # Derived from the checkpoints (and rebuilt from them here), so never fsync'd.
         _write(run.path, run.path / METRICS_FILE, _metrics_text(
             GenerationMetrics.from_row(s["metrics"]) for s in states), durable=False)
         if learner.uses_strengths:
-            shape = (learner.controller.n_rules, learner.controller.n_commands)
-            for state in states:
-                if _shape(state.get("q")) != shape:
-                    raise run._damaged(state["generation"], f"the checkpoint has no q table of "
-                                       f"shape (rules, commands) = {shape}")
             _write(run.path, run.path / STRENGTHS_FILE, _strengths_text(
                 ((s["generation"], s["q"]) for s in states),
                 learner.controller.command_names), durable=False)

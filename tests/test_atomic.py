@@ -83,3 +83,50 @@ def test_only_durable_writes_wait_for_the_disk(tmp_path: Path,
     assert synced == [] and (tmp_path / "quick.txt").read_text() == "a"
     write_text_atomic(tmp_path / "durable.txt", "b")
     assert len(synced) == 1 and (tmp_path / "durable.txt").read_text() == "b"
+
+
+def test_streamed_output_replaces_the_file_only_when_complete(tmp_path: Path) -> None:
+    from flctool.atomic import atomic_text_writer
+
+    target = tmp_path / "out.csv"
+    target.write_text("old\n")
+    with pytest.raises(RuntimeError), atomic_text_writer(target) as handle:
+        handle.write("half")
+        raise RuntimeError("stopped mid-write")
+    assert target.read_text() == "old\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv"]  # no temporary left
+    with atomic_text_writer(target) as handle:
+        handle.write("a,b\n1,2\n")
+    assert target.read_bytes() == b"a,b\n1,2\n"
+
+
+def test_several_files_are_replaced_together_or_not_at_all(tmp_path: Path,
+                                                           monkeypatch: pytest.MonkeyPatch,
+                                                           ) -> None:
+    from flctool.atomic import replace_all
+
+    first, second = tmp_path / "a.h", tmp_path / "a.c"
+    first.write_text("old h")
+    with pytest.raises(IsADirectoryError):
+        replace_all({first: b"new h", tmp_path: b"x"})
+    assert first.read_text() == "old h" and sorted(p.name for p in tmp_path.iterdir()) == ["a.h"]
+    synced: list[int] = []
+    real_fsync = os.fsync
+    monkeypatch.setattr(os, "fsync", lambda fd: synced.append(fd) or real_fsync(fd))
+    replace_all({first: b"new h", second: b"new c"}, durable=False)
+    assert synced == [] and first.read_text() == "new h" and second.read_text() == "new c"
+    replace_all({first: b"h", second: b"c"})
+    assert len(synced) == 2
+
+
+def test_a_deferred_sync_refuses_a_link_when_asked(tmp_path: Path) -> None:
+    from flctool.atomic import sync_file
+
+    real = tmp_path / "real.json"
+    write_text_atomic(real, "{}", durable=False)
+    sync_file(real, follow_symlinks=False)
+    link = tmp_path / "link.json"
+    link.symlink_to(real)
+    sync_file(link)
+    with pytest.raises(OSError):
+        sync_file(link, follow_symlinks=False)

@@ -288,6 +288,8 @@ def test_behaviour_reference_has_every_key_of_every_object() -> None:
     for name in defs:
         assert f"## {name} {{ #def-{name.lower()} }}" in page
     assert "inputs.<name>" in page and "`environment`" in page
+    for section, key in (("learning", "learner"), ("environment", "adapter")):
+        assert f"`{section}` is chosen by its `{key}` key:" in page
 
 
 def test_cli_reference_has_every_command_and_option() -> None:
@@ -319,6 +321,8 @@ def test_learners_reference_cites_an_equation_for_every_learning_key() -> None:
     assert not stale, f"EQUATIONS names keys the schema no longer has: {stale}"
     page = generator.learners_reference(schema)
     assert all(f"| `{key}` |" in page for key in keys)
+    # who reads a key comes from the learners' models
+    assert "| pitt |" in page and "| fuzzy_q, hybrid |" in page and "| all |" in page
 
 
 def test_site_nav_names_every_page() -> None:

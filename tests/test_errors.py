@@ -37,3 +37,36 @@ def test_the_tree_and_the_install_hint() -> None:
     error = MissingDependencyError("gymnasium", "gym", "The gymnasium adapter")
     assert str(error) == ("The gymnasium adapter needs the optional package 'gymnasium', which "
                           "is not installed (fix: pip install 'flctool[gym]')")
+
+
+def test_every_exception_and_warning_is_exported_from_flctool() -> None:
+    import inspect
+
+    import flctool
+    from flctool import errors
+
+    defined = {name for name, value in vars(errors).items()
+               if inspect.isclass(value) and issubclass(value, (Exception, Warning))}
+    assert defined and defined <= set(flctool.__all__)
+    for name in defined:
+        assert getattr(flctool, name) is getattr(errors, name)
+
+
+def test_no_other_module_defines_a_public_exception() -> None:
+    import ast
+    from pathlib import Path
+
+    import flctool
+
+    root = Path(flctool.__file__).parent
+    found = []
+    for path in root.rglob("*.py"):
+        if path.name == "errors.py" and path.parent == root:
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_") and any(
+                    isinstance(base, ast.Name) and base.id.endswith(("Error", "Exception",
+                                                                     "Warning"))
+                    for base in node.bases):
+                found.append(f"{path.relative_to(root)}:{node.name}")
+    assert found == [], "define exceptions in flctool/errors.py"

@@ -13,12 +13,14 @@ from flctool import load_behaviour
 from flctool.cli import app
 from flctool.errors import FlcError, MissingDependencyError, RunDirError, SpecError
 from flctool.plots import (
+    default_folder,
     most_contested_rule,
     outcome,
     plot_controller,
     plot_fitness,
     plot_memberships,
     plot_rule_table,
+    plot_sources,
     plot_strengths,
     plot_surface,
     plot_trajectory,
@@ -119,6 +121,29 @@ def test_plot_command(tmp_path: Path) -> None:
     result = runner.invoke(app, ["plot", str(pitt.path), "--rule", "3"])
     assert result.exit_code == 1
     assert "--rule picks the rule of one run" in result.output
+
+
+def test_plot_sources_decides_the_figures_from_python(tmp_path: Path) -> None:
+    hybrid = _run(tmp_path, "hybrid", "hybrid")
+    pitt = _run(tmp_path, "pitt", "pitt")
+    assert default_folder([hybrid.path, pitt.path]) == hybrid.path
+    one = tmp_path / "one"
+    one.mkdir()
+    drawn = plot_sources([hybrid.path], one, rule=2)
+    assert drawn[0] == ([one / "fitness.png", one / "fitness.svg"], "")
+    assert drawn[1] == ([one / "strengths.png", one / "strengths.svg"], " (rule 2)")
+    assert {path.stem for paths, _ in drawn[2:] for path in paths} >= {
+        "memberships", "rules", "surface", "trajectory"}
+    assert all(path.is_file() for paths, _ in drawn for path in paths)
+    both = tmp_path / "both"
+    both.mkdir()
+    assert [note for _, note in plot_sources([hybrid.path, pitt.path], both)] == [""]
+    with pytest.raises(FlcError, match="--rule picks the rule of one run"):
+        plot_sources([pitt.path], both, rule=3)
+    with pytest.raises(FlcError, match="no such file or directory"):
+        default_folder([tmp_path / "gone"])
+    with pytest.raises(FlcError, match="give run directories, or a single trace CSV"):
+        plot_sources([hybrid.path, hybrid.path / "best.yaml"], both)
 
 
 def test_the_fitness_band_stays_inside_the_possible_range(tmp_path: Path) -> None:

@@ -77,6 +77,9 @@ def test_registries_hold_exactly_the_plugins() -> None:
     (Plugin("mine", "x:Y", "flctool.spec.base:Section"), "must extend"),
     (Plugin("mine", "x:Y", type("Mine", (LearningConfig,), {})),
      "must declare learner: Literal['mine']"),
+    (Plugin("mine", "x:Y", LearningConfig), "must declare learner: Literal['mine']"),
+    (Plugin("mine", "x:Y", "flctool.spec.learning:PittConfig"),
+     "must declare learner: Literal['mine']"),
 ])
 def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem: str) -> None:
     found = _problem("learner", plugin, {"pitt"})
@@ -111,6 +114,21 @@ def test_a_plugins_own_keys_are_checked_and_located(tmp_path: Path) -> None:
         result.stderr)
     assert ("demo.yaml:18:3: environment.max_steps: input should be greater than or equal to 1"
             in result.stderr)
+
+
+def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
+        tmp_path: Path) -> None:
+    (tmp_path / "demo.yaml").write_text(DEMO.replace("  keep: 2", "  crossover: 0.3"))
+    result = _flctool(tmp_path, "validate", "demo.yaml")
+    assert result.returncode == 1
+    assert ("demo.yaml:12:3: learning.crossover: 'crossover' is read by the pitt and hybrid "
+            "learners, not by random_search") in " ".join(result.stderr.split())
+    (tmp_path / "pitt.yaml").write_text(DEMO.replace("learner: random_search\n  keep: 2",
+                                                     "learner: pitt\n  mutation: 0.2"))
+    switched = _flctool(tmp_path, "learn", "pitt.yaml", "--learner", "random_search",
+                        "--out", "run", "--json")
+    assert switched.returncode == 0, switched.stderr
+    assert "keep: 1" in (tmp_path / "run" / "behaviour.yaml").read_text()
 
 
 def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.errors import RunDirError, SpecError
@@ -143,6 +144,43 @@ def test_resume_ends_where_an_uninterrupted_run_ends(tmp_path: Path, learner: st
     for state in (a, b):
         state.pop("elapsed"), state["metrics"].pop("wall_time")
     assert a == b
+
+
+#: What versions with one flat ``learning:`` model wrote for the keys a learner does not read.
+EARLIER_DEFAULTS = {"crossover": 0.2, "mutation": 0.1, "pitt_crossover": "uniform",
+                    "elites": 1, "common_starts": False,
+                    "q": {"alpha": 0.1, "gamma": 0.9, "lambda": 0.7, "temperature": 0.15,
+                          "initial": 0.0},
+                    "exploration": {"policy": "boltzmann", "epsilon": 0.1, "decay": 1.0,
+                                    "minimum": 0.0}}
+
+
+def as_an_earlier_version_wrote_it(path: Path) -> None:
+    """Rewrite the behaviour file ``path`` with every learning key of every learner."""
+    text = path.read_text(encoding="utf-8")
+    header = "".join(line + "\n" for line in text.splitlines() if line.startswith("#"))
+    data = yaml.safe_load(text)
+    data["learning"] = {**EARLIER_DEFAULTS, **data["learning"]}
+    path.write_text(header + yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+
+
+@pytest.mark.parametrize("learner", ["pitt", "fuzzy_q", "hybrid"])
+def test_a_run_an_earlier_version_recorded_still_resumes(tmp_path: Path, learner: str) -> None:
+    behaviour = ballchase(learner=learner, seed=3, generations=4)
+    whole = create_run(behaviour, tmp_path / "a" / "run")
+    whole.train()
+    part = create_run(behaviour, tmp_path / "b" / "run")
+    part.train([StopAfter(1)])
+    for name in ("behaviour.yaml", BEST_FILE):
+        as_an_earlier_version_wrote_it(part.path / name)
+        assert "pitt_crossover" in (part.path / name).read_text()
+    assert load_behaviour(part.path / BEST_FILE).learning.learner == learner
+    reopened = open_run(part.path)
+    assert reopened.behaviour == behaviour
+    assert reopened.train().status == "finished"
+    assert without_wall_time(part.path / METRICS_FILE) == without_wall_time(
+        whole.path / METRICS_FILE)
+    assert (part.path / BEST_FILE).read_text() == (whole.path / BEST_FILE).read_text()
 
 
 def test_resume_can_extend_a_finished_run(tmp_path: Path) -> None:
@@ -289,13 +327,48 @@ def test_a_damaged_earlier_checkpoint_says_to_delete_the_later_ones_too(
         run.behaviour_for(generation=0)
 
 
+@pytest.mark.parametrize(("damage", "message"), [
+    (lambda state: {**state, "selection": {**state["selection"], "best": {
+        **state["selection"]["best"], "consequents": [7] * 15}}},
+     "selection record holds a controller that is not one of this behaviour"),
+    (lambda state: {**state, "fitness": [1e400] * len(state["fitness"])},
+     "its 'fitness' holds NaN or infinity"),
+    (lambda state: {**state, "population": [[2**70] * 15] * len(state["population"])},
+     "its 'population' is not a table of whole numbers"),
+])
+def test_every_reader_of_a_run_refuses_a_damaged_checkpoint_alike(
+        tmp_path: Path, damage: Callable[[dict[str, Any]], object], message: str) -> None:
+    # One validation (flctool.learners.checkpoint) behind the summary, the best controller
+    # and the resume: each names the file and the same problem.
+    run = create_run(ballchase(generations=3), tmp_path / "run")
+    run.train([StopAfter(1)])
+    path = write_checkpoint(run.path, 1, damage(run.checkpoint(1)))
+    for read in (lambda: open_run(run.path).behaviour_for(), lambda: open_run(run.path).train()):
+        with pytest.raises(RunDirError, match=message) as caught:
+            read()
+        assert str(caught.value).startswith(f"{path}: ")
+
+
+def test_a_resume_needs_the_q_table_of_a_learner_with_strengths(tmp_path: Path) -> None:
+    run = create_run(ballchase(generations=3), tmp_path / "run")  # hybrid keeps a q table
+    run.train([StopAfter(1)])
+    state = run.checkpoint(1)
+    path = write_checkpoint(run.path, 1, {k: v for k, v in state.items() if k != "q"})
+    assert open_run(run.path).behaviour_for()[1]["generation"] == 1  # needs no q table
+    with pytest.raises(RunDirError, match=r"the checkpoint has no 'q' table of shape "
+                                          r"\(rules, commands\) = \(15, 5\)") as caught:
+        open_run(run.path).train()
+    assert str(caught.value).startswith(f"{path}: ")
+
+
 def test_a_damaged_earlier_q_table_is_found_when_the_tables_are_rebuilt(
         tmp_path: Path) -> None:
     run = create_run(ballchase(generations=3), tmp_path / "run")
     run.train([StopAfter(1)])
     path = write_checkpoint(run.path, 0, {**run.checkpoint(0), "q": [[0.0]]})
-    with pytest.raises(RunDirError, match=r"gen-00000\.json: the checkpoint has no q table "
-                                          r"of shape \(rules, commands\) = \(15, 5\)"):
+    with pytest.raises(RunDirError, match=r"gen-00000\.json: the checkpoint is damaged: its "
+                                          r"'q' table has shape \(1, 1\), not \(rules, "
+                                          r"commands\) = \(15, 5\)"):
         open_run(run.path).train()
     assert json.loads((run.path / "run.json").read_text())["status"] == "stopped"
     assert path.exists()

@@ -178,12 +178,13 @@ def behaviour_reference(schema: dict[str, Any]) -> str:
         "",
     ]
     environment = schema["properties"].get("environment", {})
-    adapters = _adapter_mapping(environment)
-    if adapters:
-        lines += ["`environment` is chosen by its `adapter` key:", ""]
-        lines += [f"- `{name}`: [{_def_name(ref)}](#{_anchor(_def_name(ref))})"
-                  for name, ref in adapters.items()]
-        lines.append("")
+    for section, key in (("learning", "learner"), ("environment", "adapter")):
+        chosen = _discriminator_mapping(schema["properties"].get(section, {}))
+        if chosen:
+            lines += [f"`{section}` is chosen by its `{key}` key:", ""]
+            lines += [f"- `{name}`: [{_def_name(ref)}](#{_anchor(_def_name(ref))})"
+                      for name, ref in chosen.items()]
+            lines.append("")
     for name, where in paths.items():
         node = schema["$defs"][name]
         lines += [f"## {name} {{ #{_anchor(name)} }}", ""]
@@ -195,8 +196,10 @@ def behaviour_reference(schema: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _adapter_mapping(environment: dict[str, Any]) -> dict[str, str]:
-    for option in environment.get("anyOf", [environment]):
+def _discriminator_mapping(section: dict[str, Any]) -> dict[str, str]:
+    """Plugin name -> definition reference of a section chosen by name (environment by
+    ``adapter``, learning by ``learner``)."""
+    for option in section.get("anyOf", [section]):
         mapping = option.get("discriminator", {}).get("mapping")
         if mapping:
             return dict(mapping)
@@ -275,61 +278,71 @@ def _params(command: Any, context: Any) -> list[str]:
 
 
 # -- learners and the paper's equations ------------------------------------------------------
-#: ``learning:`` key -> (equation or section of the paper it sets, the learners that use it)
-EQUATIONS: dict[str, tuple[str, str]] = {
+#: ``learning:`` key -> the equation or section of the paper it sets (which learners read
+#: it comes from the schema)
+EQUATIONS: dict[str, str] = {
     "learner": ("Sec. III (fuzzy Q-learning) and IV (GA exploration): which method learns "
-                "the consequents", "all"),
+                "the consequents"),
     "seed": ("every random choice of the run (initial population, selection, exploration, "
-             "episode starts)", "all"),
+             "episode starts)"),
     "population": ("experiments: individuals per generation (paper: 10); fuzzy_q: episodes "
-                   "per generation", "all"),
-    "generations": ("experiments: generations (paper: 30 in simulation, 20 on the robot)", "all"),
-    "crossover": ("GA exploration: crossover probability p_c (experiments: 0.2)", "pitt, hybrid"),
-    "mutation": ("GA exploration: mutation probability p_m per gene (experiments: 0.1)",
-                 "pitt, hybrid"),
+                   "per generation"),
+    "generations": "experiments: generations (paper: 30 in simulation, 20 on the robot)",
+    "crossover": "GA exploration: crossover probability p_c (experiments: 0.2)",
+    "mutation": "GA exploration: mutation probability p_m per gene (experiments: 0.1)",
     "pitt_crossover": ("GA exploration: the standard crossover of the Pitt GA (the hybrid takes, "
-                       "gene by gene, the consequent with the larger q_m^k instead)", "pitt"),
-    "elites": ("GA exploration: elitism, the best copied unchanged", "pitt, hybrid"),
+                       "gene by gene, the consequent with the larger q_m^k instead)"),
+    "elites": "GA exploration: elitism, the best copied unchanged",
     "trials": ("experiments: one trial per individual per generation; fitness is the mean of "
-               "`trials` trials", "pitt, hybrid"),
+               "`trials` trials; fuzzy_q: population × trials episodes per generation"),
     "common_starts": ("experiments: the start states of a generation's trials (an addition: the "
-                      "same for every individual when true)", "pitt, hybrid"),
-    "q": ("eq. 4-9: the fuzzy Q-learning of rule strengths", "fuzzy_q, hybrid"),
-    "q.alpha": ("eq. 7: learning rate α of q_m^k += α ΔQ φ_m (times the trace, eq. 8-9)",
-                "fuzzy_q, hybrid"),
-    "q.gamma": ("eq. 6: discount γ of ΔQ = r + γ max Q(S', ·) − Q(S, a)", "fuzzy_q, hybrid"),
+                      "same for every individual when true)"),
+    "q": "eq. 4-9: the fuzzy Q-learning of rule strengths",
+    "q.alpha": "eq. 7: learning rate α of q_m^k += α ΔQ φ_m (times the trace, eq. 8-9)",
+    "q.gamma": "eq. 6: discount γ of ΔQ = r + γ max Q(S', ·) − Q(S, a)",
     "q.lambda": ("eq. 8-9: trace decay λ of the replacing eligibility trace; 0 gives eq. 7 "
-                 "alone", "fuzzy_q, hybrid"),
+                 "alone"),
     "q.temperature": ("GA exploration: Boltzmann temperature T of P(k) ∝ exp(q_m^k / T): hybrid "
-                      "mutation, fuzzy_q exploration", "fuzzy_q, hybrid"),
-    "q.initial": ("eq. 4: the q_m^k every rule starts with", "fuzzy_q, hybrid"),
-    "exploration": ("how fuzzy_q picks each active rule's command", "fuzzy_q"),
-    "exploration.policy": ("Boltzmann over q_m^k (as the hybrid's mutation) or ε-greedy",
-                           "fuzzy_q"),
-    "exploration.epsilon": ("ε of ε-greedy", "fuzzy_q"),
-    "exploration.decay": ("multiplies T (or ε) after every generation", "fuzzy_q"),
-    "exploration.minimum": ("floor of the decayed T or ε", "fuzzy_q"),
+                      "mutation, fuzzy_q exploration"),
+    "q.initial": "eq. 4: the q_m^k every rule starts with",
+    "exploration": "how fuzzy_q picks each active rule's command",
+    "exploration.policy": "Boltzmann over q_m^k (as the hybrid's mutation) or ε-greedy",
+    "exploration.epsilon": "ε of ε-greedy",
+    "exploration.decay": "multiplies T (or ε) after every generation",
+    "exploration.minimum": "floor of the decayed T or ε",
     "selection": ("an addition to the paper: which controller the run returns, chosen on "
-                  "validation episodes instead of one noisy trial", "all"),
-    "selection.candidates": ("an addition: the best distinct controllers kept for validation",
-                             "all"),
+                  "validation episodes instead of one noisy trial"),
+    "selection.candidates": "an addition: the best distinct controllers kept for validation",
     "selection.episodes": ("an addition: validation episodes per candidate (seeds disjoint from "
-                           "training and from evaluate)", "all"),
-    "stop": ("an addition: the run's budget; the paper stops after a number of generations",
-             "all"),
-    "stop.episodes": ("an addition: stop after this many episodes, selection included", "all"),
-    "stop.steps": ("an addition: stop after this many environment steps", "all"),
-    "stop.seconds": ("an addition: stop after this much training time", "all"),
-    "stop.target": ("an addition: stop once the validated controller reaches this fitness",
-                    "all"),
+                           "training and from evaluate)"),
+    "stop": "an addition: the run's budget; the paper stops after a number of generations",
+    "stop.episodes": "an addition: stop after this many episodes, selection included",
+    "stop.steps": "an addition: stop after this many environment steps",
+    "stop.seconds": "an addition: stop after this much training time",
+    "stop.target": "an addition: stop once the validated controller reaches this fitness",
 }
 
 
+def _learner_defs(schema: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Learner name -> the schema of its ``learning:`` model, in plugin order."""
+    section = schema["properties"]["learning"]
+    name_of = {ref: name for name, ref in _discriminator_mapping(section).items()}
+    return {name_of[option["$ref"]]: schema["$defs"][_def_name(option["$ref"])]
+            for option in section["oneOf"]}
+
+
 def learning_keys(schema: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
-    """Every key under ``learning:`` as (dotted key, schema node), nested sections included."""
+    """Every key under ``learning:`` of any learner as (dotted key, schema node), nested
+    sections included: the keys every learner reads first."""
     defs = schema["$defs"]
+    learners = list(_learner_defs(schema).values())
+    keys: list[str] = []
+    for node in learners:
+        keys += [key for key in node["properties"] if key not in keys]
+    keys.sort(key=lambda key: not all(key in node["properties"] for node in learners))
     found = []
-    for key, prop in defs["LearningConfig"]["properties"].items():
+    for key in keys:
+        prop = next(node["properties"][key] for node in learners if key in node["properties"])
         found.append((key, prop))
         if "$ref" in prop:
             for sub, sub_prop in defs[_def_name(prop["$ref"])]["properties"].items():
@@ -337,9 +350,20 @@ def learning_keys(schema: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     return found
 
 
+def _readers(schema: dict[str, Any], key: str) -> str:
+    """Which learners read ``key`` (dotted keys: their section)."""
+    learners = _learner_defs(schema)
+    first = key.partition(".")[0]
+    names = [name for name, node in learners.items() if first in node["properties"]]
+    return "all" if len(names) == len(learners) else ", ".join(names)
+
+
 def _nested_default(schema: dict[str, Any], key: str) -> Any:
-    node: Any = schema["$defs"]["LearningConfig"]["properties"]
     first, _, rest = key.partition(".")
+    if first == "learner":
+        return "hybrid"  # each learner's model names itself; a section without it is this
+    node = next(node["properties"] for node in _learner_defs(schema).values()
+                if first in node["properties"])
     prop = node[first]
     if not rest:
         return prop.get("default")
@@ -361,12 +385,14 @@ def learners_reference(schema: dict[str, Any]) -> str:
         "chromosome = the M consequent indices); `fuzzy_q` is fuzzy Q-learning (eq. 4-9) of one",
         "controller; `hybrid`, the paper's method, is the GA whose crossover and mutation are",
         "guided by the rule strengths q_m^k that fuzzy Q-learning updates during every trial.",
+        "Each learner reads only its own keys (\"used by\"); another learner's key is an error",
+        "that names the learner reading it.",
         "",
         "| key | default | paper | used by | constraints |",
         "| --- | --- | --- | --- | --- |",
     ]
     for key, prop in learning_keys(schema):
-        equation, used_by = EQUATIONS[key]
+        equation, used_by = EQUATIONS[key], _readers(schema, key)
         default = "section" if "$ref" in prop else f"`{json.dumps(_nested_default(schema, key))}`"
         constraints = ", ".join(_constraints(prop))
         lines.append(f"| `{key}` | {default} | {_cell(equation)} | {used_by} "

@@ -14,13 +14,17 @@ codes. The conventions are written down for users in docs/cli.md.
 - **Progress** on stderr: a rich bar on a terminal, a plain line every few seconds otherwise
   -- :mod:`flctool.cli.progress`.
 
-Every command module imports only what its command needs, inside the command, so that
-``flctool --version`` and ``flctool validate`` do not pay for numpy, numba or the learners.
+Every command module is imported only when its command runs (:data:`COMMANDS`), and imports
+only what its command needs, inside the command, so that ``flctool --version`` and
+``flctool --help`` load neither numpy, pydantic nor rich, and ``flctool validate`` does not pay
+for numba or the learners.
 """
 
 from __future__ import annotations
 
+import difflib
 import errno
+import importlib
 import os
 import re
 import signal
@@ -32,9 +36,12 @@ from types import FrameType
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from typer._click import exceptions as click_errors  # typer >= 0.29 bundles click
+from typer import _click as click  # typer >= 0.29 bundles click
+from typer._click import exceptions as click_errors
 from typer._click.globals import get_current_context
+from typer._click.utils import make_default_short_help
 from typer.core import TyperGroup
+from typer.main import get_command_from_info, get_command_name
 
 from flctool import __version__
 from flctool.errors import FlcError, SpecError
@@ -66,6 +73,44 @@ class FlctoolGroup(TyperGroup):
         if standalone_mode:
             sys.exit(code)
         return code
+
+    # -- commands, imported on first use (see COMMANDS) ---------------------------------
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return [*COMMANDS, *(name for name in self.commands if name not in COMMANDS)]
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        command = self.commands.get(cmd_name)
+        if command is None and cmd_name in COMMANDS:
+            importlib.import_module(COMMANDS[cmd_name][0])  # registers its commands on app
+            for info in app.registered_commands:
+                name = info.name or get_command_name(info.callback.__name__)  # type: ignore[union-attr]
+                if name == cmd_name:
+                    command = get_command_from_info(
+                        info, pretty_exceptions_short=app.pretty_exceptions_short,
+                        rich_markup_mode=app.rich_markup_mode)
+                    self.add_command(command, cmd_name)
+        return command
+
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The list of commands from COMMANDS, without importing one."""
+        limit = formatter.width - 6 - max(len(name) for name in COMMANDS)
+        rows = [(name, make_default_short_help(summary, limit))
+                for name, (_, summary) in COMMANDS.items()]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+    def resolve_command(self, ctx: click.Context, args: list[str]
+                        ) -> tuple[str | None, click.Command | None, list[str]]:
+        try:
+            return super().resolve_command(ctx, args)
+        except click_errors.UsageError as error:
+            # typer suggests only among the commands imported so far
+            if args and "Did you mean" not in error.message:
+                close = difflib.get_close_matches(args[0], list(COMMANDS))
+                if close:
+                    error.message = (error.message.rstrip(".") + ". Did you mean "
+                                     + ", ".join(repr(name) for name in close) + "?")
+            raise
 
     def _run(self, args: Sequence[str] | None, prog_name: str, complete_var: str | None,
              **extra: Any) -> int:
@@ -335,6 +380,17 @@ def user_errors() -> Iterator[None]:
 
 
 # -- input -----------------------------------------------------------------------------------
+def command_line_labels(assignments: list[str],
+                        options: dict[str, str] | None = None) -> dict[str, str]:
+    """Where each override came from, for messages: ``--set key=value`` gives
+    ``command line (--set key)``; ``options`` maps keys set by an option to the option
+    (``{"seed": "--seed"}``)."""
+    labels = {key: f"command line (--set {key})"
+              for key in (text.partition("=")[0].strip() for text in assignments)}
+    labels.update({key: f"command line ({option})" for key, option in (options or {}).items()})
+    return labels
+
+
 def controller_file(path: Path) -> Path:
     """The behaviour file a controller argument names: the file itself, or a run directory's
     ``best.yaml``. A missing path or a run without a best controller is a clear error."""
@@ -435,16 +491,38 @@ def output_format(path: Path | None, given: str | None, suffixes: Mapping[str, s
 
 
 # -- registration ----------------------------------------------------------------------------
-# Every command module registers its commands on `app` when imported. This is the one list of
-# them; `flctool --help` shows them in this order. A new command: its module, one line here.
-from flctool.cli import (  # noqa: E402
-    evaluate,  # noqa: F401  (evaluate)
-    experiment,  # noqa: F401  (experiment)
-    export_commands,  # noqa: F401  (export, import)
-    infer,  # noqa: F401  (infer)
-    learn,  # noqa: F401  (learn)
-    new,  # noqa: F401  (new)
-    plot,  # noqa: F401  (plot)
-    serve,  # noqa: F401  (serve)
-    spec_commands,  # noqa: F401  (validate, show, schema)
-)
+# Every command module registers its commands on `app` when imported, and is imported only
+# when its command runs (or its --help is asked for): `flctool --version` and `flctool --help`
+# load neither numpy, pydantic nor rich. This is the one list of commands, in the order
+# `flctool --help` shows them, each with its module and the first paragraph of its help (a
+# test checks these against the commands themselves). A new command: its module, one line here.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "validate": ("flctool.cli.spec_commands", "Check behaviour files and report every problem "
+                 "in each (exit 1 if any is invalid)."),
+    "show": ("flctool.cli.spec_commands", "Show a behaviour: its inputs and sets, M and K, "
+             "and the rule table."),
+    "schema": ("flctool.cli.spec_commands", "Write the behaviour JSON Schema generated from "
+               "the models (or check it is current)."),
+    "evaluate": ("flctool.cli.evaluate", "Run a controller in its environment: success rate, "
+                 "steps to success and fitness, each with a 95 % confidence interval. Success "
+                 "lines appear only when the environment defines success."),
+    "experiment": ("flctool.cli.experiment", "Run the paper's experiment: every learner on "
+                   "every seed, then report the spread across seeds, held-out success, rank "
+                   "tests and whether the paper's claims hold."),
+    "export": ("flctool.cli.export_commands", "Export a controller so that it runs elsewhere, "
+               "with the same outputs."),
+    "import": ("flctool.cli.export_commands", "Import a controller from FLL, FCL or FIS as a "
+               "behaviour file."),
+    "infer": ("flctool.cli.infer", "Run a deployable controller on states from CSV; adds the "
+              "output column."),
+    "learn": ("flctool.cli.learn", "Learn the rule consequents of a behaviour (Pitt GA, fuzzy "
+              "Q-learning or the hybrid)."),
+    "new": ("flctool.cli.new", "Scaffold a valid behaviour file: evenly spaced, overlapping "
+            "sets over each input's range (shoulders at the ends), the commands, and rules "
+            "left to learn."),
+    "plot": ("flctool.cli.plot", "Plot learning curves, strengths, a trajectory and the "
+             "controller as PNG and SVG files."),
+    "serve": ("flctool.cli.serve", "Serve a behaviour's simulator over the robot-link "
+              "protocol (docs/robot-link.md), for trying the link without a robot and as an "
+              "example for bridge writers."),
+}

@@ -1,16 +1,11 @@
-"""``flctool evaluate``: run a deployable controller for many episodes and summarise.
-
-Episodes run in lock-step in chunks of at most :data:`CHUNK_EPISODES`, so memory follows the
-chunk, not ``--episodes``; every episode depends on its own seed only, so the chunking does not
-change a result (tests check it).
-"""
+"""``flctool evaluate``: run a deployable controller for many episodes and show the summary
+that :mod:`flctool.evaluation` makes."""
 
 from __future__ import annotations
 
 import csv
 import io
 import json
-import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -33,84 +28,22 @@ from flctool.cli.progress import Progress, compiling
 from flctool.cli.spec_commands import ControllerArgument
 
 if TYPE_CHECKING:
-    import numpy as np
-    from numpy.typing import NDArray
     from rich.table import Table
 
-    from flctool.compile import Controller
-    from flctool.envs import BatchEnv
-    from flctool.rollout import Estimate, EvaluationResult
-    from flctool.spec import Behaviour
-
-#: Most episodes stepped together; the peak memory of an evaluation follows this, not
-#: --episodes.
-CHUNK_EPISODES = 1024
-#: Episodes of the first chunk, and the seconds later chunks are sized to take (so that a
-#: slow environment still shows progress).
-FIRST_CHUNK, CHUNK_SECONDS = 64, 2.0
-#: Most episodes one --seeds list may name.
-MAX_LISTED_SEEDS = 10_000_000
-#: Training episodes use seeds from 2^32 up (flctool.learners.base.TRAIN_SEED_LOW).
-TRAINING_SEEDS_FROM = 2**32
-
-_SEED_ITEM = re.compile(r"^\s*(\d+)\s*(?:-\s*(\d+)\s*)?$")
+    from flctool.evaluation import Evaluation
 
 
-def parse_seeds(text: str) -> list[int]:
-    """``"1,2,5-9"`` -> ``[1, 2, 5, 6, 7, 8, 9]``: comma-separated seeds and inclusive
-    ranges, in the order given; a seed named twice is an error (it would count twice)."""
-    seeds: list[int] = []
-    for item in text.split(","):
-        match = _SEED_ITEM.match(item)
-        if match is None:
-            raise ValueError(f"'{item.strip()}' is not a seed or a range like 5-9 "
-                                     "(seeds are integers >= 0)")
-        low = int(match.group(1))
-        high = int(match.group(2)) if match.group(2) is not None else low
-        if high < low:
-            raise ValueError(f"the range {low}-{high} is empty; write it low-high")
-        if len(seeds) + high - low + 1 > MAX_LISTED_SEEDS:
-            raise ValueError(f"more than {MAX_LISTED_SEEDS:,} seeds")
-        seeds.extend(range(low, high + 1))
-    if max(seeds) >= 2**63:
-        raise ValueError("seeds must be below 2^63")
-    if len(set(seeds)) != len(seeds):
-        twice = sorted({s for s in seeds if seeds.count(s) > 1})[:5] if len(seeds) < 10_000 \
-            else []
-        raise ValueError("a seed is named twice" +
-                                 (f" ({', '.join(map(str, twice))})" if twice else ""))
-    return seeds
-
-
-def _row(label: str, estimate: Estimate, percent: bool = False) -> tuple[str, str, str, str]:
-    def fmt(x: float) -> str:
-        if x != x:  # NaN: no samples, or no interval from a single one
-            return "-"
-        return f"{100 * x:.1f} %" if percent else f"{x:.3f}"
-    interval = "-" if estimate.low != estimate.low else \
-        f"[{fmt(estimate.low)}, {fmt(estimate.high)}]"
-    return label, fmt(estimate.value), interval, str(estimate.n)
-
-
-def defines_success(behaviour: Behaviour) -> bool:
-    """Whether the behaviour's environment has a notion of success (``success: never``
-    says it has none)."""
-    return getattr(behaviour.environment, "success", "terminated") != "never"
-
-
-def _table(name: str, result: EvaluationResult, success: bool) -> Table:
+def _table(evaluation: Evaluation) -> Table:
     from rich.table import Table
 
-    table = Table(title=f"{name}: {result.episodes} episodes", title_justify="left")
+    table = Table(title=f"{evaluation.behaviour.name}: {evaluation.result.episodes} episodes",
+                  title_justify="left")
     table.add_column("statistic")
     table.add_column("value", justify="right")
     table.add_column("95 % CI", justify="right")
     table.add_column("n", justify="right")
-    if success:
-        table.add_row(*_row("success rate (Wilson)", result.success_rate, percent=True))
-        table.add_row(*_row("steps to success", result.steps_to_success))
-    table.add_row(*_row("mean fitness", result.mean_fitness))
-    table.add_row(*_row("mean return", result.mean_return))
+    for row in evaluation.rows():
+        table.add_row(*row)
     return table
 
 
@@ -145,12 +78,17 @@ def evaluate_command(
     """Run a controller in its environment: success rate, steps to success and fitness, each
     with a 95 % confidence interval. Success lines appear only when the environment defines
     success."""
-    import numpy as np
-
-    from flctool.cli.locate import located_in
     from flctool.compile import compile_behaviour
     from flctool.envs import make_env
-    from flctool.rollout import evaluation_seeds, trace_episode
+    from flctool.evaluation import (
+        DEFAULT_EPISODES,
+        TRAINING_SEEDS_FROM,
+        batch_size,
+        defines_success,
+        evaluate_behaviour,
+        parse_seeds,
+    )
+    from flctool.rollout import trace_episode
 
     listed: list[int] | None = None
     if seeds is not None:
@@ -165,79 +103,37 @@ def evaluate_command(
         if trace is not None:
             check_output(trace, "trace", force=force)
         controller = compile_behaviour(behaviour)
-        episode_seeds = (np.array(listed, dtype=np.int64) if listed is not None else
-                         evaluation_seeds(0 if seed is None else seed,
-                                          1000 if episodes is None else episodes))
         if listed is not None and max(listed) >= TRAINING_SEEDS_FROM:
             err_console.print(f"[yellow]warning:[/] seeds from {TRAINING_SEEDS_FROM} up are "
                               "the range training episodes use; these are not held out",
                               highlight=False)
-        with located_in(source):  # an adapter's complaint about the file, at its line
-            env = make_env(behaviour, min(len(episode_seeds), CHUNK_EPISODES))
-        try:
-            result = evaluate_in_chunks(controller, env, episode_seeds,
-                                        show_progress=not json_output,
-                                        success=defines_success(behaviour))
-        finally:
-            env.close()
+        with compiling():  # load (or, on a machine's first run, compile) the kernels
+            controller.output(controller.ranges[:, 0][None, :])
+        total = len(listed) if listed is not None else (episodes or DEFAULT_EPISODES)
+        success = defines_success(behaviour)
+        env = make_env(behaviour, batch_size(total))  # its errors come before the progress bar
+        with Progress("episodes", total, terminal=not json_output) as progress:
+
+            def chunk_done(done: int, successes: int) -> None:
+                if success:
+                    progress.update(done, success=f"{100 * successes / done:.1f} %")
+                else:
+                    progress.update(done)
+
+            evaluation = evaluate_behaviour(behaviour, listed, seed=seed, episodes=episodes,
+                                            controller=controller, env=env,
+                                            on_chunk=chunk_done)
+        first_seed = int(evaluation.result.seeds[0])
         if trace is not None:
             single = make_env(behaviour, 1)
             try:
-                rows = trace_episode(controller, single, int(episode_seeds[0]))
+                rows = trace_episode(controller, single, first_seed)
             finally:
                 single.close()
             write_output(trace, _csv(rows), "trace", force=force)
-    success = defines_success(behaviour)
     if json_output:
-        summary = result.summary()
-        if not success:
-            del summary["success_rate"], summary["steps_to_success"]
-        typer.echo(json.dumps({"behaviour": behaviour.name, "file": str(source),
-                               "seed": None if listed is not None else (seed or 0),
-                               **summary, "seeds": result.seeds.tolist()}, indent=2))
+        typer.echo(json.dumps(evaluation.to_dict(str(source)), indent=2))
         return
-    console.print(_table(behaviour.name, result, success))
+    console.print(_table(evaluation))
     if trace is not None:
-        console.print(f"trace of episode seed {int(episode_seeds[0])} written to "
-                      f"{escape(str(trace))}")
-
-
-def evaluate_in_chunks(controller: Controller, env: BatchEnv, seeds: NDArray[np.int64], *,
-                       show_progress: bool = True, success: bool = True,
-                       chunk: int = CHUNK_EPISODES) -> EvaluationResult:
-    """:func:`flctool.rollout.evaluate` of ``seeds (E,)``, at most ``chunk`` episodes at a
-    time: the same outcomes, with memory that does not grow with E.
-
-    The first chunk is small; later ones are sized to take about :data:`CHUNK_SECONDS` each
-    (up to ``chunk``), so a slow environment still reports progress every few seconds while
-    a fast one runs in large lock-step batches.
-    """
-    import time
-
-    import numpy as np
-
-    from flctool.rollout import EvaluationResult, evaluate
-
-    parts: list[EvaluationResult] = []
-    total = int(seeds.shape[0])
-    with compiling():  # load (or, on a machine's first run, compile) the kernels
-        controller.output(controller.ranges[:, 0][None, :])
-    size = min(FIRST_CHUNK, chunk)
-    done = 0
-    with Progress("episodes", total, terminal=show_progress) as progress:
-        while done < total:
-            started = time.monotonic()
-            parts.append(evaluate(controller, env, seeds[done:done + size]))
-            seconds = max(time.monotonic() - started, 1e-6)
-            done += parts[-1].episodes
-            size = max(1, min(chunk, int(parts[-1].episodes * CHUNK_SECONDS / seconds)))
-            if success:
-                rate = sum(int(p.success.sum()) for p in parts) / done
-                progress.update(done, success=f"{100 * rate:.1f} %")
-            else:
-                progress.update(done)
-    if len(parts) == 1:
-        return parts[0]
-    return EvaluationResult(*(np.concatenate([getattr(p, name) for p in parts])
-                              for name in ("seeds", "returns", "lengths", "success",
-                                           "fitness")))
+        console.print(f"trace of episode seed {first_seed} written to {escape(str(trace))}")

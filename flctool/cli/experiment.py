@@ -8,8 +8,7 @@ from typing import Annotated
 
 import typer
 
-from flctool.cli.app import app, console, escape, example, user_errors
-from flctool.cli.learn import parse_assignments, set_keys
+from flctool.cli.app import app, command_line_labels, console, escape, example, user_errors
 from flctool.cli.progress import Progress
 from flctool.errors import FlcError
 
@@ -49,7 +48,6 @@ def experiment(
 
     Writes report.md and summary.json; 'flctool plot' on the directory draws the figures.
     """
-    from flctool.cli.locate import located_in
     from flctool.experiment import (
         ExperimentPlan,
         make_executor,
@@ -60,6 +58,7 @@ def experiment(
     from flctool.experiment.runner import JobOutcome
     from flctool.runs import resolve_behaviour
     from flctool.spec import load_behaviour
+    from flctool.training import parse_assignments
 
     with user_errors():
         names = parse_learners(learners)
@@ -69,9 +68,8 @@ def experiment(
                 raise FlcError(f"--set {key} is decided by the experiment for each run",
                                hint="use --learners and --seeds")
         runner = make_executor(executor, workers, address)
-        with located_in(file, set_keys(set_ or [])):
-            behaviour = resolve_behaviour(load_behaviour(file), overrides,
-                                          f"{file} with command-line options")
+        behaviour = resolve_behaviour(load_behaviour(file), overrides,
+                                      command_line_labels(set_ or []))
         plan = ExperimentPlan(behaviour.name, names, seeds, heldout_episodes=heldout,
                               overrides=overrides)
         folder = out if out is not None else Path("experiments") / behaviour.name

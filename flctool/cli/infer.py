@@ -13,11 +13,9 @@ See docs/performance.md ("Whole commands").
 
 from __future__ import annotations
 
-import os
-import secrets
 import sys
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, TextIO
 
@@ -134,17 +132,12 @@ def _target(output: Path | None) -> Iterator[TextIO]:
     if output is None:
         yield sys.stdout
         return
-    temporary = output.with_name(f".{output.name}.{secrets.token_hex(4)}.tmp")
-    try:
-        handle = open(temporary, "w", encoding="utf-8", newline="\n")  # noqa: SIM115
-    except OSError as error:
-        raise FlcError(f"cannot write the output CSV {output}: {error.strerror}",
-                       hint="check that the folder exists and is writable") from None
-    try:
-        with handle:
-            yield handle
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(temporary, output)
-    finally:
-        temporary.unlink(missing_ok=True)
+    from flctool.atomic import atomic_text_writer
+
+    with ExitStack() as stack:
+        try:
+            handle = stack.enter_context(atomic_text_writer(output))
+        except OSError as error:
+            raise FlcError(f"cannot write the output CSV {output}: {error.strerror or error}",
+                           hint="check that the folder exists and is writable") from None
+        yield handle

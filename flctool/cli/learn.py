@@ -5,12 +5,13 @@ from __future__ import annotations
 import json
 import shlex
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from flctool.cli.app import (
     app,
+    command_line_labels,
     console,
     err_console,
     escape,
@@ -19,83 +20,12 @@ from flctool.cli.app import (
     user_errors,
 )
 from flctool.cli.progress import Progress
-from flctool.errors import Problem, RunDirError, SpecError
+from flctool.errors import RunDirError
+from flctool.plugins import names
 
 if TYPE_CHECKING:
-    from flctool.learners import Learner
-    from flctool.runs import Run, RunSummary
-    from flctool.spec import Behaviour
-
-
-def parse_assignments(assignments: list[str]) -> dict[str, Any]:
-    """``["q.temperature=0.2", "common_starts=true"]`` -> a mapping; values read as YAML."""
-    import yaml
-
-    overrides: dict[str, Any] = {}
-    for text in assignments:
-        key, sep, value = text.partition("=")
-        key = key.strip()
-        if not sep or not key:
-            raise SpecError([Problem(("--set",), f"'{text}' is not key=value",
-                                     "write e.g. --set q.temperature=0.2", file="command line")],
-                            "command line")
-        try:
-            overrides[key] = yaml.safe_load(value) if value.strip() else ""
-        except yaml.YAMLError:  # not YAML: the text itself
-            overrides[key] = value
-    return overrides
-
-
-def set_keys(assignments: list[str]) -> list[str]:
-    """The keys of ``--set key=value`` assignments, as given."""
-    return [text.partition("=")[0].strip() for text in assignments]
-
-
-_GENERATIONS_KEYS = ("generations", "learning.generations")
-
-
-def _resume_generations(run: Run, generations: int | None,
-                        overrides: dict[str, Any]) -> int | None:
-    """The new generation budget of a resumed run: ``-g``, or ``--set generations=N`` (taken
-    out of ``overrides``, which must otherwise match the run)."""
-    from flctool.runs import resolve_behaviour
-
-    for key in _GENERATIONS_KEYS:
-        if key not in overrides:
-            continue
-        value = overrides.pop(key)
-        # Validated like the file's own field (an int >= 1), named as the user wrote it.
-        budget = resolve_behaviour(run.behaviour, {"generations": value},
-                                   f"--set {key}").learning.generations
-        if generations is not None and generations != budget:
-            raise RunDirError(f"--generations {generations} and --set {key}={value} ask for "
-                              "different budgets", hint="give the new total once")
-        generations = budget
-    return generations
-
-
-def _differences(a: Any, b: Any, path: str = "") -> list[str]:
-    if isinstance(a, dict) and isinstance(b, dict):
-        found: list[str] = []
-        for key in sorted(set(a) | set(b), key=str):
-            found += _differences(a.get(key), b.get(key), f"{path}.{key}" if path else str(key))
-        return found
-    return [] if a == b else [path or "(top level)"]
-
-
-def _check_same_run(run: Run, requested: Behaviour) -> None:
-    from flctool.spec import behaviour_to_data
-
-    recorded = behaviour_to_data(run.behaviour)
-    wanted = behaviour_to_data(requested)
-    for data in (recorded, wanted):
-        data.get("learning", {}).pop("generations", None)
-    changed = _differences(recorded, wanted)
-    if changed:
-        raise RunDirError(f"--resume continues the run recorded in {run.path}, but the file "
-                          f"and options given differ from it at: {', '.join(changed)}",
-                          hint="leave them out (only --generations may change), or start a "
-                          "new run with --out")
+    from flctool.runs import RunSummary
+    from flctool.training import Training
 
 
 @app.command(epilog=example(
@@ -106,7 +36,8 @@ def learn(
     file: Annotated[Path | None, typer.Argument(
         help="The behaviour file (YAML); optional with --resume.")] = None,
     learner: Annotated[str | None, typer.Option(
-        "--learner", "-l", help="pitt, fuzzy_q or hybrid (default: the file's).")] = None,
+        "--learner", "-l", help=f"{', '.join(names('learner'))} (default: the file's).")]
+    = None,
     seed: Annotated[int | None, typer.Option("--seed", "-s", help="Random seed.")] = None,
     generations: Annotated[int | None, typer.Option(
         "--generations", "-g", help="Generations to run (with --resume: the new total).")]
@@ -130,55 +61,36 @@ def learn(
 
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
-    from flctool.cli.locate import located_in
-    from flctool.learners import make_learner
-    from flctool.runs import BEHAVIOUR_FILE, create_run, open_run, resolve_behaviour
-    from flctool.spec import load_behaviour
+    from flctool.training import parse_assignments, resume_run, start_run
 
     with user_errors():
         overrides = parse_assignments(set_ or [])
-        for key, value in (("learner", learner), ("seed", seed), ("population", population)):
+        options: dict[str, str] = {}
+        for key, option, value in (("learner", "--learner", learner), ("seed", "--seed", seed),
+                                   ("population", "--population", population)):
             if value is not None:
-                overrides[key] = value
+                overrides[key], options[key] = value, option
         if resume is not None:
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
-            run = open_run(resume)
-            generations = _resume_generations(run, generations, overrides)
-            if file is not None or overrides:
-                base = load_behaviour(file) if file is not None else run.behaviour
-                _check_same_run(run, resolve_behaviour(base, overrides))
-            if generations is not None and generations != run.behaviour.learning.generations:
-                run.extend(generations)
-            source, overridden = run.path / BEHAVIOUR_FILE, []
-            behaviour = run.behaviour
+            training = resume_run(resume, file, overrides, generations,
+                                  where=command_line_labels(set_ or [], options))
         else:
             if file is None:
                 raise RunDirError("give a behaviour file to learn, or --resume a run directory",
                                   hint="flctool learn behaviours/ballchase.yaml")
             if generations is not None:
-                overrides["generations"] = generations
-            behaviour = resolve_behaviour(load_behaviour(file), overrides,
-                                          f"{file} with command-line options")
-            source, overridden = file, set_keys(set_ or [])
-        # The environment is built before any directory is made, so that its errors (located
-        # in the file they are about) leave nothing behind.
-        with located_in(source, overridden):
-            learner_ = make_learner(behaviour)
-        if resume is None:
-            try:
-                run = create_run(behaviour, out)
-            except BaseException:
-                learner_.env.close()  # Run.train closes it from here on (a robot gets stop)
-                raise
-        done = len(run.checkpoint_generations())
-        err_console.print(f"{'resuming' if resume is not None else 'learning'} "
+                overrides["generations"], options["generations"] = generations, "--generations"
+            training = start_run(file, overrides, out,
+                                 where=command_line_labels(set_ or [], options))
+        run, behaviour = training.run, training.run.behaviour
+        err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
-                          f"from generation {done} in the run directory "
+                          f"from generation {training.done} in the run directory "
                           f"{escape(str(run.path))}", highlight=False)
         try:
-            summary = _train(run, learner_, show_progress=not as_json)
+            summary = _train(training, show_progress=not as_json)
         except KeyboardInterrupt:
             report_interrupted(f"the run in {run.path} stopped at its last checkpoint; "
                                f"continue it with: {resume_command(run.path)}")
@@ -194,12 +106,11 @@ def resume_command(path: Path) -> str:
     return f"flctool learn --resume {shlex.quote(str(path))}"
 
 
-def _train(run: Run, learner: Learner, show_progress: bool) -> RunSummary:
+def _train(training: Training, show_progress: bool) -> RunSummary:
     from flctool.learners import FunctionCallback, GenerationMetrics
 
-    config = run.behaviour.learning
-    done = len(run.checkpoint_generations())
-    with Progress(f"{config.learner} generation", config.generations, done,
+    config = training.run.behaviour.learning
+    with Progress(f"{config.learner} generation", config.generations, training.done,
                   terminal=show_progress) as progress:
 
         def advance(metrics: GenerationMetrics) -> None:
@@ -208,7 +119,7 @@ def _train(run: Run, learner: Learner, show_progress: bool) -> RunSummary:
             progress.update(metrics.generation + 1, **{"validated best": validated,
                                                        "training mean": f"{metrics.mean:.3f}"})
 
-        return run.train([FunctionCallback(advance)], learner=learner)
+        return training.train([FunctionCallback(advance)])
 
 
 def _report(summary: RunSummary) -> None:

@@ -254,6 +254,11 @@ class Controller:
             "floating point (every membership underflows to 0)",
             hint="widen their overlap")
 
+    def require_consequents(self) -> IntArray:
+        """This controller's consequents (M,); :class:`NotDeployableError` if its behaviour
+        has none."""
+        return self._consequents(None)
+
     def _consequents(self, consequents: IntArray | None) -> IntArray:
         if consequents is None:
             if self.consequents is None:

@@ -1,4 +1,4 @@
-"""Trapezoid membership of paper Sec. II, vectorised.
+"""Trapezoid membership of paper Sec. II: the one Python coding, vectorised and scalar.
 
 For a set (pa, pb, pc, pd)::
 
@@ -11,31 +11,63 @@ For a set (pa, pb, pc, pd)::
 happens. Because inputs are clipped to their range first, a shoulder ending at the range's end
 (``pc == pd == high``) has membership 1 at and beyond that end. This is exactly
 ``skfuzzy.trapmf`` (tests compare them).
+
+Two forms of the one formula, and nothing else in flctool's Python codes it again (the
+compiled kernels and the C export have their own, which the tests compare with these):
+:func:`trapezoid` for arrays of values (any float dtype: float32 reproduces the float C
+export), and :func:`firing_sets` for one value, in plain Python floats for the learners' hot
+loop, where numpy's per-call overhead would cost more than the arithmetic. Both do the same
+operations in the same order, so they give the same bits (a test checks it over many random
+sets and values).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
 
+def trapezoid(x: NDArray[Any], quads: NDArray[Any]) -> NDArray[Any]:
+    """Membership of every value in every set: ``x (B,)``, ``quads (L, 4)`` -> ``(B, L)``.
 
-def trapezoid(x: FloatArray, quads: FloatArray) -> FloatArray:
-    """Membership of every value in every set: ``x (B,)``, ``quads (L, 4)`` -> ``(B, L)``."""
-    s = np.asarray(x, dtype=np.float64)[:, None]
+    Computed in the dtype of ``x`` and ``quads`` (float64 unless both are float32), each
+    operation rounded in it.
+    """
+    s = np.asarray(x)
+    if s.dtype != np.float32:
+        s = s.astype(np.float64)
+    quads = np.asarray(quads, dtype=s.dtype)
+    s = s[:, None]
     pa, pb, pc, pd = (quads[:, k] for k in range(4))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        falling = np.where(pd > pc, (pd - s) / (pd - pc), 0.0)
-        rising = np.where(pb > pa, (s - pa) / (pb - pa), 0.0)
-    mu = np.where(s > pc, falling, np.where(s < pb, rising, 1.0))
-    return np.maximum(mu, 0.0)
+    zero, one = s.dtype.type(0), s.dtype.type(1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        falling = np.where(pd > pc, (pd - s) / (pd - pc), zero)
+        rising = np.where(pb > pa, (s - pa) / (pb - pa), zero)
+    mu = np.where(s > pc, falling, np.where(s < pb, rising, one))
+    result: NDArray[Any] = np.maximum(mu, zero)
+    return result
+
+
+def firing_sets(s: float, sets: Sequence[Sequence[float]]) -> list[tuple[int, float]]:
+    """The sets a clipped value ``s`` belongs to: ``(index, membership)`` in set order, for
+    the sets whose membership is above 0 (the same operations as :func:`trapezoid`)."""
+    fired = []
+    for j, (pa, pb, pc, pd) in enumerate(sets):
+        if s > pc:
+            mu = (pd - s) / (pd - pc) if pd > pc else 0.0
+        elif s < pb:
+            mu = (s - pa) / (pb - pa) if pb > pa else 0.0
+        else:
+            mu = 1.0
+        if mu > 0.0:
+            fired.append((j, mu))
+    return fired
 
 
 def trapezoid_scalar(s: float, pa: float, pb: float, pc: float, pd: float) -> float:
-    """The same membership for one value, in plain Python (the reference of the tests)."""
-    if s > pc:
-        return max(0.0, (pd - s) / (pd - pc)) if pd > pc else 0.0
-    if s < pb:
-        return max(0.0, (s - pa) / (pb - pa)) if pb > pa else 0.0
-    return 1.0
+    """The membership of one value in one set (:func:`firing_sets` of that set alone)."""
+    fired = firing_sets(s, ((pa, pb, pc, pd),))
+    return fired[0][1] if fired else 0.0

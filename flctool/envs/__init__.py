@@ -16,6 +16,7 @@ from flctool.envs.checker import check_env
 from flctool.errors import EnvError
 from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.spec.located import located
 from flctool.spec.models import Behaviour
 
 
@@ -35,8 +36,9 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
 
     ``batch_size`` is a hint (adapters that hold one world per episode build that many up
     front); the number of seeds given to ``reset`` decides B. Raises :class:`SpecError`
-    naming the field when the environment does not fit the behaviour,
-    :class:`MissingDependencyError` when the adapter's optional package is missing.
+    naming the field (at its line in the behaviour's file) when the environment does not fit
+    the behaviour, :class:`MissingDependencyError` when the adapter's optional package is
+    missing.
     """
     if behaviour.environment is None:
         raise EnvError(f"behaviour '{behaviour.name}' has no 'environment' section",
@@ -44,7 +46,8 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
     if batch_size < 1:
         raise EnvError(f"batch_size must be at least 1, got {batch_size}")
     factory = ENVIRONMENTS.get(behaviour.environment.adapter)
-    return factory.from_behaviour(behaviour, batch_size)
+    with located(behaviour):  # the adapter's checks name fields; this adds file and line
+        return factory.from_behaviour(behaviour, batch_size)
 
 
 __all__ = ["ENVIRONMENTS", "BatchEnv", "EnvFactory", "SingleEnv", "Step", "check_env",

@@ -12,10 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from flctool.errors import MissingDependencyError, Problem, SpecError
+from flctool.errors import MissingDependencyError, Problem
 from flctool.spec import Behaviour, load_behaviour
 from flctool.spec.checks import find_warnings
-from flctool.spec.yaml_source import SourceMap, read_yaml
+from flctool.spec.located import locate
 
 #: Adapters whose checks need the world outside the process (a robot on the network).
 _NOT_BUILT = {"robot-link": "the robot-link adapter's checks run when learn connects to the "
@@ -37,18 +37,14 @@ def validate_file(path: str | Path) -> FileReport:
     problem located in the file."""
     path = Path(path)
     behaviour = load_behaviour(path)
-    source = _source(path)
-    warnings = [source.problem(w.path, w.message, w.hint) for w in find_warnings(behaviour)]
+    warnings = [locate(behaviour, w.path, w.message, w.hint) for w in find_warnings(behaviour)]
     note = ""
     environment = behaviour.environment
     if environment is not None:
         note = _NOT_BUILT.get(environment.adapter, "")
         if not note:
             try:
-                check_adapter(behaviour)
-            except SpecError as error:
-                raise SpecError([p if p.file else source.problem(p.path, p.message, p.hint)
-                                 for p in error.problems], str(path)) from None
+                check_adapter(behaviour)  # its errors are located in the file (make_env)
             except MissingDependencyError as error:
                 note = f"the {environment.adapter} adapter's checks did not run: {error}"
     return FileReport(behaviour, warnings, note)
@@ -60,9 +56,3 @@ def check_adapter(behaviour: Behaviour) -> None:
 
     make_env(behaviour, 1).close()
 
-
-def _source(path: Path) -> SourceMap:
-    try:
-        return read_yaml(path.read_text(encoding="utf-8"), str(path))[1]
-    except (OSError, UnicodeDecodeError, SpecError):  # gone since it loaded: no lines
-        return SourceMap(str(path))

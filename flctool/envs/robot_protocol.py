@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from flctool.envs.base import BoolArray, FloatArray
+from flctool.errors import ProtocolError as ProtocolError  # defined with the others
 
 PROTOCOL = "flctool-robot-link"
 VERSION = 1
@@ -33,10 +34,6 @@ MAX_WELCOME_NAMES = 10_000
 MAX_BATCH_STEPS = 20_000_000
 #: Optional requests a robot side may support, announced in its welcome.
 FEATURES = ("fitness", "state")
-
-
-class ProtocolError(ValueError):
-    """A line that is not a message of the protocol (not JSON, not an object, no type)."""
 
 
 def encode(message: dict[str, Any]) -> bytes:

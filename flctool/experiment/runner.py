@@ -28,12 +28,10 @@ from pathlib import Path
 from typing import Any
 
 from flctool import __version__
-from flctool.atomic import write_text_atomic
-from flctool.compile import compile_behaviour
-from flctool.envs import make_env
+from flctool.atomic import remove_stale_temporaries, write_text_atomic
 from flctool.errors import RunDirError
+from flctool.evaluation import evaluate_behaviour
 from flctool.plugins import names as plugin_names
-from flctool.rollout import evaluate, evaluation_seeds
 from flctool.runs import (
     BEHAVIOUR_FILE,
     BEST_FILE,
@@ -153,23 +151,18 @@ def _clear_unstarted(directory: Path) -> None:
     the folder with its own message."""
     if not directory.is_dir():
         return
-    for entry in directory.iterdir():
-        if entry.name == CHECKPOINT_DIR and entry.is_dir() and not any(entry.iterdir()):
-            entry.rmdir()
-        elif entry.is_file() and entry.name.startswith(".") and entry.name.endswith(".tmp"):
-            entry.unlink()
+    remove_stale_temporaries(directory)  # no writer runs there: the job is not started
+    checkpoints = directory / CHECKPOINT_DIR
+    if checkpoints.is_dir() and not checkpoints.is_symlink() and not any(checkpoints.iterdir()):
+        checkpoints.rmdir()
 
 
 def heldout_evaluation(run: Run, seed: int, episodes: int) -> dict[str, Any]:
     """The run's best.yaml on ``episodes`` held-out episodes drawn from ``seed``: success
     count and rate, mean fitness, and the episodes and steps the test cost."""
-    best = load_behaviour(run.path / BEST_FILE)
-    controller = compile_behaviour(best)
-    env = make_env(best, episodes)
-    try:
-        result = evaluate(controller, env, evaluation_seeds(seed, episodes))
-    finally:
-        env.close()
+    # what `flctool evaluate --seed SEED --episodes EPISODES` reports
+    result = evaluate_behaviour(load_behaviour(run.path / BEST_FILE), seed=seed,
+                                episodes=episodes).result
     return {"seed": seed, "episodes": result.episodes,
             "successes": int(result.success.sum()),
             "success_rate": float(result.success.mean()),

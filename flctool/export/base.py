@@ -11,8 +11,6 @@ from __future__ import annotations
 import math
 import os
 import re
-import secrets
-import stat
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -20,7 +18,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from flctool import __version__
-from flctool.atomic import regular_target, write_text_atomic
+from flctool.atomic import regular_target, replace_all, write_text_atomic
 from flctool.errors import ExportError
 from flctool.spec import Behaviour
 
@@ -109,7 +107,8 @@ class Importer(ABC):
 
 
 def write_files(texts: Mapping[Path, str], *, force: bool) -> list[Path]:
-    """Write every file or none: check all targets, then write them (see :func:`replace_all`).
+    """Write every file or none: check all targets, then write them (see
+    :func:`flctool.atomic.replace_all`).
 
     Returns the files written; an OSError becomes an ExportError naming the file.
     """
@@ -126,36 +125,6 @@ def write_files(texts: Mapping[Path, str], *, force: bool) -> list[Path]:
         raise ExportError(f"cannot write {where}: {exc.strerror or exc}",
                           hint="choose another path with -o") from None
     return list(texts)
-
-
-def replace_all(contents: Mapping[Path, bytes]) -> None:
-    """Write several files as nearly at once as the file system allows.
-
-    Each file is written in full to a temporary file beside its target first, with the
-    permissions :mod:`flctool.atomic` gives (the replaced file's mode, else 0o666 less the
-    umask); only when every one is on disk are they renamed over their targets, one
-    ``os.replace`` each. Any error before the renames removes the temporary files and leaves
-    every target as it was.
-    """
-    staged: list[tuple[Path, Path]] = []
-    try:
-        for path, data in contents.items():
-            target = regular_target(path)
-            tmp = target.with_name(f".{target.name}.{secrets.token_hex(4)}.tmp")
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-            staged.append((tmp, target))
-            with os.fdopen(fd, "wb") as handle:
-                handle.write(data)
-                handle.flush()
-                if target.exists():
-                    os.fchmod(handle.fileno(), stat.S_IMODE(target.stat().st_mode))
-                os.fsync(handle.fileno())
-    except BaseException:
-        for tmp, _ in staged:
-            tmp.unlink(missing_ok=True)
-        raise
-    for tmp, target in staged:
-        os.replace(tmp, target)
 
 
 def check_writable(path: Path, *, force: bool) -> None:

@@ -14,6 +14,8 @@ from __future__ import annotations
 import numpy as np
 
 from flctool.compile import compile_behaviour
+from flctool.compile.defuzzify import centre_of_area
+from flctool.compile.membership import trapezoid
 from flctool.errors import ExportError
 from flctool.spec import Behaviour
 
@@ -42,16 +44,6 @@ def grid_states(behaviour: Behaviour) -> np.ndarray:
     return np.column_stack(columns).astype(np.float64)
 
 
-def _membership(s: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The C source's float membership, operation by operation (flctool's trapezoid)."""
-    zero = F32(0)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        falling = np.where(q[3] > q[2], np.maximum((q[3] - s) / (q[3] - q[2]), zero), zero)
-        rising = np.where(q[1] > q[0], np.maximum((s - q[0]) / (q[1] - q[0]), zero), zero)
-    mu: np.ndarray = np.where(s > q[2], falling, np.where(s < q[1], rising, F32(1)))
-    return mu.astype(F32)
-
-
 def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     """(S,) the float C export's outputs for (S, N) ``states`` (rounded to float)."""
     controller = compile_behaviour(behaviour)
@@ -60,22 +52,24 @@ def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
         lo, hi = (F32(v) for v in variable.range)
         s = states[:, i].astype(F32)
         s = np.where(s < lo, lo, np.where(s > hi, hi, s))
-        memberships.append(np.stack([_membership(s, np.array(q, dtype=F32))
-                                     for q in variable.sets.values()], axis=1))
+        memberships.append(trapezoid(s, np.array(list(variable.sets.values()), dtype=F32)))
     singletons = controller.singletons.astype(F32)
     assert controller.consequents is not None  # a deployable behaviour has every rule
-    weighted = np.zeros(len(states), dtype=F32)
-    total = np.zeros(len(states), dtype=F32)
-    for m, sets in enumerate(np.ndindex(*controller.shape)):  # rule order, eq. 1
-        alpha = memberships[0][:, sets[0]]
-        for i in range(1, len(sets)):
-            alpha = np.minimum(alpha, memberships[i][:, sets[i]])  # eq. 2
-        weighted += alpha * singletons[controller.consequents[m]]  # eq. 3
-        total += alpha
     with np.errstate(divide="ignore", invalid="ignore"):
-        out = weighted / total
+        out = centre_of_area(((_activation(memberships, sets),
+                               singletons[controller.consequents[m]])
+                              for m, sets in enumerate(np.ndindex(*controller.shape))),
+                             np.zeros(len(states), dtype=F32))  # rule order, eq. 1
     clipped: np.ndarray = np.clip(out, singletons.min(), singletons.max())
     return clipped.astype(np.float64)
+
+
+def _activation(memberships: list[np.ndarray], sets: tuple[int, ...]) -> np.ndarray:
+    """One rule's activation over the states: the minimum of its sets' memberships (eq. 2)."""
+    alpha = memberships[0][:, sets[0]]
+    for i in range(1, len(sets)):
+        alpha = np.minimum(alpha, memberships[i][:, sets[i]])
+    return alpha
 
 
 def near_vertical_edges(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:

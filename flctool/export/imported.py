@@ -346,7 +346,7 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         check_unique(file, ((s.name, s.line) for s in variable.sets), "set",
                      f" of input '{variable.name}'")
     check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
-    _check_rules(imported)
+    _check_rules_cover_every_input(imported)
     _check_methods(imported)
     _identifiers(imported)
     marks: dict[tuple[PathPart, ...], tuple[int, int]] = {
@@ -367,8 +367,8 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
                       "commands": {c.name: c.value for c in imported.commands}}
     for index, rule in enumerate(imported.rules):
         marks[("rules", index)] = (rule.line, 1)
-    data["rules"] = [{"if": {i.name: rule.antecedent[i.name] for i in imported.inputs},
-                      "then": rule.command} for rule in imported.rules]
+    data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command}
+                     for rule in imported.rules]
     return behaviour_from_data(data, SourceMap(file, marks))
 
 
@@ -399,21 +399,22 @@ def _identifiers(imported: ImportedController) -> None:
         for item in variable.sets:
             item.name = sets[item.name]
         for rule in imported.rules:
-            if variable.name in rule.antecedent:
-                rule.antecedent[variable.name] = sets[rule.antecedent[variable.name]]
+            term = rule.antecedent.get(variable.name)
+            if term is not None:  # (an unknown term is left for the rule checks to name)
+                rule.antecedent[variable.name] = sets.get(term, term)
     inputs = {v.name: identifier(v.name) for v in imported.inputs}
     _check_renames(file, [(v.name, inputs[v.name], v.line) for v in imported.inputs], "input")
     for variable in imported.inputs:
         variable.name = inputs[variable.name]
     for rule in imported.rules:
-        rule.antecedent = {inputs[n]: s for n, s in rule.antecedent.items()}
+        rule.antecedent = {inputs.get(n, n): s for n, s in rule.antecedent.items()}
     commands = {c.name: identifier(c.name) for c in imported.commands}
     _check_renames(file, [(c.name, commands[c.name], c.line) for c in imported.commands],
                    "output term")
     for command in imported.commands:
         command.name = commands[command.name]
     for rule in imported.rules:
-        rule.command = commands[rule.command]
+        rule.command = commands.get(rule.command, rule.command)
 
 
 def _check_renames(file: str, renames: list[tuple[str, str, int]], kind: str) -> None:
@@ -427,35 +428,21 @@ def _check_renames(file: str, renames: list[tuple[str, str, int]], kind: str) ->
         first.setdefault(new, (old, line))
 
 
-def _check_rules(imported: ImportedController) -> None:
-    file = imported.file
-    inputs = {i.name: {s.name for s in i.sets} for i in imported.inputs}
-    commands = {c.name for c in imported.commands}
-    seen: dict[tuple[str, ...], int] = {}
+def _check_rules_cover_every_input(imported: ImportedController) -> None:
+    """Refuse a rule that leaves out an input: in these formats it means something no rule of
+    flctool's grid does. Every other rule check (unknown inputs, sets and commands, repeated
+    antecedents) is the behaviour's own, located at the rule's line by :func:`build_behaviour`.
+    """
+    inputs = [i.name for i in imported.inputs]
     for rule in imported.rules:
-        for name, term in rule.antecedent.items():
-            if name not in inputs:
-                raise unsupported(file, rule.line, f"the rule names an unknown input '{name}'")
-            if term not in inputs[name]:
-                raise unsupported(file, rule.line,
-                                  f"input '{name}' has no term '{term}' (in a rule)")
         left_out = [n for n in inputs if n not in rule.antecedent]
-        if left_out:
+        # (a rule naming an unknown input is a typo the behaviour's checks name instead)
+        if left_out and all(n in inputs for n in rule.antecedent):
             raise unsupported(
-                file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}: it "
-                "fires with the other inputs' minimum alone, which no rule of the full grid "
+                imported.file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}: "
+                "it fires with the other inputs' minimum alone, which no rule of the full grid "
                 "(eq. 1-2) does, so expanding it over the sets would change the output",
                 DONT_CARE_HINT)
-        if rule.command not in commands:
-            raise unsupported(file, rule.line,
-                              f"the output has no term '{rule.command}' (in a rule)")
-        key = tuple(rule.antecedent[n] for n in inputs)
-        if key in seen:
-            raise unsupported(
-                file, rule.line, f"the rule repeats the antecedent of the rule at line "
-                f"{seen[key]}; flctool has one rule per combination of sets",
-                "merge the two rules into one")
-        seen[key] = rule.line
 
 
 def _check_methods(imported: ImportedController) -> None:

@@ -13,6 +13,7 @@ from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback,
 from flctool.learners.metrics import GenerationMetrics
 from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.spec.located import located
 from flctool.spec.models import Behaviour
 
 #: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.learners`` entries).
@@ -23,11 +24,18 @@ def make_learner(behaviour: Behaviour, env: BatchEnv | None = None) -> Learner:
     """The learner ``behaviour.learning.learner``, on ``env`` or on a batch-of-one
     environment built from the behaviour's ``environment:`` section."""
     learner_class = LEARNERS.get(behaviour.learning.learner)
+    built = env is None
     if env is None:
         from flctool.envs import make_env
 
         env = make_env(behaviour, 1)
-    return learner_class(behaviour, env)
+    try:
+        with located(behaviour):  # the learner's checks name fields; this adds file and line
+            return learner_class(behaviour, env)
+    except BaseException:
+        if built:
+            env.close()  # built here for this learner: nobody else will close it
+        raise
 
 
 __all__ = [

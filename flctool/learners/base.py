@@ -29,9 +29,11 @@ from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.callbacks import Callback, CallbackList
+from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate, Selection
 from flctool.learners.trial import SparseRules
+from flctool.spec.learning import LearningConfig
 from flctool.spec.models import Behaviour
 
 
@@ -51,8 +53,6 @@ IntArray = NDArray[np.intp]
 
 TRAIN_SEED_LOW = 2**32
 TRAIN_SEED_HIGH = 2**62
-STREAMS = ("ga", "env", "explore")
-_DAMAGED = "delete the damaged checkpoint (and any later ones) to resume from the one before"
 
 
 @dataclass(frozen=True)
@@ -67,11 +67,14 @@ class GenerationResult:
 class Learner(ABC):
     """Base of every learner; subclasses supply :meth:`evaluate` and :meth:`advance`.
 
-    Attributes: ``population (P, M)`` command indices, ``fitness (P,)`` of the last evaluated
-    generation, ``generation`` (-1 before the first), ``elapsed`` seconds of training so far.
+    Attributes: ``config``, the behaviour's ``learning:`` section, of the model the learner's
+    plugin entry names (a subclass declares it: ``config: PittConfig``); ``population (P,
+    M)`` command indices, ``fitness (P,)`` of the last evaluated generation, ``generation``
+    (-1 before the first), ``elapsed`` seconds of training so far.
     """
 
     name: ClassVar[str]
+    config: LearningConfig
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
     fuzzy_q: RuleStrengths | None = None
     #: How the hall of fame ranks candidates (see :class:`Selection`).
@@ -79,7 +82,14 @@ class Learner(ABC):
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         self.behaviour = behaviour
-        self.config = behaviour.learning
+        learning = behaviour.learning
+        if learning.learner != self.name:
+            raise LearnError(f"the {self.name} learner cannot learn a behaviour whose "
+                             f"learning section is the {learning.learner} learner's",
+                             hint=f"set learning.learner: {self.name}, or use make_learner")
+        # The section's model is chosen by 'learner' among the plugins' models, so it is
+        # the one this learner's entry names: the type a subclass declares for config.
+        self.config = learning
         self.controller = compile_behaviour(behaviour)
         self.rules = SparseRules(self.controller)
         self.env = env
@@ -148,9 +158,13 @@ class Learner(ABC):
         index, consequents, fitness = self.best()
         return self.generation, index, consequents, fitness, None
 
+    def elite_count(self) -> int:
+        """How many of a generation's best are its elites (at least 1); a GA's ``elites``."""
+        return 1
+
     def elite_candidates(self) -> list[Candidate]:
         """The last generation's elites (at least its best) as hall-of-fame candidates."""
-        count = max(1, self.config.elites) if self.population.shape[0] > 1 else 1
+        count = self.elite_count() if self.population.shape[0] > 1 else 1
         order = np.argsort(-self.fitness, kind="stable")[:count]
         found = [self.selection.candidate_for(self.population[i]) for i in order]
         return [c for c in found if c is not None]
@@ -190,81 +204,19 @@ class Learner(ABC):
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        """Restore what :meth:`state_dict` saved; :class:`LearnError` if it is damaged or of
-        another learner or behaviour."""
-        if not isinstance(state, dict):
-            raise LearnError(f"a checkpoint is a JSON object, not {type(state).__name__}",
-                             hint=_DAMAGED)
-        if state.get("learner") != self.name:
-            raise LearnError(f"the checkpoint is of learner '{state.get('learner')}', "
-                             f"not '{self.name}'",
-                             hint="resume with the learner the run was started with")
-        rng = state.get("rng")
-        if not isinstance(rng, dict):
-            rng = {}
-        missing = [name for name in STREAMS if name not in rng]
-        if missing:
-            raise LearnError(f"the checkpoint has no state of the random generator(s) "
-                             f"{', '.join(missing)}", hint=_DAMAGED)
-        try:
-            generation = int(state["generation"])
-            elapsed = float(state["elapsed"])
-            population = np.array(state["population"], dtype=np.intp)
-            fitness = np.array(state["fitness"], dtype=np.float64)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise LearnError(f"the checkpoint is incomplete or damaged ({exc!r})",
-                             hint=_DAMAGED) from None
+        """Restore what :meth:`state_dict` saved; :class:`LearnError` (and the learner left
+        as it was) if it is damaged or of another learner or behaviour (the checks are
+        :func:`~flctool.learners.checkpoint.read_checkpoint`'s)."""
         controller = self.controller
-        if population.ndim == 2 and population.shape[1] != controller.n_rules:
-            raise LearnError(f"the checkpoint's controllers have {population.shape[1]} "
-                             f"rules, the behaviour {controller.n_rules}",
-                             hint="resume with the behaviour the run was started with")
-        problem = population_problem(population, fitness, controller.n_rules,
-                                     controller.n_commands)
-        if problem is not None:
-            raise LearnError(f"the checkpoint's {problem}", hint=_DAMAGED)
-        if self.fuzzy_q is not None:
-            shape = (controller.n_rules, controller.n_commands)
-            for key in ("q", "traces"):
-                try:
-                    table = np.array(state.get(key), dtype=np.float64)
-                except (TypeError, ValueError):
-                    table = np.zeros(0)
-                if table.shape != shape:
-                    raise LearnError(f"the checkpoint's '{key}' table has shape {table.shape}, "
-                                     f"not (rules, commands) = {shape}", hint=_DAMAGED)
-        saved = {name: generator.bit_generator.state for name, generator in self.rngs.items()}
-        try:
-            for name, generator in self.rngs.items():
-                generator.bit_generator.state = rng[name]
-        except (KeyError, TypeError, ValueError) as exc:
-            for name, generator in self.rngs.items():  # leave the learner as it was
-                generator.bit_generator.state = saved[name]
-            raise LearnError(f"the checkpoint's random generator states are damaged ({exc!r})",
-                             hint=_DAMAGED) from None
-        self.selection.load_state_dict(state.get("selection"), controller.n_rules,
-                                       controller.n_commands)
-        self.generation, self.elapsed = generation, elapsed
-        self.population, self.fitness = population, fitness
+        checkpoint = read_checkpoint(state, Expected(
+            controller.n_rules, controller.n_commands, learner=self.name,
+            max_population=self.config.population, strengths=self.uses_strengths))
+        for name, generator in self.rngs.items():
+            generator.bit_generator.state = checkpoint.rng[name]
+        self.selection.restore(checkpoint.selection)
+        self.generation, self.elapsed = checkpoint.generation, checkpoint.elapsed
+        self.population, self.fitness = checkpoint.population, checkpoint.fitness
         self.load_extra_state(state)
-
-
-def population_problem(population: IntArray, fitness: FloatArray, n_rules: int,
-                       n_commands: int) -> str | None:
-    """What is wrong with a checkpoint's ``population (P, M)`` and ``fitness (P,)``, or None.
-
-    Values must be command indices 0..K-1: anything else would index past the singletons.
-    """
-    if population.ndim != 2 or population.shape[0] < 1 or population.shape[1] != n_rules:
-        return (f"population has shape {population.shape}, not (individuals, rules) with "
-                f"{n_rules} rules")
-    if population.min() < 0 or population.max() >= n_commands:
-        return (f"population holds command indices {population.min()}..{population.max()}, "
-                f"outside 0..{n_commands - 1}")
-    if fitness.shape != population.shape[:1]:
-        return (f"fitness has shape {fitness.shape}, not ({population.shape[0]},) as its "
-                "population")
-    return None
 
 
 def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:

@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from flctool.envs.base import BatchEnv
 from flctool.learners.base import GenerationResult, Learner
 from flctool.learners.trial import add_in_order, run_trial
+from flctool.spec.learning import FuzzyQConfig, QConfig
 from flctool.spec.models import Behaviour
 
 FloatArray = NDArray[np.float64]
@@ -196,9 +197,9 @@ class EpsilonGreedyChooser:
         return choices
 
 
-def new_fuzzy_q(behaviour: Behaviour, n_rules: int, n_commands: int) -> FuzzyQ:
-    """A q table filled with ``learning.q.initial`` and the run's alpha, gamma, lambda."""
-    config = behaviour.learning.q
+def new_fuzzy_q(config: QConfig, n_rules: int, n_commands: int) -> FuzzyQ:
+    """A q table (M, K) filled with ``q.initial``, learning with ``q``'s alpha, gamma and
+    lambda (``config`` is ``learning.q``)."""
     return FuzzyQ(np.full((n_rules, n_commands), config.initial), config.alpha, config.gamma,
                   config.lambda_)
 
@@ -223,12 +224,13 @@ class FuzzyQLearner(Learner):
     """
 
     name: ClassVar[str] = "fuzzy_q"
+    config: FuzzyQConfig
     rank_by: ClassVar[str] = "recency"  # exploring fitness says little of the greedy one
     fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
-        self.fuzzy_q = new_fuzzy_q(behaviour, self.controller.n_rules,
+        self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
                                    self.controller.n_commands)
         self.fixed = dict(zip(self.fixed_rules.tolist(), self.fixed_commands.tolist(),
                               strict=True))

@@ -26,6 +26,7 @@ from flctool.learners.ga import (
     random_population,
     strength_crossover,
 )
+from flctool.spec.learning import HybridConfig
 from flctool.spec.models import Behaviour
 
 
@@ -33,6 +34,7 @@ class HybridLearner(Learner):
     """GA exploration of whole controllers + Q-learning credit assignment to single rules."""
 
     name: ClassVar[str] = "hybrid"
+    config: HybridConfig
     fuzzy_q: FuzzyQ
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
@@ -40,10 +42,13 @@ class HybridLearner(Learner):
         config = self.config
         n_rules, n_commands = self.controller.n_rules, self.controller.n_commands
         self.ga = GeneticAlgorithm(config.crossover, config.elites)
-        self.fuzzy_q = new_fuzzy_q(behaviour, n_rules, n_commands)
+        self.fuzzy_q = new_fuzzy_q(config.q, n_rules, n_commands)
         self.population = self.keep_fixed(random_population(
             self.rngs["ga"], config.population, n_rules, n_commands))
         self.fitness = np.zeros(config.population)
+
+    def elite_count(self) -> int:
+        return max(1, self.config.elites)
 
     def evaluate(self, generation: int) -> GenerationResult:
         config = self.config

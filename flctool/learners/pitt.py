@@ -22,6 +22,7 @@ from flctool.learners.ga import (
     uniform_crossover,
     uniform_mutation,
 )
+from flctool.spec.learning import PittConfig
 from flctool.spec.models import Behaviour
 
 
@@ -29,6 +30,7 @@ class PittLearner(Learner):
     """A population of controllers evolved by fitness alone."""
 
     name: ClassVar[str] = "pitt"
+    config: PittConfig
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
@@ -42,6 +44,9 @@ class PittLearner(Learner):
             self.rngs["ga"], config.population, self.controller.n_rules,
             self.controller.n_commands))
         self.fitness = np.zeros(config.population)
+
+    def elite_count(self) -> int:
+        return max(1, self.config.elites)
 
     def evaluate(self, generation: int) -> GenerationResult:
         config = self.config

@@ -37,16 +37,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.envs.base import BatchEnv
-from flctool.errors import LearnError
 from flctool.learners.trial import SparseRules, Trial, run_trial
 from flctool.rollout import Estimate, mean_interval
 from flctool.spec.learning import SelectionConfig, StopConfig
+
+if TYPE_CHECKING:
+    from flctool.learners.checkpoint import SelectionState
 
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
@@ -55,7 +57,6 @@ VALIDATION_SEED_LOW = 2**62
 VALIDATION_SEED_HIGH = 2**63 - 1
 #: Index of the validation seeds' child in the run's SeedSequence (after ga, env, explore).
 _VALIDATION_STREAM = 3
-_DAMAGED = "delete the damaged checkpoint (and any later ones) to resume from the one before"
 
 
 def validation_seeds(run_seed: int, episodes: int) -> NDArray[np.int64]:
@@ -333,33 +334,17 @@ class Selection:
                 "usage": self.usage.to_dict(), "stop_reason": self.stop_reason,
                 "finalized": self.finalized, "validated": self.validated}
 
-    def load_state_dict(self, state: Any, n_rules: int, n_commands: int) -> None:
-        """Restore what :meth:`state_dict` saved; :class:`LearnError` if it is damaged."""
-        if state is None:  # a checkpoint of a run without selection records
+    def restore(self, state: SelectionState | None) -> None:
+        """Restore what :meth:`state_dict` saved, as :func:`~flctool.learners.checkpoint.
+        read_checkpoint` validated it (None: a checkpoint of a run without selection)."""
+        if state is None:
             return
-        try:
-            hall = [Candidate.from_dict(c) for c in state["hall"]]
-            best = None if state["best"] is None else Candidate.from_dict(state["best"])
-            usage = Usage(**{k: int(v) for k, v in state["usage"].items()})
-            stop_reason = state["stop_reason"]
-            finalized = bool(state["finalized"])
-            validated = [dict(v) for v in state["validated"]]
-        except (KeyError, TypeError, ValueError, AttributeError) as exc:
-            raise LearnError(f"the checkpoint's selection record is damaged ({exc!r})",
-                             hint=_DAMAGED) from None
-        for candidate in [*hall, *([best] if best else [])]:
-            genes = candidate.consequents
-            if genes.shape != (n_rules,) or (genes.size and (
-                    genes.min() < 0 or genes.max() >= n_commands)):
-                raise LearnError("the checkpoint's selection record holds a controller that "
-                                 "is not one of this behaviour", hint=_DAMAGED)
-        if stop_reason is not None and not isinstance(stop_reason, str):
-            raise LearnError("the checkpoint's stop reason is not a name", hint=_DAMAGED)
-        self.hall = {c.key(): c for c in hall}
+        self.hall = {c.key(): c for c in state.hall}
+        best = state.best
         # the best is the same object as its hall entry, so later validations update both
         self.best = self.hall.get(best.key(), best) if best is not None else None
-        self.usage, self.stop_reason, self.finalized = usage, stop_reason, finalized
-        self.validated = validated
+        self.usage, self.stop_reason = state.usage, state.stop_reason
+        self.finalized, self.validated = state.finalized, state.validated
 
     def record(self) -> dict[str, Any]:
         """What run.json shows: the validation scheme, every candidate validated (in order:

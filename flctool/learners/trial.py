@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from flctool.compile import Controller
+from flctool.compile.defuzzify import centre_of_area
+from flctool.compile.membership import firing_sets
 from flctool.envs.base import BatchEnv
 from flctool.errors import InferenceError
 
@@ -61,28 +63,15 @@ class SparseRules:
                                      hint="NaN has no membership; fix the adapter's sensor")
             low, high, sets = self._lows[i], self._highs[i], self._sets[i]
             s = low if value < low else high if value > high else value  # clip to the range
-            # the sets this state is a member of: index and membership mu > 0
-            members = []
-            for j, (pa, pb, pc, pd) in enumerate(sets):
-                # trapezoid_scalar inlined (the same operations, so the same bits)
-                if s > pc:
-                    mu = (pd - s) / (pd - pc) if pd > pc else 0.0
-                elif s < pb:
-                    mu = (s - pa) / (pb - pa) if pb > pa else 0.0
-                else:
-                    mu = 1.0
-                if mu > 0.0:
-                    members.append((j, mu))
+            members = firing_sets(s, sets)  # (index, mu > 0) in set order
             if i == 0:  # the first input: min(1.0, mu) is mu, as 0 < mu <= 1
                 rules = [j for j, _ in members]
                 alphas = [mu for _, mu in members]
             else:
                 width = len(sets)
-                rules = [r * width + k for r in rules for k, _ in members]
+                rules = [r * width + j for r in rules for j, _ in members]
                 alphas = [a if a < mu else mu for a in alphas for _, mu in members]
-        total = 0.0  # add_in_order, inlined
-        for a in alphas:
-            total += a
+        total = add_in_order(alphas)
         if not total > 0.0:  # covered ranges fire a rule; only underflow leaves none
             raise InferenceError(f"no rule fires for the state {state}: the sets overlap too "
                                  "little to be computed in floating point",
@@ -91,16 +80,8 @@ class SparseRules:
 
     def output(self, alphas: list[float], commands: list[int]) -> float:
         """Crisp output of eq. 3 from the firing rules' activations and command indices."""
-        return self.crisp(alphas, commands, add_in_order(alphas))
-
-    def crisp(self, alphas: list[float], commands: list[int], total: float) -> float:
-        """:meth:`output` given ``total = add_in_order(alphas)`` (as :meth:`activations`
-        returns it), so the training loop does not add the activations twice."""
-        singletons = self.singletons
-        numerator = 0.0
-        for a, k in zip(alphas, commands, strict=True):
-            numerator += a * singletons[k]
-        return self.clip(numerator / total)
+        return self.clip(centre_of_area(zip(alphas, map(self.singletons.__getitem__, commands),
+                                            strict=True), 0.0))
 
     def clip(self, value: float) -> float:
         """Within the commands, as Controller.output keeps it (rounding may step an ulp
@@ -192,7 +173,7 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
         else:
             commands = [consequents[m] for m in active]  # type: ignore[index]
         # eq. 3, or the vote
-        action = rules.vote(alphas, commands) if votes else rules.crisp(alphas, commands, total)
+        action = rules.vote(alphas, commands) if votes else rules.output(alphas, commands)
         observation, reward, terminal, truncated = env.step_one(action)
         ret += reward
         steps += 1
@@ -214,24 +195,22 @@ def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list
                  acted: set[int] | None) -> Trial:
     """:func:`run_trial` with fixed consequents, no q update and eq. 3 (pitt's trials and
     every validation episode): the same operations with less bookkeeping per step."""
-    # each rule's command singleton, so eq. 3's numerator needs no command list
-    singletons = [rules.singletons[k] for k in consequents]
+    # each rule's command singleton, so eq. 3 needs no command list
+    singleton = [rules.singletons[k] for k in consequents].__getitem__
     clip = rules.clip
-    active, alphas, total = rules.activations(env.reset_one(seed).tolist())
+    active, alphas, _ = rules.activations(env.reset_one(seed).tolist())
     ret = 0.0
     steps = 0
     while True:
         if acted is not None:
             acted.update(active)
-        numerator = 0.0
-        for a, m in zip(alphas, active, strict=True):
-            numerator += a * singletons[m]
-        observation, reward, terminal, truncated = env.step_one(clip(numerator / total))
+        action = clip(centre_of_area(zip(alphas, map(singleton, active), strict=True), 0.0))
+        observation, reward, terminal, truncated = env.step_one(action)
         ret += reward
         steps += 1
         if terminal:
             return Trial(ret, steps, bool(env.success()[0]))
         # a truncated episode's last state is fired too, as run_trial does (its errors count)
-        active, alphas, total = rules.activations(observation.tolist())
+        active, alphas, _ = rules.activations(observation.tolist())
         if truncated:
             return Trial(ret, steps, bool(env.success()[0]))

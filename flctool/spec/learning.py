@@ -1,16 +1,21 @@
-"""The ``learning:`` section: which learner, and its hyperparameters (paper Sec. IV)."""
+"""The ``learning:`` section: one config model per learner, chosen by ``learner`` (paper Sec. IV).
+
+:class:`LearningConfig` holds what every learner reads; each learner's model extends it with
+its own keys and ``learner: Literal[name]``, and its plugin entry (:mod:`flctool.plugins`)
+names that model, so ``learning:`` is the union of the models of every learner there is.
+"""
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Mapping
+from typing import Any, Literal
 
-from pydantic import Field, ValidationInfo, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
-from flctool.registry import did_you_mean
 from flctool.spec.base import Section
 
-#: The built-in learners (flctool.plugins adds installed ones).
-LEARNER_NAMES = ("pitt", "fuzzy_q", "hybrid")
+#: The learner of a ``learning:`` section that names none: the paper's method.
+DEFAULT_LEARNER = "hybrid"
 
 
 class QConfig(Section):
@@ -66,26 +71,46 @@ class StopConfig(Section):
         "stop once a controller's validated mean fitness reaches this"))
 
 
-class LearningConfig(Section):
-    """Defaults are the paper's protocol: population 10, pc 0.2, pm 0.1, 30 generations."""
+def _learner_required_unless_default(schema: dict[str, Any], model: type[Any]) -> None:
+    # flctool reads a section without 'learner' as the default learner's, so in the JSON
+    # Schema only that model may leave it out: editors then match a file to one model, as
+    # flctool does.
+    field = model.model_fields.get("learner")
+    if field is not None and field.default != DEFAULT_LEARNER:
+        required = schema.setdefault("required", [])
+        if "learner" not in required:
+            required.insert(0, "learner")
 
-    learner: str = Field("hybrid", description=(
-        "one of: " + ", ".join(LEARNER_NAMES) + ", or an installed plugin's"))
+
+class LearningConfig(Section):
+    """What every learner reads. Each learner's config extends it with its own keys and
+    ``learner: Literal[name]``; a plugin's learner does the same (docs/plugins.md).
+
+    Defaults are the paper's protocol: population 10, 30 generations, one trial each.
+    """
+
+    model_config = ConfigDict(json_schema_extra=_learner_required_unless_default)
+
+    learner: str = Field(DEFAULT_LEARNER, description=(
+        "which learner reads this section; flctool learn --help lists the installed ones"))
     seed: int = Field(0, ge=0, description="seeds every random choice of the run")
-    population: int = Field(10, ge=2)
+    population: int = Field(10, ge=2, description=(
+        "individuals per generation (fuzzy_q: a generation is population x trials episodes)"))
     generations: int = Field(30, ge=1)
-    crossover: float = Field(0.2, ge=0, le=1, description="crossover probability pc")
-    mutation: float = Field(0.1, ge=0, le=1, description="mutation probability pm, per gene")
-    pitt_crossover: Literal["uniform", "one_point"] = Field("uniform", description=(
-        "the pitt learner's crossover (the hybrid takes, gene by gene, the stronger rule)"))
-    elites: int = Field(1, ge=0, description="best individuals copied unchanged")
     trials: int = Field(1, ge=1, description="trials per individual per generation")
-    common_starts: bool = Field(False, description=(
-        "every individual of a generation gets the same start states"))
-    q: QConfig = QConfig()
-    exploration: ExplorationConfig = ExplorationConfig()
     selection: SelectionConfig = SelectionConfig()
     stop: StopConfig = StopConfig()
+
+
+class GeneticConfig(LearningConfig):
+    """The genetic algorithm's keys, shared by the ``pitt`` and ``hybrid`` learners
+    (paper Sec. IV: pc 0.2, pm 0.1, one elite)."""
+
+    crossover: float = Field(0.2, ge=0, le=1, description="crossover probability pc")
+    mutation: float = Field(0.1, ge=0, le=1, description="mutation probability pm, per gene")
+    elites: int = Field(1, ge=0, description="best individuals copied unchanged")
+    common_starts: bool = Field(False, description=(
+        "every individual of a generation gets the same start states"))
 
     @field_validator("elites")
     @classmethod
@@ -97,13 +122,87 @@ class LearningConfig(Section):
                              "the population (the paper copies 1)")
         return elites
 
-    @field_validator("learner")
-    @classmethod
-    def _known_learner(cls, name: str) -> str:
-        from flctool.plugins import names
 
-        known = names("learner")
-        if name not in known:
-            raise ValueError(f"unknown learner '{name}'.{did_you_mean(name, known)} "
-                             f"Use one of: {', '.join(known)}")
-        return name
+class PittConfig(GeneticConfig):
+    """``learner: pitt``: the GA alone, learning from fitness only."""
+
+    learner: Literal["pitt"] = Field("pitt", description=(
+        "the Pitt approach: a GA over whole controllers"))
+    pitt_crossover: Literal["uniform", "one_point"] = Field("uniform", description=(
+        "how two parents make a child: each gene from either (uniform) or one cut point"))
+
+
+class FuzzyQConfig(LearningConfig):
+    """``learner: fuzzy_q``: fuzzy Q-learning of one controller (eq. 4-9)."""
+
+    learner: Literal["fuzzy_q"] = Field("fuzzy_q", description="fuzzy Q-learning of one controller")
+    q: QConfig = QConfig()
+    exploration: ExplorationConfig = ExplorationConfig()
+
+
+class HybridConfig(GeneticConfig):
+    """``learner: hybrid``, the paper's method: the GA guided by fuzzy-Q rule strengths."""
+
+    learner: Literal["hybrid"] = Field("hybrid", description=(
+        "the paper's method: the GA guided by fuzzy-Q rule strengths (the default)"))
+    q: QConfig = QConfig()
+
+
+def learner_keys(model: type[BaseModel]) -> tuple[str, ...]:
+    """The keys a ``learning:`` model reads, as a file writes them."""
+    return tuple(info.alias or name for name, info in model.model_fields.items())
+
+
+def readers_of(key: str) -> tuple[str, ...]:
+    """The learners (built-in and installed) whose ``learning:`` reads ``key``."""
+    from flctool.plugins import plugins
+
+    return tuple(plugin.name for plugin in plugins("learner")
+                 if key in learner_keys(plugin.config_model()))
+
+
+def foreign_key_message(key: str, learner: str) -> str | None:
+    """Why ``key`` may not appear in the ``learning:`` of ``learner``, when another learner
+    reads it; None for a key no learner reads (a typo, reported as unknown)."""
+    readers = readers_of(key)
+    if not readers or learner in readers:
+        return None
+    if len(readers) == 1:
+        return (f"'{key}' is read by the {readers[0]} learner only; remove it or set "
+                f"learner: {readers[0]}")
+    return (f"'{key}' is read by the {', '.join(readers[:-1])} and {readers[-1]} learners, "
+            f"not by {learner}; remove it or set learner to one of them")
+
+
+#: The keys of the one flat ``learning:`` model of earlier versions, which wrote every one of
+#: them into each behaviour they recorded (a run's behaviour.yaml and best.yaml).
+EARLIER_RECORD_KEYS = frozenset((
+    "learner", "seed", "population", "generations", "crossover", "mutation", "pitt_crossover",
+    "elites", "trials", "common_starts", "q", "exploration"))
+
+
+def section_for_learner(learning: Mapping[str, Any]) -> dict[str, Any]:
+    """A ``learning:`` section (as data) ready to validate: named its learner, the default
+    if it names none, and, if an earlier version recorded it, without the keys its learner
+    never read. A section someone wrote keeps every key, so that a stray key is reported."""
+    section = {"learner": DEFAULT_LEARNER, **learning}
+    learner = section["learner"]
+    if section.keys() >= EARLIER_RECORD_KEYS and isinstance(learner, str):
+        return keep_keys_read_by(section, learner)
+    return section
+
+
+def keep_keys_read_by(learning: Mapping[str, Any], learner: str) -> dict[str, Any]:
+    """``learning`` (a section as data) for ``learner``: the keys it does not read left out.
+
+    For a section written for another learner, e.g. when an override switches the learner
+    or a run directory of an older flctool recorded every key for every learner. A learner
+    nobody knows keeps every key, so that validation reports the name.
+    """
+    from flctool.plugins import plugins
+
+    models = {plugin.name: plugin.config_model() for plugin in plugins("learner")}
+    if learner not in models:
+        return dict(learning)
+    keys = learner_keys(models[learner])
+    return {key: value for key, value in learning.items() if key in keys}

@@ -14,13 +14,14 @@ from typing import Any
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
+from flctool.plugins import names
 from flctool.registry import did_you_mean
 from flctool.spec.checks import check_input, check_rules, limit_problems
 from flctool.spec.environment import AdapterConfig
+from flctool.spec.learning import foreign_key_message
+from flctool.spec.located import attach_source
 from flctool.spec.models import (
-    ADAPTER_NAMES,
     FORMAT_VERSION,
-    LEARNING_TAGS,
     Behaviour,
     EnvironmentConfig,
     InputVariable,
@@ -79,6 +80,7 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None) -> Behaviour
     problems += [source.problem(p.path, p.message, p.hint) for p in semantic]
     if problems:
         raise SpecError(_in_file_order(problems), source.file)
+    attach_source(behaviour, source)  # later layers locate their errors with it
     return behaviour
 
 
@@ -208,9 +210,9 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     message = error["msg"]
     hint = ""
     # A discriminated union puts the chosen tag into the path; the file does not have it.
-    if len(loc) >= 2 and ((loc[0] == "environment" and loc[1] in ADAPTER_NAMES)
-                          or (loc[0] == "learning" and loc[1] in LEARNING_TAGS)):
-        del loc[1]
+    chosen = None
+    if len(loc) >= 2 and loc[0] in _CHOSEN_BY and loc[1] in names(_CHOSEN_BY[loc[0]][0]):
+        chosen = str(loc.pop(1))
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
@@ -239,19 +241,25 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     elif kind == "missing":
         message = f"required field '{loc[-1]}' is missing"
         hint = f"add '{loc[-1]}:' here"
+    elif kind == "extra_forbidden" and len(loc) == 2 and loc[0] == "learning" and chosen \
+            and (foreign := foreign_key_message(str(loc[1]), chosen)) is not None:
+        message = foreign  # another learner's key: say whose
     elif kind == "extra_forbidden":
-        allowed = _allowed_keys(loc[:-1], error)
+        allowed = _allowed_keys(loc[:-1], chosen)
         message = f"unknown key '{loc[-1]}'.{did_you_mean(str(loc[-1]), allowed)}"
         hint = f"allowed keys here: {', '.join(allowed)}" if allowed else "remove it"
-    elif kind == "union_tag_invalid":
+    elif kind == "union_tag_invalid" and loc and loc[0] in _CHOSEN_BY:
         tag = error["ctx"]["tag"]
-        loc.append("adapter")
-        message = f"unknown adapter '{tag}'.{did_you_mean(tag, ADAPTER_NAMES)}"
-        hint = f"use one of: {', '.join(ADAPTER_NAMES)}"
-    elif kind == "union_tag_not_found":
-        loc.append("adapter")
-        message = "the environment names no 'adapter'"
-        hint = f"add 'adapter:' with one of: {', '.join(ADAPTER_NAMES)}"
+        plugin_kind, key = _CHOSEN_BY[str(loc[0])]
+        known = names(plugin_kind)
+        loc.append(key)
+        message = f"unknown {key} '{tag}'.{did_you_mean(tag, known)}"
+        hint = f"use one of: {', '.join(known)}"
+    elif kind == "union_tag_not_found" and loc and loc[0] in _CHOSEN_BY:
+        plugin_kind, key = _CHOSEN_BY[str(loc[0])]
+        loc.append(key)
+        message = f"the {loc[0]} names no '{key}'"
+        hint = f"add '{key}:' with one of: {', '.join(names(plugin_kind))}"
     elif kind == "too_short":
         message = f"'{loc[-1]}' is empty"
         hint = f"give at least {error['ctx']['min_length']} entry"
@@ -264,6 +272,10 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     return source.problem(tuple(loc), message, hint)
 
 
+#: The sections whose model a key chooses among plugins: section -> (plugin kind, key).
+_CHOSEN_BY = {"environment": ("environment", "adapter"), "learning": ("learner", "learner")}
+
+
 def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:
     """Whether the error is about the length of a range pair or a set quadruple."""
     if kind == "missing":
@@ -271,14 +283,19 @@ def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:
     return len(loc) >= 2 and (loc[-1] == "range" or loc[-2] == "sets")
 
 
-def _allowed_keys(path: list[PathPart], error: Any) -> list[str]:
-    """The keys the model at ``path`` accepts, found by walking the type annotations."""
+def _allowed_keys(path: list[PathPart], chosen: str | None) -> list[str]:
+    """The keys the model at ``path`` accepts, found by walking the type annotations;
+    ``chosen`` names the plugin whose model a section chosen by name is."""
     annotation: Any = Behaviour
     for part in path:
         annotation = _step(annotation, part, None)
         if annotation is None:
             return []
     models = [m for m in _members(annotation) if isinstance(m, type) and issubclass(m, BaseModel)]
+    if len(path) == 1 and path[0] in _CHOSEN_BY and chosen is not None:
+        key = _CHOSEN_BY[str(path[0])][1]
+        models = [m for m in models if chosen in typing.get_args(
+            m.model_fields[key].annotation if key in m.model_fields else None)] or models
     keys: list[str] = []
     for model in models:
         for name, info in model.model_fields.items():

@@ -15,9 +15,8 @@ from typing import TYPE_CHECKING, Annotated, Any, Union
 from pydantic import (
     AfterValidator,
     ConfigDict,
-    Discriminator,
     Field,
-    Tag,
+    PrivateAttr,
     ValidationInfo,
     field_validator,
     model_validator,
@@ -28,11 +27,21 @@ from flctool.plugins import names, plugins
 from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
 from flctool.spec.environment import default_gymnasium_ranges
-from flctool.spec.learning import LearningConfig
+from flctool.spec.learning import DEFAULT_LEARNER, HybridConfig, section_for_learner
+from flctool.spec.located import SourceRef
 
-# The sections chosen by name are unions built from the plugins (flctool.plugins): the built-in
-# learners and adapters and any an installed package adds. mypy sees the built-ins.
+# The sections chosen by name are unions built from the plugins (flctool.plugins): the config
+# models of the built-in learners and adapters and of any an installed package adds, chosen by
+# the key that names the plugin. mypy sees the built-ins.
 ADAPTER_NAMES = names("environment")
+
+
+def _chosen_by(kind: str, key: str) -> Any:
+    """The union of the config models of every plugin of ``kind``, discriminated by ``key``."""
+    models = tuple(plugin.config_model() for plugin in plugins(kind))
+    return Annotated[Union[models], Field(discriminator=key)]  # noqa: UP007
+
+
 if TYPE_CHECKING:
     from flctool.spec.environment import (
         BallchaseSimConfig,
@@ -40,37 +49,17 @@ if TYPE_CHECKING:
         PitchConfig,
         RobotLinkConfig,
     )
+    from flctool.spec.learning import FuzzyQConfig, PittConfig
 
     EnvironmentConfig = Annotated[
         BallchaseSimConfig | PitchConfig | GymnasiumConfig | RobotLinkConfig,
         Field(discriminator="adapter"),
     ]
-    LearningSection = LearningConfig
+    LearningSection = Annotated[PittConfig | FuzzyQConfig | HybridConfig,
+                                Field(discriminator="learner")]
 else:
-    EnvironmentConfig = Annotated[
-        Union[tuple(plugin.config_model() for plugin in plugins("environment"))],  # noqa: UP007
-        Field(discriminator="adapter"),
-    ]
-    _LEARNING_MODELS = {plugin.name: plugin.config_model() for plugin in plugins("learner")}
-    if set(_LEARNING_MODELS.values()) == {LearningConfig}:
-        LearningSection = LearningConfig
-    else:
-        # Built-in learners share LearningConfig; an installed learner brings its own model.
-        # A file without 'learner:' gets the default, as LearningConfig says.
-        def _learning_tag(value: Any) -> str:
-            name = (value.get("learner") if isinstance(value, dict)
-                    else getattr(value, "learner", None))
-            model = _LEARNING_MODELS.get(name) if isinstance(name, str) else None
-            return name if model is not None and model is not LearningConfig else "builtin"
-
-        _MEMBERS = (Annotated[LearningConfig, Tag("builtin")],
-                    *(Annotated[model, Tag(name)] for name, model in _LEARNING_MODELS.items()
-                      if model is not LearningConfig))
-        LearningSection = Annotated[
-            Union[_MEMBERS],  # noqa: UP007
-            Discriminator(_learning_tag),
-        ]
-LEARNING_TAGS = ("builtin", *names("learner"))
+    EnvironmentConfig = _chosen_by("environment", "adapter")
+    LearningSection = _chosen_by("learner", "learner")
 
 FORMAT_VERSION = 1
 
@@ -143,8 +132,19 @@ class Behaviour(Section):
     output: Output
     rules: list[Rule] = Field(default_factory=list, description=(
         "rule consequents; empty or partial for a behaviour still to be learned"))
-    learning: LearningSection = LearningConfig()
+    learning: LearningSection = Field(HybridConfig(), description=(
+        "the learner and its hyperparameters; without 'learner:' the section is the "
+        f"{DEFAULT_LEARNER} learner's"))
     environment: EnvironmentConfig | None = None
+    #: Where each field was written (:mod:`flctool.spec.located`); not part of the value,
+    #: set once by the loader (:func:`flctool.spec.located.attach_source`).
+    _source: SourceRef = PrivateAttr(default_factory=SourceRef)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "_source":  # the fields are frozen by pydantic; the source map is too
+            raise TypeError("a validated behaviour cannot be changed; its source map is "
+                            "set when it is loaded")
+        super().__setattr__(name, value)
 
     @field_validator("flctool")
     @classmethod
@@ -162,6 +162,16 @@ class Behaviour(Section):
     def _default_ranges(cls, data: Any) -> Any:
         # a gymnasium input may leave out its range: the observation space's bounds
         return default_gymnasium_ranges(data)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _name_the_learner(cls, data: Any) -> Any:
+        # 'learner' chooses the model of the section, so a section without it is given the
+        # default's name before the union looks for it
+        learning = data.get("learning") if isinstance(data, dict) else None
+        if isinstance(learning, dict):
+            data = {**data, "learning": section_for_learner(learning)}
+        return data
 
     @model_validator(mode="after")
     def _consistent(self, info: ValidationInfo) -> Behaviour:

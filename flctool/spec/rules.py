@@ -118,7 +118,7 @@ def _renumbered(source: SourceMap, origin: list[int]) -> SourceMap:
         for rest, mark in by_rule.get(index, []):
             renumbered: tuple[PathPart, ...] = ("rules", k, *rest)
             marks[renumbered] = mark
-    return SourceMap(source.file, marks, raw)
+    return SourceMap(source.file, marks, raw, source.parsed, source.overrides)
 
 
 def with_rules(behaviour: Behaviour, consequents: Iterable[SupportsInt]) -> Behaviour:

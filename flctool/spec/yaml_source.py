@@ -110,6 +110,14 @@ class SourceMap:
     raw: dict[Path, str] = field(default_factory=dict)
     #: Whether this map is of a parsed file (then every problem has at least line 1).
     parsed: bool = False
+    #: Field paths given somewhere else than the file (a ``--set`` on the command line) ->
+    #: where, e.g. ``command line (--set q.alpha)``: a problem inside one is placed there.
+    overrides: dict[Path, str] = field(default_factory=dict)
+
+    def with_overrides(self, overrides: dict[Path, str]) -> SourceMap:
+        """This map with more fields given elsewhere (see :attr:`overrides`)."""
+        return SourceMap(self.file, self.marks, self.raw, self.parsed,
+                         {**self.overrides, **overrides})
 
     def locate(self, path: Path) -> tuple[int | None, int | None]:
         """The position of ``path``, or of its nearest ancestor that the file has (the start
@@ -121,6 +129,9 @@ class SourceMap:
         return (1, 1) if self.parsed else (None, None)
 
     def problem(self, path: Path, message: str, hint: str = "") -> Problem:
+        for given, where in self.overrides.items():
+            if tuple(path[: len(given)]) == given:
+                return Problem(path=tuple(path), message=message, hint=hint, file=where)
         line, column = self.locate(path)
         return Problem(path=tuple(path), message=message, hint=hint, file=self.file, line=line,
                        column=column)

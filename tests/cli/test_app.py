@@ -13,6 +13,7 @@ import typer
 from typer.testing import CliRunner
 
 from flctool.cli import app
+from flctool.cli.app import COMMANDS as COMMAND_TABLE
 from flctool.cli.app import output_format
 
 from ..conftest import BEHAVIOURS, restore_sigint
@@ -24,7 +25,9 @@ HANDMADE = str(BEHAVIOURS / "ballchase-handmade.yaml")
 def _commands() -> dict[str, typer.core.TyperCommand]:
     group = typer.main.get_command(app)
     assert isinstance(group, typer.core.TyperGroup)
-    return dict(group.commands)  # type: ignore[arg-type]
+    context = group.context_class(group, info_name="flctool")
+    return {name: group.get_command(context, name)  # type: ignore[misc]
+            for name in group.list_commands(context)}
 
 
 COMMANDS = sorted(_commands())
@@ -167,6 +170,59 @@ def test_output_format_rules() -> None:
     assert output_format(Path("x"), "b", suffixes, "a") == "b"
     with pytest.raises(Exception, match="cannot tell the format"):
         output_format(Path("x.txt"), None, suffixes, "a")
+
+
+def test_the_command_list_is_that_of_the_commands_themselves() -> None:
+    # `flctool --help` lists the commands from app.COMMANDS without importing them
+    commands = _commands()
+    assert list(commands)[: len(COMMAND_TABLE)] == list(COMMAND_TABLE)
+    for name, (module, summary) in COMMAND_TABLE.items():
+        command = commands[name]
+        assert command.callback is not None and command.callback.__module__ == module, name
+        first_paragraph = (command.help or "").split("\n\n")[0]
+        assert " ".join(first_paragraph.split()) == summary, name
+
+
+@pytest.mark.parametrize("options", [["--version"], ["--help"], []])
+def test_start_up_loads_no_command_and_no_heavy_module(options: list[str]) -> None:
+    result = _run_python(
+        "import sys\n"
+        f"sys.argv = ['flctool', *{options!r}]\n"
+        "from flctool.cli import run\n"
+        "try:\n"
+        "    run()\n"
+        "finally:\n"
+        "    loaded = [m for m in ('numpy', 'pydantic', 'rich', 'yaml', 'flctool.spec')\n"
+        "              if m in sys.modules]\n"
+        "    loaded += [m for m in sys.modules if m.startswith('flctool.cli.')\n"
+        "               and m != 'flctool.cli.app']\n"
+        "    print('loaded:', loaded)\n")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.splitlines()[-1] == "loaded: []"
+
+
+def test_a_command_loads_its_own_module_only() -> None:
+    result = _run_python(
+        "import sys\n"
+        "sys.argv = ['flctool', 'new', '--help']\n"
+        "from flctool.cli import run\n"
+        "try:\n"
+        "    run()\n"
+        "finally:\n"
+        "    print('loaded:', sorted(m for m in sys.modules if m.startswith('flctool.cli.')))\n")
+    assert result.returncode == 0, result.stderr
+    assert "Scaffold a valid behaviour file" in result.stdout
+    assert result.stdout.splitlines()[-1] == "loaded: ['flctool.cli.app', 'flctool.cli.new']"
+
+
+def test_a_mistyped_command_is_suggested_before_any_is_loaded() -> None:
+    result = _run_python(
+        "import sys\n"
+        "sys.argv = ['flctool', 'lern']\n"
+        "from flctool.cli import run\n"
+        "run()\n")
+    assert result.returncode == 2
+    assert "no such command 'lern'. Did you mean 'learn'?" in result.stderr
 
 
 def _run_python(code: str) -> subprocess.CompletedProcess[str]:

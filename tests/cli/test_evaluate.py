@@ -7,14 +7,11 @@ import json
 from pathlib import Path
 
 import numpy as np
-import pytest
 from typer.testing import CliRunner
 
-from flctool import compile_behaviour, load_behaviour, with_rules
+from flctool import load_behaviour, with_rules
 from flctool.cli import app
-from flctool.cli.evaluate import evaluate_in_chunks, parse_seeds
-from flctool.envs import make_env
-from flctool.rollout import evaluate, evaluation_seeds
+from flctool.rollout import evaluation_seeds
 from flctool.spec import behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS
@@ -97,15 +94,6 @@ def test_an_environment_error_points_at_the_line_of_the_file(tmp_path: Path) -> 
         result.stderr.split())
 
 
-def test_seeds_lists_and_ranges() -> None:
-    assert parse_seeds("1,2,5-9") == [1, 2, 5, 6, 7, 8, 9]
-    assert parse_seeds(" 3 - 4 ,0") == [3, 4, 0]
-    for bad, message in (("1,x", "'x' is not a seed"), ("9-5", "is empty"),
-                         ("1,1-2", "named twice"), ("-1", "is not a seed")):
-        with pytest.raises(ValueError, match=message):
-            parse_seeds(bad)
-
-
 def test_evaluate_on_chosen_seeds_lists_them_in_json() -> None:
     result = runner.invoke(app, ["evaluate", HANDMADE, "--seeds", "1,2,5-9", "--json"])
     assert result.exit_code == 0, result.output
@@ -123,17 +111,6 @@ def test_seeds_and_seed_exclude_each_other() -> None:
         result.output)
     bad = runner.invoke(app, ["evaluate", HANDMADE, "--seeds", "a-b"])
     assert bad.exit_code == 2 and "--seeds" in bad.output
-
-
-def test_chunks_do_not_change_the_outcomes() -> None:
-    behaviour = load_behaviour(HANDMADE)
-    controller = compile_behaviour(behaviour)
-    seeds = evaluation_seeds(3, 23)
-    env = make_env(behaviour, 23)
-    whole = evaluate(controller, env, seeds)
-    chunked = evaluate_in_chunks(controller, env, seeds, show_progress=False, chunk=5)
-    for name in ("seeds", "returns", "lengths", "success", "fitness"):
-        assert np.array_equal(getattr(whole, name), getattr(chunked, name)), name
 
 
 def test_no_outcome_lines_for_success_the_environment_does_not_define(tmp_path: Path) -> None:

@@ -62,7 +62,12 @@ def test_learn_reports_progress_and_the_best_controller(tmp_path: Path) -> None:
     (["--set", "q.gamma=1.2"], "learning.q.gamma"),
     (["--set", "q.alpha=0"], "learning.q.alpha"),
     (["--learner", "hybird"], "learning.learner"),
-    (["--set", "exploration.epsilon=2"], "learning.exploration.epsilon"),
+    (["--learner", "fuzzy_q", "--set", "exploration.epsilon=2"], "learning.exploration.epsilon"),
+    (["--set", "exploration.epsilon=0.2"],
+     "learning.exploration: 'exploration' is read by the fuzzy_q learner only; remove it or "
+     "set learner: fuzzy_q"),
+    (["--learner", "fuzzy_q", "--set", "crossover=0.3"], "learning.crossover: 'crossover' is "
+     "read by the pitt and hybrid learners, not by fuzzy_q"),
     (["--set", "q.temprature=0.2"], "learning.q.temprature"),
     (["--set", "nonsense"], "--set"),
 ])
@@ -78,6 +83,29 @@ def test_bad_hyperparameters_name_the_field(tmp_path: Path, options: list[str],
 def test_learner_error_suggests_the_closest_name(tmp_path: Path) -> None:
     result = runner.invoke(app, ["learn", BALLCHASE, "--learner", "hybird"])
     assert "Did you mean 'hybrid'?" in result.stderr
+
+
+def test_learner_help_and_errors_list_the_plugins_learners(tmp_path: Path) -> None:
+    from flctool.plugins import names
+
+    listed = ", ".join(names("learner"))
+    assert listed in runner.invoke(app, ["learn", "--help"]).stdout
+    result = runner.invoke(app, ["learn", BALLCHASE, "--learner", "hybird"])
+    assert f"use one of: {listed}" in " ".join(result.stderr.split())
+
+
+def test_switching_learner_drops_the_files_keys_for_the_other_learner(tmp_path: Path) -> None:
+    text = (BEHAVIOURS / "ballchase.yaml").read_text().replace(
+        "  learner: hybrid\n", "  learner: pitt\n  pitt_crossover: one_point\n  mutation: 0.2\n")
+    (tmp_path / "pitt.yaml").write_text(text)
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["learn", str(tmp_path / "pitt.yaml"), "--learner", "fuzzy_q",
+                                 "-g", "1", "-p", "2", "--set", "selection.candidates=0",
+                                 "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    learning = load_behaviour(out / "behaviour.yaml").learning
+    assert learning.learner == "fuzzy_q"
+    assert "pitt_crossover" not in (out / "behaviour.yaml").read_text()
 
 
 def test_resume_refuses_changed_hyperparameters(tmp_path: Path) -> None:

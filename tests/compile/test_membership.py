@@ -39,3 +39,41 @@ def test_equals_skfuzzy_trapmf_on_random_quadruples() -> None:
 ])
 def test_documented_shapes(quad: tuple[float, ...], x: list[float], mu: list[float]) -> None:
     np.testing.assert_allclose(trapezoid(np.array(x), np.array([quad], float))[:, 0], mu)
+
+
+def test_the_scalar_form_gives_the_vectorised_bits() -> None:
+    # The learners' one-value form and the array form are the one formula: same operations,
+    # so the same bits, on random sets of every shape and values at and around their corners.
+    from flctool.compile.membership import firing_sets
+
+    rng = np.random.default_rng(7)
+    quads = _random_quads(rng, 300)
+    corners = quads.ravel()
+    x = np.concatenate([rng.uniform(-6, 6, size=2_000), corners,
+                        np.nextafter(corners, -np.inf), np.nextafter(corners, np.inf)])
+    dense = trapezoid(x, quads)
+    sets = [tuple(q) for q in quads.tolist()]
+    for row, value in zip(dense, x.tolist(), strict=True):
+        fired = firing_sets(value, sets)
+        assert [j for j, _ in fired] == np.flatnonzero(row > 0).tolist()
+        assert [mu for _, mu in fired] == row[row > 0].tolist()
+
+
+def test_float32_membership_rounds_each_operation_in_float() -> None:
+    # The float C export's membership (what export.float_error measures): the same formula
+    # with every operation rounded to float32.
+    rng = np.random.default_rng(3)
+    quads = _random_quads(rng, 50).astype(np.float32)
+    x = rng.uniform(-6, 6, size=500).astype(np.float32)
+    got = trapezoid(x, quads)
+    assert got.dtype == np.float32
+    f = np.float32
+    for i, s in enumerate(x):
+        for j, (pa, pb, pc, pd) in enumerate(quads):
+            if s > pc:
+                want = max(f(0), f(f(pd - s) / f(pd - pc))) if pd > pc else f(0)
+            elif s < pb:
+                want = max(f(0), f(f(s - pa) / f(pb - pa))) if pb > pa else f(0)
+            else:
+                want = f(1)
+            assert got[i, j] == want

@@ -76,6 +76,42 @@ def test_batched_equals_one_at_a_time(action: str) -> None:
             assert value[0] == batch_env.trace_state()[key][seed], key
 
 
+def test_one_at_a_time_gives_the_batched_bits_over_many_random_states() -> None:
+    # One dynamics (envs/pitch.py's _advance and _sense) runs on floats for reset_one and
+    # step_one and on arrays for reset and step: over many random starts and actions, noise
+    # on, the learners' path and the evaluation path give the same bits at every step.
+    behaviour = load_behaviour(HANDMADE)
+    count = 300
+    rng = np.random.default_rng(5)
+    seeds = rng.integers(0, 2**62, count, dtype=np.int64)
+    batch = make_env(behaviour, count)
+    actions = rng.uniform(-1.5, 1.5, (batch.max_steps, count))
+    history = [batch.reset(seeds)[0]]
+    outcomes, poses = [], []
+    for row in actions:
+        step = batch.step(row)
+        history.append(step.observations.copy())
+        outcomes.append((step.rewards.copy(), step.terminated.copy(), step.truncated.copy()))
+        poses.append({k: v.copy() for k, v in batch.trace_state().items()})
+        if (step.terminated | step.truncated).all():
+            break
+    single = make_env(behaviour)
+    steps = 0
+    for b, seed in enumerate(seeds.tolist()):
+        assert np.array_equal(single.reset_one(seed), history[0][b])
+        for t, (rewards, terminated, truncated) in enumerate(outcomes):
+            obs, reward, term, trunc = single.step_one(float(actions[t, b]))
+            steps += 1
+            assert np.array_equal(obs, history[t + 1][b]), (seed, t)
+            assert (reward, term, trunc) == (rewards[b], terminated[b], truncated[b]), (seed, t)
+            for key, value in single.trace_state().items():
+                assert value[0] == poses[t][key][b], (seed, t, key)
+            if term or trunc:
+                break
+        assert single.success()[0] == batch.success()[b]
+    assert steps > 10 * count  # the episodes ran, not just their starts
+
+
 def test_finished_episode_is_unchanged() -> None:
     env = make_env(load_behaviour(HANDMADE), 2)
     env.reset(np.array([1, 2]))

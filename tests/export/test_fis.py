@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import itertools
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
-from flctool.errors import ExportError
+from flctool.errors import ExportError, SpecError
 from flctool.export.base import sloped_quad
 from flctool.export.fis import FisExporter, FisImporter
 from flctool.spec import Behaviour
@@ -96,11 +97,19 @@ def test_an_or_rule_over_two_inputs_is_refused() -> None:
         FisImporter().from_string(text, "x.fis")
 
 
-def test_duplicate_antecedents_are_refused_with_both_lines() -> None:
-    text = SYSTEM.replace("2, 1 (1) : 1", "1, 1 (1) : 1")
-    with pytest.raises(ExportError, match=r"tiny.fis:25: the rule repeats the antecedent of the "
-                       r"rule at line 24"):
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("2, 1 (1) : 1", "1, 1 (1) : 1", r"duplicate rule: the same antecedent as rules\[0\]"),
+])
+def test_rule_checks_are_the_behaviours_located_at_the_rule(old: str, new: str,
+                                                            message: str) -> None:
+    # The import checks rules through the behaviour's own checks, not a second copy of them.
+    text = SYSTEM.replace(old, new)
+    assert text != SYSTEM
+    with pytest.raises(SpecError) as caught:
         FisImporter().from_string(text, "tiny.fis")
+    [problem] = caught.value.problems
+    assert (problem.file, problem.line) == ("tiny.fis", 25)
+    assert re.search(message, problem.message), problem.message
 
 
 def test_names_become_identifiers_unless_two_collide() -> None:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
-from flctool.errors import ExportError
+from flctool.errors import ExportError, SpecError
 from flctool.export.fll import FllExporter, FllImporter
 from flctool.spec import Behaviour
 
@@ -146,6 +146,21 @@ def test_import_names_what_it_cannot_express(old: str, new: str, message: str | 
         return
     with pytest.raises(ExportError, match=message):
         FllImporter().from_string(text, "tiny.fll")
+
+
+@pytest.mark.parametrize(("new", "message"), [
+    ("rule: if x is lo then u is up", "input 'x' has no set 'lo'. Did you mean 'low'"),
+    ("rule: if y is low then u is up", "rule names an unknown input 'y'"),
+    ("rule: if x is low then u is upp", "unknown command 'upp'. Did you mean 'up'"),
+    ("rule: if x is high then u is up", "duplicate rule"),
+])
+def test_rule_checks_are_the_behaviours_located_at_the_rule(new: str, message: str) -> None:
+    # One set of rule checks (the behaviour's), each problem at its rule's line in the file.
+    text = ENGINE.replace("rule: if x is low then u is up", new)
+    with pytest.raises(SpecError) as caught:
+        FllImporter().from_string(text, "tiny.fll")
+    located = [(p.file, p.line) for p in caught.value.problems if message in p.message]
+    assert ("tiny.fll", 19 if "duplicate" not in message else 20) in located, caught.value
 
 
 def test_aggregation_merging_shared_terms_is_refused() -> None:

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from flctool import parse_behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
+from flctool.runs import resolve_behaviour
 from flctool.spec.models import Behaviour
 
 LINE_BEHAVIOUR = """\
@@ -37,10 +38,8 @@ learning:
 
 
 def line_behaviour(**learning: Any) -> Behaviour:
-    """The line behaviour with ``learning`` fields overridden."""
-    behaviour = parse_behaviour(LINE_BEHAVIOUR, "line.yaml")
-    config = behaviour.learning.model_copy(update=learning)
-    return behaviour.model_copy(update={"learning": config})
+    """The line behaviour with ``learning`` fields overridden (validated, as ``--set``)."""
+    return resolve_behaviour(parse_behaviour(LINE_BEHAVIOUR, "line.yaml"), learning)
 
 
 class LineEnv(BatchEnv):

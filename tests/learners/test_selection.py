@@ -20,10 +20,11 @@ from flctool.learners.selection import (
     validation_seeds,
 )
 from flctool.learners.trial import run_trial
+from flctool.plugins import names
 from flctool.rollout import evaluation_seeds
 from flctool.runs import BEST_FILE, METRICS_FILE, create_run, open_run, resolve_behaviour
 from flctool.spec import Behaviour
-from flctool.spec.learning import LEARNER_NAMES, SelectionConfig, StopConfig
+from flctool.spec.learning import SelectionConfig, StopConfig
 from tests.conftest import BEHAVIOURS
 from tests.learners.line_env import LineEnv, line_behaviour
 
@@ -50,7 +51,7 @@ def test_validation_seeds_are_fixed_distinct_and_in_their_own_range() -> None:
     np.testing.assert_array_equal(validation_seeds(7, 20), seeds[:20])
 
 
-@pytest.mark.parametrize("name", LEARNER_NAMES)
+@pytest.mark.parametrize("name", names("learner"))
 def test_selection_seeds_are_disjoint_from_training_and_evaluation(name: str) -> None:
     env = SeedRecordingEnv()
     behaviour = line_behaviour(learner=name, selection=SelectionConfig(candidates=3,
@@ -70,7 +71,7 @@ def test_selection_seeds_are_disjoint_from_training_and_evaluation(name: str) ->
     assert learner.selection.usage.selection_episodes == 7 * len(validation)
 
 
-@pytest.mark.parametrize("name", LEARNER_NAMES)
+@pytest.mark.parametrize("name", names("learner"))
 def test_the_returned_controller_is_the_best_validated_candidate(name: str) -> None:
     learner = make_learner(line_behaviour(learner=name), LineEnv())
     history = train(learner)
@@ -112,7 +113,7 @@ def test_no_selection_returns_the_last_generation_s_best_and_runs_no_validation(
     assert consequents.tolist() == learner.population[individual].tolist()
 
 
-@pytest.mark.parametrize("name", LEARNER_NAMES)
+@pytest.mark.parametrize("name", names("learner"))
 def test_an_episode_budget_counts_selection_and_is_never_exceeded(name: str) -> None:
     stop = StopConfig(episodes=80)
     behaviour = line_behaviour(learner=name, generations=50, stop=stop,
@@ -166,7 +167,7 @@ def metrics_rows(path: Path) -> list[dict[str, str]]:
                 for row in csv.DictReader(handle)]
 
 
-@pytest.mark.parametrize("learner", LEARNER_NAMES)
+@pytest.mark.parametrize("learner", names("learner"))
 @pytest.mark.parametrize("stop", [{"stop.episodes": 150}, {"stop.steps": 2500},
                                   {"stop.target": 1.9}])
 def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
@@ -193,7 +194,7 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
     assert resumed.usage == whole_summary.usage and resumed.usage["selection_episodes"] > 0
 
 
-@pytest.mark.parametrize("learner", LEARNER_NAMES)
+@pytest.mark.parametrize("learner", names("learner"))
 def test_reusing_known_validation_episodes_changes_nothing(
         learner: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """A candidate that commands alike every rule that fired where an earlier one acted in a

@@ -14,7 +14,7 @@ from flctool.spec.learning import LearningConfig
 
 
 class RandomSearchConfig(LearningConfig):
-    """``learning:`` of the random search: the common keys plus its own."""
+    """``learning:`` of the random search: the keys every learner reads plus its own."""
 
     learner: Literal["random_search"] = "random_search"
     keep: int = Field(1, ge=1, description="best controllers kept into the next generation")

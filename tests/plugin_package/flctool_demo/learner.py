@@ -4,10 +4,12 @@ import numpy as np
 
 from flctool.learners.base import GenerationResult, Learner
 from flctool.learners.ga import evaluate_population, random_population
+from flctool_demo import RandomSearchConfig
 
 
 class RandomSearchLearner(Learner):
     name = "random_search"
+    config: RandomSearchConfig  # the model its entry names: learning.keep is typed
 
     def __init__(self, behaviour, env):  # type: ignore[no-untyped-def]
         super().__init__(behaviour, env)

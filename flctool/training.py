@@ -1,0 +1,166 @@
+"""Starting and resuming runs: everything ``flctool learn`` decides, for Python users too.
+
+    training = start_run("behaviours/ballchase.yaml", {"seed": 3}, out="runs/first")
+    summary = training.train()                  # to learning.generations, checkpointed
+
+    training = resume_run("runs/first", generations=60)   # continue to 60 generations
+    summary = training.train()
+
+The learner (and with it the environment) is built before a new run directory is made, so a
+behaviour whose environment does not fit leaves nothing behind; its errors are located in the
+file (or at the override) they are about. A resumed run continues only as it was recorded:
+overrides that differ from the run are refused, except a new generation budget.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from flctool.errors import Problem, RunDirError, SpecError
+from flctool.learners import Callback, Learner, make_learner
+from flctool.runs import (
+    Run,
+    RunSummary,
+    create_run,
+    open_run,
+    override_label,
+    resolve_behaviour,
+)
+from flctool.spec import Behaviour, behaviour_to_data, load_behaviour
+
+#: Override keys that set the generation budget (the one thing a resumed run may change).
+GENERATIONS_KEYS = ("generations", "learning.generations")
+
+
+def parse_assignments(assignments: Iterable[str]) -> dict[str, Any]:
+    """``["q.temperature=0.2", "common_starts=true"]`` -> a mapping; values read as YAML (a
+    value that is not YAML is kept as text)."""
+    import yaml
+
+    overrides: dict[str, Any] = {}
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SpecError([Problem(("--set",), f"'{text}' is not key=value",
+                                     "write e.g. --set q.temperature=0.2", file="command line")],
+                            "command line")
+        try:
+            overrides[key] = yaml.safe_load(value) if value.strip() else ""
+        except yaml.YAMLError:  # not YAML: the text itself
+            overrides[key] = value
+    return overrides
+
+
+@dataclass
+class Training:
+    """A run ready to train: its directory and the learner built for it."""
+
+    run: Run
+    learner: Learner
+    #: Whether the run continues from a checkpoint (:func:`resume_run`).
+    resumed: bool
+
+    @property
+    def done(self) -> int:
+        """Generations the run has completed so far."""
+        return len(self.run.checkpoint_generations())
+
+    def train(self, callbacks: Iterable[Callback] = ()) -> RunSummary:
+        """Train to the run's generation budget (see :meth:`Run.train`); the environment is
+        closed when training ends, however it ends."""
+        return self.run.train(callbacks, learner=self.learner)
+
+    def close(self) -> None:
+        """Close the environment without training (a robot is sent ``stop``)."""
+        self.learner.env.close()
+
+
+def start_run(behaviour: Behaviour | str | Path, overrides: Mapping[str, Any] | None = None,
+              out: str | Path | None = None, *,
+              where: str | Mapping[str, str] = "overrides") -> Training:
+    """A new run of ``behaviour`` (a behaviour or its file) with ``overrides`` applied (see
+    :func:`~flctool.runs.resolve_behaviour`, which also explains ``where``), in ``out`` or
+    a new folder under ``runs/``."""
+    if not isinstance(behaviour, Behaviour):
+        behaviour = load_behaviour(behaviour)
+    if overrides:
+        behaviour = resolve_behaviour(behaviour, overrides, where)
+    learner = make_learner(behaviour)
+    try:
+        run = create_run(behaviour, Path(out) if out is not None else None)
+    except BaseException:
+        learner.env.close()  # Run.train closes it from here on (a robot gets stop)
+        raise
+    return Training(run, learner, resumed=False)
+
+
+def resume_run(path: str | Path, behaviour: Behaviour | str | Path | None = None,
+               overrides: Mapping[str, Any] | None = None, generations: int | None = None,
+               *, where: str | Mapping[str, str] = "overrides") -> Training:
+    """The run in ``path``, to continue from its last checkpoint.
+
+    ``generations`` (or an override ``generations``) raises the run's generation budget.
+    ``behaviour`` and ``overrides``, when given, must describe the run as it was recorded
+    (apart from the budget): a resumed run continues bit for bit, or not at all.
+    """
+    run = open_run(path)
+    remaining = dict(overrides or {})
+    generations = new_budget(run, generations, remaining, where)
+    if behaviour is not None or remaining:
+        if behaviour is None:
+            base = run.behaviour
+        elif isinstance(behaviour, Behaviour):
+            base = behaviour
+        else:
+            base = load_behaviour(behaviour)
+        check_same_run(run, resolve_behaviour(base, remaining, where))
+    if generations is not None and generations != run.behaviour.learning.generations:
+        run.extend(generations)
+    return Training(run, make_learner(run.behaviour), resumed=True)
+
+
+def new_budget(run: Run, generations: int | None, overrides: dict[str, Any],
+               where: str | Mapping[str, str] = "overrides") -> int | None:
+    """The generation budget of a resumed run: ``generations``, or the override
+    ``generations`` (taken out of ``overrides``); None keeps the recorded one."""
+    for key in GENERATIONS_KEYS:
+        if key not in overrides:
+            continue
+        value = overrides.pop(key)
+        # Validated like the file's own field (an int >= 1), placed where it was given.
+        budget = resolve_behaviour(run.behaviour, {"generations": value},
+                                   {"generations": override_label(where, key)}
+                                   ).learning.generations
+        if generations is not None and generations != budget:
+            raise RunDirError(f"a budget of {generations} generations and {key}={value} ask "
+                              "for different budgets", hint="give the new total once")
+        generations = budget
+    return generations
+
+
+def check_same_run(run: Run, requested: Behaviour) -> None:
+    """Refuse to resume ``run`` as ``requested`` when the two differ anywhere but in the
+    generation budget; the error lists the fields that differ."""
+    recorded = behaviour_to_data(run.behaviour)
+    wanted = behaviour_to_data(requested)
+    for data in (recorded, wanted):
+        data.get("learning", {}).pop("generations", None)
+    changed = _differences(recorded, wanted)
+    if changed:
+        raise RunDirError(f"--resume continues the run recorded in {run.path}, but the file "
+                          f"and options given differ from it at: {', '.join(changed)}",
+                          hint="leave them out (only --generations may change), or start a "
+                          "new run with --out")
+
+
+def _differences(a: Any, b: Any, path: str = "") -> list[str]:
+    if isinstance(a, dict) and isinstance(b, dict):
+        found: list[str] = []
+        for key in sorted(set(a) | set(b), key=str):
+            found += _differences(a.get(key), b.get(key), f"{path}.{key}" if path else str(key))
+        return found
+    return [] if a == b else [path or "(top level)"]
