@@ -17,13 +17,20 @@ Goals (CPU seconds, peak MB):
 4. ``flctool evaluate``: peak memory independent of the number of episodes (10,000 against
    100,000 episodes; ratio goal <= 1.1).
 
-Also the anchors: a bare interpreter, and ``python -c "import numpy"``. Prints the table and
-writes JSON (default: bench_commands.json beside the script). A script, never a timed test.
+Also the anchors, measured in the same run: a bare interpreter, and ``python -c "import
+numpy"``; every command's CPU time is also given as a ratio to each anchor. Prints the
+table and writes JSON (default: bench_commands.json beside the script). A script, never a
+timed test.
+
+flctool's bytecode is compiled first (``compileall``), as pip does for an installed package:
+with an editable install and ``PYTHONDONTWRITEBYTECODE`` set, every process would otherwise
+compile flctool's modules from source (about 0.05 s of each command).
 """
 
 from __future__ import annotations
 
 import argparse
+import compileall
 import json
 import os
 import shutil
@@ -54,12 +61,12 @@ def run_once(command: list[str], env: dict[str, str] | None = None,
              stdin: Path | None = None) -> Figure:
     """One run of ``command``; its own CPU time and peak memory (not its siblings').
 
-    Through GNU time when the system has it: a child forked from this (large) Python process
-    would count this process's memory in its peak until it execs. Without it, ``os.wait4``
-    of the child, whose peak then has this process's size as a floor.
+    CPU from ``os.wait4``. The peak through GNU time when the system has it: a child forked
+    from this (large) Python process would count this process's memory in its peak until it
+    execs. Without it, the child's own, which then has this process's size as a floor.
     """
     with tempfile.NamedTemporaryFile("r") as report, open(stdin or os.devnull, "rb") as source:
-        timed = ([str(GNU_TIME), "-f", "%U %S %M", "-o", report.name, *command]
+        timed = ([str(GNU_TIME), "-f", "%M", "-o", report.name, *command]
                  if GNU_TIME.exists() else command)
         process = subprocess.Popen(timed, stdin=source, stdout=subprocess.DEVNULL,
                                    stderr=subprocess.PIPE, env=env, cwd=ROOT)
@@ -70,11 +77,14 @@ def run_once(command: list[str], env: dict[str, str] | None = None,
         if process.returncode != 0:
             raise SystemExit(f"{' '.join(command)} failed:\n"
                              f"{errors.decode(errors='replace')}")
+        # CPU from wait4, to the microsecond (GNU time prints hundredths); it counts the
+        # command and GNU time, which waited for it (about a millisecond).
+        cpu = usage.ru_utime + usage.ru_stime
         if GNU_TIME.exists():
-            user, system, peak_kib = report.read().split()[-3:]
-            return Figure(float(user) + float(system), int(peak_kib) * 1024 / 1e6)
+            peak_kib = report.read().split()[-1]
+            return Figure(cpu, int(peak_kib) * 1024 / 1e6)
     # ru_maxrss is in KiB on Linux
-    return Figure(usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024 / 1e6)
+    return Figure(cpu, usage.ru_maxrss * 1024 / 1e6)
 
 
 def median_of(command: list[str], repeats: int, env: dict[str, str] | None = None,
@@ -118,12 +128,20 @@ def main() -> None:
     python = sys.executable
     flctool = [python, "-m", "flctool"]
     results: dict[str, dict[str, float]] = {}
-    rows: list[tuple[str, str, str, str]] = []
+    rows: list[tuple[str, str, str, str, str]] = []
+    compileall.compile_dir(ROOT / "flctool", quiet=1)
+    anchors: list[Figure] = []  # python -c pass, then python -c "import numpy"
 
     def record(name: str, figure: Figure, shown: str, goal: str, met: bool | None) -> None:
-        results[name] = {"cpu_s": round(figure.cpu, 4), "peak_mb": round(figure.peak_mb, 1)}
-        rows.append((name, shown, goal, "-" if met is None else "yes" if met else "NO"))
-        print(f"  {name}: {shown}", flush=True)
+        ratios = [figure.cpu / a.cpu for a in anchors] if len(anchors) == 2 else []
+        shown_ratios = " / ".join(f"{r:.2f}x" for r in ratios)
+        results[name] = {"cpu_s": round(figure.cpu, 4), "peak_mb": round(figure.peak_mb, 1),
+                         **({"cpu_to_bare_anchor": round(ratios[0], 3),
+                             "cpu_to_numpy_anchor": round(ratios[1], 3)} if ratios else {})}
+        rows.append((name, shown, shown_ratios, goal,
+                     "-" if met is None else "yes" if met else "NO"))
+        print(f"  {name}: {shown}" + (f" ({shown_ratios} the bare / numpy anchors)"
+                                      if ratios else ""), flush=True)
 
     with tempfile.TemporaryDirectory() as folder:
         scratch = Path(folder)
@@ -134,8 +152,10 @@ def main() -> None:
 
         bare = median_of([python, "-c", "pass"], r)
         record("anchor: python -c pass", bare, f"{bare.cpu:.3f} s", "", None)
+        anchors.append(bare)
         numpy_ = median_of([python, "-c", "import numpy"], r)
         record("anchor: python -c 'import numpy'", numpy_, f"{numpy_.cpu:.3f} s", "", None)
+        anchors.append(numpy_)
 
         version = median_of([*flctool, "--version"], r)
         record("flctool --version", version, f"{version.cpu:.3f} s CPU", "<= 0.15 s",
@@ -169,9 +189,10 @@ def main() -> None:
                "memory <= 1.1x", ratio <= 1.1)
 
     width = max(len(row[0]) for row in rows)
-    print(f"\n{'command':<{width}}  {'figure (median)':<34} {'goal':<22} met")
-    for name, shown, goal, met in rows:
-        print(f"{name:<{width}}  {shown:<34} {goal:<22} {met}")
+    print(f"\n{'command':<{width}}  {'figure (median)':<34} {'/ bare / numpy':<18} "
+          f"{'goal':<22} met")
+    for name, shown, ratio, goal, met in rows:
+        print(f"{name:<{width}}  {shown:<34} {ratio:<18} {goal:<22} {met}")
     args.json.write_text(json.dumps({"repeats": args.repeats, "rows": args.rows,
                                      "results": results}, indent=2) + "\n")
     print(f"\nwrote {args.json}")

@@ -44,7 +44,7 @@ from flctool.compile import kernels
 TOLERANCE = 1e-9
 GOALS = {"single_us": 0.6, "batched_vs_naive": 4.0, "every_size_vs_naive": 1.0,
          "vs_pyfuzzylite": 25.0, "vs_skfuzzy": 3000.0}
-SIZES = (1, 10, 100, 1_000, 10_000, 100_000, 1_000_000)
+SIZES = (1, 2, 4, 8, 10, 16, 100, 1_000, 10_000, 100_000, 1_000_000)
 STATES_PER_TIMING = 200_000  # small batches are timed as many calls, this many states in all
 
 

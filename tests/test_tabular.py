@@ -85,3 +85,25 @@ def test_empty_and_headerless_input() -> None:
 def test_format_rows_adds_the_shortest_round_trip_text() -> None:
     text = format_rows(["1,2", "3,4"], np.array([0.1, 1 / 3]))
     assert text == "1,2,0.1\n3,4,0.3333333333333333\n"
+
+
+def test_numeric_tables_in_any_column_order_and_extra_columns() -> None:
+    # every cell a number: numpy reads them all, then the inputs are picked in input order
+    _, chunks = _read(b"b,x,a\n2,nan,1\n4,5,3\n")
+    assert chunks[0][1].tolist() == [[1.0, 2.0], [3.0, 4.0]]  # NaN outside the inputs is fine
+    # a row with a cell too many or too few among numbers is located, not read
+    assert "t.csv:3: (top level): expected 3 cells, found 4" in _error(b"a,b,x\n1,2,3\n4,5,6,7\n")
+    assert "t.csv:2: (top level): expected 3 cells, found 2" in _error(b"a,b,x\n1,2\n4,5,6\n")
+    # a text column: the cells are counted, the inputs read
+    _, chunks = _read(b"a,note,b\n1,left,2\n3,,4\n")
+    assert chunks[0][1].tolist() == [[1.0, 2.0], [3.0, 4.0]]
+    assert "t.csv:3: (top level): expected 3 cells, found 2" in _error(b"a,note,b\n1,x,2\n3,4\n")
+
+
+def test_format_rows_keeps_percent_signs_and_formats_like_repr() -> None:
+    values = np.array([0.1, -0.0, 1e-7, 1e16, 2.0 / 3.0, 5e-324])
+    lines = ["1,50%", "%r,%s", "%%", "", "x", "y"]
+    expected = "".join(f"{line},{value!r}\n" for line, value in zip(lines, values.tolist(),
+                                                                       strict=True))
+    assert format_rows(lines, values) == expected
+    assert format_rows([], np.array([])) == ""

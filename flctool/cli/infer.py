@@ -78,7 +78,7 @@ def infer(
                     values = outputs_in_python(controller, states)
                 else:
                     small = False
-                    with compiling():
+                    with compiling(), _numba_without_scipy_blas():
                         values = controller.output(states)
                 target.write(format_rows(lines, values))
 
@@ -100,6 +100,31 @@ def outputs_in_python(controller: Controller, states: NDArray[np.float64]
         fired, alphas, _ = rules.fire(state)
         values.append(rules.output(alphas, [consequents[m] for m in fired]))
     return np.array(values, dtype=np.float64)
+
+
+#: What numba's array functions import only to learn whether BLAS is there.
+_SCIPY_BLAS = "scipy.linalg.cython_blas"
+
+
+@contextmanager
+def _numba_without_scipy_blas() -> Iterator[None]:
+    """While the kernels load, scipy's BLAS looks absent to numba.
+
+    numba loads its implementations of numpy's functions with the first kernel, and they
+    import scipy.linalg's BLAS only to choose how np.correlate and np.convolve compute (about
+    0.17 s of CPU: a tenth of ``infer`` on 10^6 rows). The kernels call neither, and nothing
+    else runs numba in this command's process, so it is spared here; the library itself does
+    not do this, as a program using it may run numba code of its own.
+    """
+    if _SCIPY_BLAS in sys.modules or "numba.np.arraymath" in sys.modules:
+        yield  # loaded already, or too late to matter
+        return
+    sys.modules[_SCIPY_BLAS] = None  # type: ignore[assignment]  # import raises ImportError
+    try:
+        yield
+    finally:
+        if sys.modules.get(_SCIPY_BLAS, 0) is None:
+            del sys.modules[_SCIPY_BLAS]
 
 
 def _chained(first: tuple[list[str], NDArray[np.float64]],

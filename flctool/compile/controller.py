@@ -141,16 +141,30 @@ class Controller:
         """
         floats, ints, tables, dense, infer, n_inputs = self._batch
         single = True
+        population = 1
         if consequents is not None or tables is None:  # (raises if there are none)
             table = self._consequents(consequents)
             single = table.ndim == 1
             tables = np.array(table.reshape(-1, self.n_rules), dtype=np.intp, order="C")
-        # Any float64 (B, N) array goes to the kernel as it is (it reads strides).
-        if not (type(states) is np.ndarray and states.dtype is _FLOAT64
-                and states.ndim == 2 and states.shape[1] == n_inputs):
+            population = tables.shape[0]
+        # Any float64 (B, N) array goes to the kernel as it is (it reads strides). (Each
+        # attribute read here costs tens of ns, a good part of a call on a few states.)
+        shape = states.shape if type(states) is np.ndarray else None
+        if not (shape is not None and len(shape) == 2 and shape[1] == n_inputs
+                and states.dtype is _FLOAT64):
             states = self._as_states(states)
-        count = states.shape[0]
-        population = tables.shape[0]
+            shape = states.shape
+        count = shape[0]
+        if count == 1 and consequents is None:
+            # One state: the one-state kernel (output_one's, the same bits) costs less than a
+            # batch of one, whose arrays and arguments cost more than its arithmetic.
+            one_floats, one_ints, one = self._one
+            value = one(one_floats, one_ints, states[0])
+            if value != value:  # a NaN input, or no rule fires
+                self._raise_undefined(states, 0)
+            out = np.empty(1)
+            out[0] = value
+            return out
         out = np.empty(population * count)  # (P, B) flat
         if threads > 1 and count >= THREADED_STATES:
             failed = self._infer_threaded(states, tables, out, threads)

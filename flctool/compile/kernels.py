@@ -2,7 +2,8 @@
 
 Three ways through, each chosen where it is cheapest:
 
-- **a few states** (``SMALL_BATCH`` or fewer, and :func:`infer_one`): state by state, each
+- **a few states** (``SMALL_BATCH`` or fewer, ``SMALL_DENSE_BATCH`` for a small rule base
+  walked every rule, and :func:`infer_one`): state by state, each
   input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
   only the rules combining them summed -- an odometer over the fired sets, last input
   fastest, which is increasing rule order;
@@ -302,7 +303,10 @@ def infer(states: FloatArray, floats: FloatArray, ints: IntArray, tables: IntArr
     underflow (sets thousands of orders of magnitude apart) -- the caller raises rather than
     return the NaN that 0 / 0 would give.
     """
-    if stop - start <= SMALL_BATCH:
+    small = SMALL_BATCH
+    if dense and ints[3] * ints[0] <= CHEAP_DENSE_RULE_INPUTS:
+        small = SMALL_DENSE_BATCH  # a cheap walk of every rule: blocks pay off sooner
+    if stop - start <= small:
         return _infer_small(states, floats, ints, tables, out, start, stop)
     return _infer_blocks(states, floats, ints, tables, out, start, stop, dense)
 
@@ -531,6 +535,11 @@ def _singleton_bounds(floats: FloatArray, ints: IntArray) -> tuple[float, float]
 # Batches up to this size are inferred state by state (_state_sets, _state_sums): the block
 # walks' set-up costs more than they save on a few states.
 SMALL_BATCH = 8
+# ... except when the blocks walk every rule of a small base (M x N rule-inputs at most this):
+# that walk costs a few ns per state, so blocks are cheaper from about 5 states (measured:
+# ballchase, 2 x 3, 2 x 5, 3 x 2 and 4 x 2 sets; with M x N = 81 or more, from 6-8 states).
+SMALL_DENSE_BATCH = 4
+CHEAP_DENSE_RULE_INPUTS = 64
 
 
 @_jit

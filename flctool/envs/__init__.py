@@ -5,19 +5,32 @@
 
 The protocol is :class:`flctool.envs.base.BatchEnv`; :func:`check_env` checks an adapter
 against it.
+
+The protocol and the checker (which need numpy) load on first use (PEP 562 module
+``__getattr__``), so that importing a module of this package, e.g. ``flctool validate``'s
+preflight, does not import numpy.
 """
 
 from __future__ import annotations
 
-from typing import Protocol
+import importlib
+from typing import TYPE_CHECKING, Any, Protocol
 
-from flctool.envs.base import BatchEnv, SingleEnv, Step
-from flctool.envs.checker import check_env
 from flctool.errors import EnvError
 from flctool.plugins import registry
 from flctool.registry import Registry
 from flctool.spec.located import located
+
+# Before the registry below: an installed adapter's module imports the behaviour models, which
+# load the plugins in turn, so the models must be complete before the plugins are loaded here.
 from flctool.spec.models import Behaviour
+
+if TYPE_CHECKING:
+    from flctool.envs.base import BatchEnv, SingleEnv, Step
+    from flctool.envs.checker import check_env
+
+_LAZY = {"BatchEnv": "flctool.envs.base", "SingleEnv": "flctool.envs.base",
+         "Step": "flctool.envs.base", "check_env": "flctool.envs.checker"}
 
 
 class EnvFactory(Protocol):
@@ -48,6 +61,15 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
     factory = ENVIRONMENTS.get(behaviour.environment.adapter)
     with located(behaviour):  # the adapter's checks name fields; this adds file and line
         return factory.from_behaviour(behaviour, batch_size)
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'flctool.envs' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
 
 
 __all__ = ["ENVIRONMENTS", "BatchEnv", "EnvFactory", "SingleEnv", "Step", "check_env",

@@ -3,8 +3,11 @@
 Loading checks the file itself (:func:`flctool.spec.load_behaviour`). The environment adapter
 checks the rest when it is built (a Gymnasium id that does not exist, an observation index
 past the space, a singleton outside the action space, a command without an action), so it is
-built here too, whenever building it has no effect outside this process. A robot link is not
-built: connecting would talk to a robot; its checks run when ``learn`` connects.
+built here too, whenever building it has no effect outside this process and checks something
+loading did not. A robot link is not built: connecting would talk to a robot; its checks run
+when ``learn`` connects. The simulators are not built either: everything building them checks
+is their section's ``fit_problems``, which loading already ran, and building them would only
+cost the import of numpy and the simulator (most of ``validate``'s time).
 """
 
 from __future__ import annotations
@@ -20,6 +23,9 @@ from flctool.spec.located import locate
 #: Adapters whose checks need the world outside the process (a robot on the network).
 _NOT_BUILT = {"robot-link": "the robot-link adapter's checks run when learn connects to the "
                             "robot (validate does not connect)"}
+#: Adapters whose construction checks nothing beyond their section's model and
+#: ``fit_problems`` (both run by :func:`load_behaviour`), so validate need not build them.
+_CHECKED_BY_LOADING = frozenset({"ballchase-sim", "pitch"})
 
 
 @dataclass(frozen=True)
@@ -42,7 +48,7 @@ def validate_file(path: str | Path) -> FileReport:
     environment = behaviour.environment
     if environment is not None:
         note = _NOT_BUILT.get(environment.adapter, "")
-        if not note:
+        if not note and environment.adapter not in _CHECKED_BY_LOADING:
             try:
                 check_adapter(behaviour)  # its errors are located in the file (make_env)
             except MissingDependencyError as error:

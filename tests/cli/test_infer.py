@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -73,3 +75,21 @@ def test_output_file_is_written_whole_or_not_at_all(tmp_path: Path) -> None:
     bad = runner.invoke(app, ["infer", str(HANDMADE), "-o", str(out)],
                         input="ball_size,pan\n0.2,10\nq,1\n")
     assert bad.exit_code == 1 and not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_loading_the_kernels_for_a_large_table_spares_scipy_blas() -> None:
+    # In a fresh process, as the command runs: numba's probe for scipy's BLAS is spared while
+    # the kernels load, and scipy's BLAS imports normally afterwards.
+    probe = (
+        "import sys\nimport numpy as np\nimport flctool\n"
+        "from flctool.cli.infer import _numba_without_scipy_blas\n"
+        f"c = flctool.compile_behaviour(flctool.load_behaviour({str(HANDMADE)!r}))\n"
+        "with _numba_without_scipy_blas():\n"
+        "    values = c.output(np.array([[0.2, 10.0]] * 100))\n"
+        "print('scipy.linalg.cython_blas' in sys.modules)\n"
+        "import scipy.linalg.cython_blas\n"
+        "print(values[0] == c.output_one(np.array([0.2, 10.0])))\n")
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                            timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split() == ["False", "True"]

@@ -48,6 +48,22 @@ def test_output_equals_loop_over_rules_on_random_controllers() -> None:
         np.testing.assert_allclose(controller.output(states), expected, rtol=0, atol=1e-12)
 
 
+def test_one_state_gives_the_bits_of_a_batch() -> None:
+    # output of one state takes the one-state kernel: the same bits as in a batch, strided too
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        controller = compile_behaviour(behaviour_from_data(random_behaviour_data(rng)))
+        lo, hi = controller.ranges[:, 0], controller.ranges[:, 1]
+        states = rng.uniform(lo - 0.2 * (hi - lo), hi + 0.2 * (hi - lo),
+                             size=(200, controller.n_inputs))
+        whole = controller.output(states)
+        ones = [controller.output(states[i:i + 1]) for i in range(len(states))]
+        assert all(one.shape == (1,) and one.dtype == np.float64 for one in ones)
+        assert np.concatenate(ones).tobytes() == whole.tobytes()
+        wide = np.repeat(states, 2, axis=1)[:, ::2]  # (B, N), not contiguous
+        assert controller.output(wide[:1]).tobytes() == whole[:1].tobytes()
+
+
 def test_population_of_consequents() -> None:
     rng = np.random.default_rng(3)
     controller = compile_behaviour(behaviour_from_data(random_behaviour_data(rng, 2, 4)))
@@ -84,6 +100,8 @@ def test_nan_input_is_a_clear_error(handmade_path: Path) -> None:
     controller = compile_behaviour(load_behaviour(handmade_path))
     with pytest.raises(InferenceError, match="input 'pan' is NaN in state 1"):
         controller.output(np.array([[0.2, 0.0], [0.2, np.nan]]))
+    with pytest.raises(InferenceError, match="input 'pan' is NaN in state 0"):
+        controller.output(np.array([[0.2, np.nan]]))
 
 
 def test_wrong_shapes_and_missing_consequents(minimal_text: str) -> None:

@@ -251,8 +251,9 @@ def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -
 
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n_inputs=st.integers(1, 4),
-       batch=st.sampled_from([1, 2, kernels.SMALL_BATCH, kernels.SMALL_BATCH + 1, 63, 64,
-                              65, 130]),
+       batch=st.sampled_from([1, 2, kernels.SMALL_DENSE_BATCH, kernels.SMALL_DENSE_BATCH + 1,
+                               kernels.SMALL_BATCH, kernels.SMALL_BATCH + 1, 63, 64, 65,
+                               130]),
        population=st.integers(1, 3))
 def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
                                          population: int) -> None:

@@ -3,13 +3,14 @@ file; a robot link is not connected to, and says so; a module-naming id runs no 
 
 from __future__ import annotations
 
+import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
 from flctool.envs import gym_adapter
-from flctool.envs.preflight import validate_file
+from flctool.envs.preflight import check_adapter, validate_file
 from flctool.errors import EnvError, SpecError
 
 from ..conftest import BEHAVIOURS
@@ -104,3 +105,21 @@ def test_a_singleton_outside_a_box_action_space_is_reported(tmp_path: Path) -> N
     problem = info.value.problems[0]
     assert "singleton 3 is outside the action space [-1, 1]" in problem.message
     assert problem.line == _line_of(text, "push_right: 3.0")
+
+
+def test_the_simulators_are_checked_by_loading_without_numpy() -> None:
+    # Their construction checks nothing beyond fit_problems (run by loading), so validate does
+    # not build them and stays clear of numpy; building them must then never fail on a file
+    # that loads.
+    for path in sorted(BEHAVIOURS.glob("*.yaml")):
+        report = validate_file(path)
+        environment = report.behaviour.environment
+        if environment is not None and environment.adapter in ("ballchase-sim", "pitch"):
+            check_adapter(report.behaviour)
+    probe = ("import sys\nfrom flctool.envs.preflight import validate_file\n"
+             f"validate_file({str(BEHAVIOURS / 'ballchase.yaml')!r})\n"
+             f"validate_file({str(BEHAVIOURS / 'dribble.yaml')!r})\n"
+             "print('numpy' in sys.modules)\n")
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                            check=True)
+    assert result.stdout.strip() == "False"
