@@ -10,7 +10,8 @@ pool workers ``getrusage(RUSAGE_CHILDREN)`` (user + system) of the children.
 1. The paper's protocol on ballchase (population 10, 30 generations, one trial each = 300
    trials of up to 200 steps), per learner: the training loop alone
    (``flctool.learners.train``), training into a run directory (``Run.train``: checkpoints,
-   metrics, strengths, best.yaml, run.json), the share of the run that is bookkeeping (goal
+   metrics, strengths, best.yaml, run.json), run in turn, and the share of the run that is
+   bookkeeping: the median over the pairs of (run directory - loop) / run directory (goal
    <= 15 %), and the whole command ``python -m flctool learn behaviours/ballchase.yaml`` with
    its start-up (the bare interpreter, then importing what the command imports). Goal: the
    whole command <= 0.4 s.
@@ -21,6 +22,11 @@ pool workers ``getrusage(RUSAGE_CHILDREN)`` (user + system) of the children.
    wall time is printed too; on a shared machine it says more about the others' load.
 3. Peak resident memory of the real commands, each the only child of a fresh interpreter
    (``getrusage(RUSAGE_CHILDREN).ru_maxrss``). Goal: ``flctool learn`` at most 150 MB.
+4. Would lock-step help? A learned controller's validation episodes (the run's 20 fixed
+   seeds) one after another, as learning runs them (``run_trial``), against the same
+   episodes stepped together by the batched simulator with the same per-state inference for
+   the episodes still running: CPU of each, and the mean and longest episode (lock-step
+   steps every episode until the longest ends).
 
 Prints the tables and writes JSON (default: bench_learning.json beside the script). A
 script, never a timed test.
@@ -39,10 +45,14 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from common import ROOT, best_seconds, machine, write_json
 
-from flctool import load_behaviour
+from flctool import compile_behaviour, load_behaviour
+from flctool.envs import make_env
 from flctool.learners import make_learner, train
+from flctool.learners.selection import validation_seeds
+from flctool.learners.trial import SparseRules, run_trial
 from flctool.runs import create_run, resolve_behaviour
 
 BALLCHASE = ROOT / "behaviours" / "ballchase.yaml"
@@ -55,13 +65,17 @@ GOAL_MEGABYTES = 150.0
 
 # What `flctool learn` imports before it trains (the learners and the simulator are
 # registered by name and imported on first use).
-IMPORTS = ("import flctool.cli, flctool.runs, flctool.envs.ballchase, flctool.learners.pitt, "
-           "flctool.learners.hybrid, flctool.learners.fuzzy_q")
-# Runs the command in this interpreter and reports afterwards whether it imported numba.
-NUMBA_PROBE = ("import atexit, runpy, sys\n"
-               "atexit.register(lambda: print('numba' in sys.modules, file=sys.stderr))\n"
-               "sys.argv = ['flctool', *sys.argv[1:]]\n"
-               "runpy.run_module('flctool', run_name='__main__')\n")
+IMPORTS = ("import flctool.cli, flctool.cli.learn, flctool.runs, flctool.envs.ballchase, "
+           "flctool.learners.pitt, flctool.learners.hybrid, flctool.learners.fuzzy_q")
+# Runs the command in this interpreter and reports afterwards which heavy libraries it
+# imported (learning needs none of them; each costs tenths of a second).
+HEAVY = ("numba", "scipy", "skfuzzy", "matplotlib")
+IMPORT_PROBE = ("import atexit, runpy, sys\n"
+                f"heavy = {HEAVY!r}\n"
+                "atexit.register(lambda: print(' '.join(m for m in heavy if m in sys.modules) "
+                "or '-', file=sys.stderr))\n"
+                "sys.argv = ['flctool', *sys.argv[1:]]\n"
+                "runpy.run_module('flctool', run_name='__main__')\n")
 # Runs one command as its only child and prints the child's peak resident set in kB.
 RSS_PROBE = ("import resource, subprocess, sys\n"
              "subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL)\n"
@@ -77,7 +91,8 @@ def children_cpu() -> float:
 def cpu(command: list[str], cwd: Path) -> float:
     """CPU seconds of one command run as a child."""
     before = children_cpu()
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, cwd=cwd)
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                   cwd=cwd)
     return children_cpu() - before
 
 
@@ -103,22 +118,29 @@ def measure(learner: str, repeats: int, tmp: Path, startup_seconds: float) -> di
         nonlocal steps
         steps = sum(m.steps for m in train(make_learner(behaviour)))
 
-    loop = best_seconds(loop_only, repeats)
-    runs = iter(range(repeats))
-    recorded = best_seconds(
-        lambda: create_run(behaviour, tmp / f"{learner}-run{next(runs)}").train(), repeats)
+    # The loop alone and with the run directory in turn, so that both meet the same load;
+    # the share is the median of the pairs' shares (one disturbed run cannot move it).
+    loops: list[float] = []
+    recordings: list[float] = []
+    for i in range(repeats):
+        loops.append(best_seconds(loop_only, 1))
+        recordings.append(best_seconds(
+            lambda i=i: create_run(behaviour, tmp / f"{learner}-run{i}").train(), 1))
+    loop, recorded = min(loops), min(recordings)
+    share = statistics.median(max(0.0, r - lo) / r for lo, r in zip(loops, recordings,
+                                                                     strict=True))
     command = min(cpu([sys.executable, *learn_command(learner, tmp / f"{learner}-cli{i}")],
                       tmp) for i in range(repeats))
-    probe = subprocess.run([sys.executable, "-c", NUMBA_PROBE,
+    probe = subprocess.run([sys.executable, "-c", IMPORT_PROBE,
                             *learn_command(learner, tmp / f"{learner}-probe")[2:]],
                            check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                            text=True, cwd=tmp)
     return {"learner": learner, "steps": steps, "loop_seconds": loop,
             "steps_per_second": steps / loop, "run_dir_seconds": recorded,
-            "bookkeeping_share": max(0.0, recorded - loop) / recorded,
+            "bookkeeping_share": share,
             "command_seconds": command, "command_after_startup_seconds":
             command - startup_seconds,
-            "command_imports_numba": probe.stderr.strip().splitlines()[-1] == "True"}
+            "command_imports": probe.stderr.strip().splitlines()[-1]}
 
 
 # -- 2. many seeds through a process pool ----------------------------------------------------
@@ -183,6 +205,47 @@ def memory(tmp: Path) -> list[dict[str, Any]]:
             for name, arguments in commands.items()]
 
 
+# -- 4. lock-step --------------------------------------------------------------------------
+def lockstep(repeats: int) -> dict[str, Any]:
+    """A controller's 20 validation episodes one at a time (``run_trial``) and in lock-step
+    (one batched simulator, the same per-state inference for the episodes still running)."""
+    behaviour = load_behaviour(HANDMADE)
+    controller = compile_behaviour(behaviour)
+    assert controller.consequents is not None
+    consequents = controller.consequents.tolist()
+    rules = SparseRules(controller)
+    seeds = validation_seeds(0, 20)
+    single = make_env(behaviour)
+    batch = make_env(behaviour, len(seeds))
+    alone: list[int] = []
+    together = np.zeros(len(seeds), dtype=np.int64)
+
+    def one_at_a_time() -> None:
+        alone[:] = [run_trial(single, rules, int(seed), consequents).length for seed in seeds]
+
+    def lock_step() -> None:
+        observations, _ = batch.reset(seeds)
+        actions = np.zeros(len(seeds))
+        running = np.ones(len(seeds), dtype=bool)
+        together[:] = 0
+        while running.any():
+            for b in np.flatnonzero(running).tolist():
+                active, alphas, _ = rules.activations(observations[b].tolist())
+                actions[b] = rules.output(alphas, [consequents[m] for m in active])
+            together[:] += running
+            out = batch.step(actions)
+            observations, running = out.observations, ~(out.terminated | out.truncated)
+
+    single_seconds = best_seconds(one_at_a_time, repeats)
+    lock_seconds = best_seconds(lock_step, repeats)
+    if alone != together.tolist():
+        raise SystemExit("lock-step ran other episodes than one at a time")
+    return {"episodes": len(seeds), "one_at_a_time_seconds": single_seconds,
+            "lock_step_seconds": lock_seconds, "lock_step_over_one_at_a_time":
+            lock_seconds / single_seconds, "mean_length": statistics.fmean(alone),
+            "longest": max(alone)}
+
+
 # -- report -----------------------------------------------------------------------------------
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -199,17 +262,18 @@ def main() -> None:
         pools = [pool(args.seeds, args.workers, None),
                  pool(args.seeds, args.workers, tmp / "pool")]
         peaks = memory(tmp)
+        lock = lockstep(args.repeats)
 
     print(f"1. ballchase, paper protocol (population 10, 30 generations, 1 trial = 300 "
           f"trials); CPU seconds, least of {args.repeats}")
     print(f"{'learner':8} {'steps':>6} {'loop s':>7} {'steps/s':>8} {'run dir s':>9} "
-          f"{'bookkeeping':>11} {'command s':>9} {'- start-up':>10} {'numba':>6}")
+          f"{'bookkeeping':>11} {'command s':>9} {'- start-up':>10} {'heavy imports':>13}")
     for r in results:
         print(f"{r['learner']:8} {r['steps']:6d} {r['loop_seconds']:7.3f} "
               f"{r['steps_per_second']:8.0f} {r['run_dir_seconds']:9.3f} "
               f"{r['bookkeeping_share']:10.0%} {r['command_seconds']:9.3f} "
               f"{r['command_after_startup_seconds']:10.3f} "
-              f"{'yes' if r['command_imports_numba'] else 'no':>6}")
+              f"{r['command_imports']:>13}")
     print(f"start-up of the command: {start['startup_seconds']:.3f} s CPU = interpreter "
           f"{start['interpreter_seconds']:.3f} s + imports {start['import_seconds']:.3f} s")
 
@@ -226,6 +290,12 @@ def main() -> None:
     print("\n3. peak resident memory")
     for m in peaks:
         print(f"{m['peak_rss_mb']:7.1f} MB  {m['command']}")
+
+    print(f"\n4. {lock['episodes']} validation episodes of the hand-made ballchase controller:"
+          f" one at a time {lock['one_at_a_time_seconds']:.4f} s CPU, in lock-step "
+          f"{lock['lock_step_seconds']:.4f} s ({lock['lock_step_over_one_at_a_time']:.2f}x);"
+          f" episodes of {lock['mean_length']:.1f} steps on average, the longest "
+          f"{lock['longest']}")
 
     learn_mb = peaks[0]["peak_rss_mb"]
     bookkeeping = max(r["bookkeeping_share"] for r in results)
@@ -245,7 +315,7 @@ def main() -> None:
               f"{'met' if met[name] else 'MISSED'}")
     write_json(args.json, {"machine": machine(), "repeats": args.repeats, "startup": start,
                            "timing": "CPU time, least of the repeats",
-                           "protocol": results, "pool": pools, "memory": peaks,
+                           "protocol": results, "pool": pools, "memory": peaks, "lock_step": lock,
                            "goals": {name: {"value": value, "sense": sense, "goal": goal,
                                             "met": met[name]}
                                      for name, (value, sense, goal) in goals.items()}})

@@ -541,7 +541,7 @@ def _fsync(path: Path) -> None:
 class RunRecorder(Callback):
     """Writes checkpoints, metrics, strengths and best.yaml as training goes.
 
-    The bookkeeping policy (docs/performance.md, "Run directories"): every generation's
+    The bookkeeping policy (docs/performance.md, "Learning and memory"): every generation's
     checkpoint is written atomically as soon as the generation ends, and its rows appended
     to metrics.csv / strengths.csv, so a killed process loses at most the generation in
     progress (the kernel keeps what was written; resume rebuilds the tables from the

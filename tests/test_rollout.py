@@ -11,9 +11,11 @@ from flctool import compile_behaviour, load_behaviour
 from flctool.envs import make_env
 from flctool.errors import NotDeployableError
 from flctool.rollout import (
+    T975,
     evaluate,
     evaluation_seeds,
     mean_interval,
+    t975,
     trace_episode,
     vote_output,
     wilson_interval,
@@ -42,6 +44,18 @@ def test_mean_interval_uses_student_t() -> None:
     assert single.value == 5.0 and math.isnan(single.low)
     assert mean_interval(np.array([])).to_dict() == {"value": None, "low": None,
                                                       "high": None, "n": 0}
+
+
+def test_t_quantile_table_is_scipys() -> None:
+    """The table spares scipy's import; it must give scipy's quantiles (exactly with the scipy
+    it was made with, within an ulp with another version), and dof off the table ask scipy."""
+    from scipy.special import stdtrit
+
+    for dof, quantile in T975.items():
+        assert quantile == pytest.approx(float(stdtrit(dof, 0.975)), rel=3e-16, abs=0.0), dof
+    assert 31 not in T975
+    assert t975(31) == float(stdtrit(31, 0.975))
+    assert t975(19) == T975[19]
 
 
 def test_evaluate_collects_every_episode() -> None:

@@ -54,6 +54,10 @@ class BatchEnv(ABC):
     #: rules sum their activations and the strongest command's singleton is ``a``, in place
     #: of eq. 3's weighted average (see docs/learning.md).
     votes: bool = False
+    #: Whether an episode is a function of its seed and the actions alone, replayed exactly
+    #: (a simulator; never a robot): learning then reuses a validation episode's outcome for
+    #: a controller that would act the same in it, instead of running it again.
+    replayable: bool = False
 
     @abstractmethod
     def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:

@@ -406,6 +406,8 @@ class PitchSim(BatchEnv):
     each (B,).
     """
 
+    replayable = True  # all randomness comes from the seed (see _draw)
+
     def __init__(self, world: World, commands: dict[str, float], motion: dict[str, Motion],
                  noise: dict[str, MotionNoise], channels: tuple[str, ...],
                  observation_names: tuple[str, ...] | None = None, votes: bool = False,

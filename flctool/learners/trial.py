@@ -45,31 +45,47 @@ class SparseRules:
     def fire(self, state: list[float]) -> tuple[list[int], list[float], list[float]]:
         """Active rules of one state (N,) in increasing order, their activations alpha_m
         (eq. 2), and phi_m = alpha_m / sum(alpha) (eq. 7)."""
+        rules, alphas, total = self.activations(state)
+        return rules, alphas, [a / total for a in alphas]
+
+    def activations(self, state: list[float]) -> tuple[list[int], list[float], float]:
+        """Active rules of one state (N,) in increasing order, their activations alpha_m
+        (eq. 2), and sum(alpha) added in rule order (the denominator of eq. 3 and eq. 7)."""
+        if len(state) != len(self._sets):
+            raise InferenceError(f"the state has {len(state)} values for "
+                                 f"{len(self._sets)} inputs")
         rules = [0]
         alphas = [1.0]
-        for i, (value, low, high, sets) in enumerate(zip(state, self._lows, self._highs,
-                                                         self._sets, strict=True)):
+        for i, value in enumerate(state):
             if value != value:  # NaN: every comparison below would be false
                 raise InferenceError(f"the environment observed NaN for input "
                                      f"'{self._names[i]}'",
                                      hint="NaN has no membership; fix the adapter's sensor")
+            low, high, sets = self._lows[i], self._highs[i], self._sets[i]
             s = low if value < low else high if value > high else value  # clip to the range
-            mus = firing_sets(s, sets)
-            width = len(sets)
-            rules = [r * width + j for r in rules for j, _ in mus]
-            alphas = [a if a < mu else mu for a in alphas for _, mu in mus]
+            members = firing_sets(s, sets)  # (index, mu > 0) in set order
+            if i == 0:  # the first input: min(1.0, mu) is mu, as 0 < mu <= 1
+                rules = [j for j, _ in members]
+                alphas = [mu for _, mu in members]
+            else:
+                width = len(sets)
+                rules = [r * width + j for r in rules for j, _ in members]
+                alphas = [a if a < mu else mu for a in alphas for _, mu in members]
         total = add_in_order(alphas)
         if not total > 0.0:  # covered ranges fire a rule; only underflow leaves none
             raise InferenceError(f"no rule fires for the state {state}: the sets overlap too "
                                  "little to be computed in floating point",
                                  hint="widen the sets' overlap")
-        return rules, alphas, [a / total for a in alphas]
+        return rules, alphas, total
 
     def output(self, alphas: list[float], commands: list[int]) -> float:
         """Crisp output of eq. 3 from the firing rules' activations and command indices."""
-        value = centre_of_area(zip(alphas, map(self.singletons.__getitem__, commands),
-                                   strict=True), 0.0)
-        # within the commands, as Controller.output keeps it (rounding may step an ulp past)
+        return self.clip(centre_of_area(zip(alphas, map(self.singletons.__getitem__, commands),
+                                            strict=True), 0.0))
+
+    def clip(self, value: float) -> float:
+        """Within the commands, as Controller.output keeps it (rounding may step an ulp
+        past)."""
         return self._low if value < self._low else self._high if value > self._high else value
 
     def vote(self, alphas: list[float], commands: list[int]) -> float:
@@ -124,41 +140,77 @@ class Trial:
 
 
 def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int] | None,
-              chooser: Chooser | None = None, td: TemporalDifference | None = None) -> Trial:
+              chooser: Chooser | None = None, td: TemporalDifference | None = None,
+              acted: set[int] | None = None) -> Trial:
     """Run one episode from ``seed`` on a batch-of-one ``env``.
 
     The commands come from the fixed ``consequents (M,)`` (pitt, hybrid) or, step by step, from
     ``chooser`` (fuzzy_q). With ``td``, every step updates the q table (eq. 4-9): trial after
     trial, never summed over simultaneous episodes. A terminal step does not bootstrap; a
-    truncated one does (the time limit is not part of the task).
+    truncated one does (the time limit is not part of the task). ``acted`` collects the rules
+    that fired in a state the controller acted on: only their commands shaped the episode.
     """
+    if chooser is None:
+        if consequents is None:
+            raise ValueError("run_trial needs consequents or a chooser")
+        if td is None and not env.votes:
+            return _fixed_trial(env, rules, seed, consequents, acted)
     if td is not None:
         td.reset_traces()
     # The B = 1 fast path of the adapter protocol: the same results as reset/step on arrays
     # of one, without building them every step.
-    active, alphas, phi = rules.fire(env.reset_one(seed).tolist())
-    act = rules.vote if env.votes else rules.output  # eq. 3, or the vote
-    total = 0.0
+    active, alphas, total = rules.activations(env.reset_one(seed).tolist())
+    # phi (eq. 7) only for the q update; each state's is computed once
+    phi = [a / total for a in alphas] if td is not None else []
+    votes = env.votes
+    ret = 0.0
     steps = 0
     while True:
+        if acted is not None:
+            acted.update(active)
         if chooser is not None:
             commands = chooser.choose(active)
-        elif consequents is not None:
-            commands = [consequents[m] for m in active]
         else:
-            raise ValueError("run_trial needs consequents or a chooser")
-        observation, reward, terminal, truncated = env.step_one(act(alphas, commands))
-        done = terminal or truncated
-        total += reward
+            commands = [consequents[m] for m in active]  # type: ignore[index]
+        # eq. 3, or the vote
+        action = rules.vote(alphas, commands) if votes else rules.output(alphas, commands)
+        observation, reward, terminal, truncated = env.step_one(action)
+        ret += reward
         steps += 1
         if terminal:
             next_active: list[int] = []
             next_alphas: list[float] = []
             next_phi: list[float] = []
         else:
-            next_active, next_alphas, next_phi = rules.fire(observation.tolist())
+            next_active, next_alphas, total = rules.activations(observation.tolist())
+            next_phi = [a / total for a in next_alphas] if td is not None else []
         if td is not None:
             td.learn(active, phi, commands, reward, next_active, next_phi, terminal)
-        if done:
-            return Trial(total, steps, bool(env.success()[0]))
+        if terminal or truncated:
+            return Trial(ret, steps, bool(env.success()[0]))
         active, alphas, phi = next_active, next_alphas, next_phi
+
+
+def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int],
+                 acted: set[int] | None) -> Trial:
+    """:func:`run_trial` with fixed consequents, no q update and eq. 3 (pitt's trials and
+    every validation episode): the same operations with less bookkeeping per step."""
+    # each rule's command singleton, so eq. 3 needs no command list
+    singleton = [rules.singletons[k] for k in consequents].__getitem__
+    clip = rules.clip
+    active, alphas, _ = rules.activations(env.reset_one(seed).tolist())
+    ret = 0.0
+    steps = 0
+    while True:
+        if acted is not None:
+            acted.update(active)
+        action = clip(centre_of_area(zip(alphas, map(singleton, active), strict=True), 0.0))
+        observation, reward, terminal, truncated = env.step_one(action)
+        ret += reward
+        steps += 1
+        if terminal:
+            return Trial(ret, steps, bool(env.success()[0]))
+        # a truncated episode's last state is fired too, as run_trial does (its errors count)
+        active, alphas, _ = rules.activations(observation.tolist())
+        if truncated:
+            return Trial(ret, steps, bool(env.success()[0]))

@@ -263,3 +263,22 @@ def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
                                  str(info["best"]["generation"] + 2), "--json"])
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["status"] == "finished"
+
+
+def test_learn_loads_neither_scipy_nor_numba(tmp_path: Path) -> None:
+    """A learning run needs neither: selection's intervals take the t quantile from a table
+    and validation runs the training loop's inference (each would add tenths of a second)."""
+    probe = ("import runpy, sys\n"
+             "sys.argv = ['flctool', *sys.argv[1:]]\n"
+             "try:\n"
+             "    runpy.run_module('flctool', run_name='__main__')\n"
+             "finally:\n"
+             "    print(sorted({m.split('.')[0] for m in sys.modules} & {'scipy', 'numba'}),\n"
+             "          file=sys.stderr)\n")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    result = subprocess.run(
+        [sys.executable, "-c", probe, "learn", BALLCHASE, "--generations", "2", "--out",
+         str(tmp_path / "run"), "--json"],
+        capture_output=True, text=True, env=env, check=False)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.strip().splitlines()[-1] == "[]"

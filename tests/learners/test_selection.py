@@ -19,6 +19,7 @@ from flctool.learners.selection import (
     Selection,
     validation_seeds,
 )
+from flctool.learners.trial import run_trial
 from flctool.plugins import names
 from flctool.rollout import evaluation_seeds
 from flctool.runs import BEST_FILE, METRICS_FILE, create_run, open_run, resolve_behaviour
@@ -191,6 +192,37 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
     info = json.loads((whole.path / "run.json").read_text())
     assert info["selection"] == json.loads((part.path / "run.json").read_text())["selection"]
     assert resumed.usage == whole_summary.usage and resumed.usage["selection_episodes"] > 0
+
+
+@pytest.mark.parametrize("learner", names("learner"))
+def test_reusing_known_validation_episodes_changes_nothing(
+        learner: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A candidate that commands alike every rule that fired where an earlier one acted in a
+    validation episode gets that episode's outcome without running it: the run is the same
+    as one that runs every episode, with fewer episodes run."""
+    from flctool.learners import selection as selection_module
+
+    ran: list[int] = []
+
+    def counted(*args: Any, **kwargs: Any) -> Any:
+        ran.append(args[2])
+        return run_trial(*args, **kwargs)
+
+    monkeypatch.setattr(selection_module, "run_trial", counted)
+    behaviour = ballchase(learner=learner, seed=2, generations=8)
+    runs = []
+    for replayable in (False, True):
+        ran.clear()
+        learned = make_learner(behaviour)
+        assert learned.env.replayable  # the simulator is
+        learned.env.replayable = replayable
+        history = [{k: v for k, v in m.row().items() if k != "wall_time"}
+                   for m in train(learned)]
+        runs.append((history, learned.selection.record(), learned.selected()[2].tolist(),
+                     len(ran)))
+    (history, record, best, every), (history_, record_, best_, fewer) = runs
+    assert (history_, record_, best_) == (history, record, best)
+    assert every == record["usage"]["selection_episodes"] > fewer
 
 
 def test_run_json_records_every_validated_candidate_and_the_usage(tmp_path: Path) -> None:

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from flctool import compile_behaviour, load_behaviour
 from flctool.errors import InferenceError
 from flctool.learners.fuzzy_q import FuzzyQ
-from flctool.learners.trial import SparseRules, run_trial
+from flctool.learners.trial import SparseRules, add_in_order, run_trial
 from tests.conftest import BEHAVIOURS
 from tests.learners.line_env import LineEnv, line_behaviour
 
@@ -78,6 +78,36 @@ def test_a_learned_controller_acts_as_it_will_when_deployed(action: str) -> None
     assert [t.length for t in learned] == deployed.lengths.tolist()
     assert [t.ret for t in learned] == deployed.returns.tolist()
     assert [t.success for t in learned] == deployed.success.tolist()
+
+
+class FixedChooser:
+    """Chooses the fixed consequents, so run_trial takes its general loop."""
+
+    def __init__(self, consequents: list[int]) -> None:
+        self.consequents = consequents
+
+    def choose(self, rules: list[int]) -> list[int]:
+        return [self.consequents[m] for m in rules]
+
+
+def test_the_fixed_consequents_path_equals_the_general_loop() -> None:
+    # pitt's trials and validation take a shorter loop; it must be the same episode
+    from flctool.envs import make_env
+
+    env = make_env(load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml"))
+    assert BALLCHASE.consequents is not None
+    consequents = BALLCHASE.consequents.tolist()
+    for seed in range(40):
+        assert run_trial(env, SPARSE, seed, consequents) == run_trial(
+            env, SPARSE, seed, None, chooser=FixedChooser(consequents))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-0.2, 1.2), st.floats(-120.0, 120.0))
+def test_activations_add_alpha_in_rule_order(size: float, pan: float) -> None:
+    rules, alphas, total = SPARSE.activations([size, pan])
+    assert (rules, alphas) == SPARSE.fire([size, pan])[:2]
+    assert total == add_in_order(alphas)
 
 
 @settings(max_examples=200, deadline=None)
