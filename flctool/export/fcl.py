@@ -472,6 +472,7 @@ class _FclParser:
         self.take()
 
     def rule(self, start: Token) -> None:
+        first = self.at - 1  # the RULE token
         self.take()  # the rule's number or name
         self.expect(":")
         self.expect("IF")
@@ -505,7 +506,9 @@ class _FclParser:
         elif end.word != ";":
             raise self.fail(end, f"'{end.text}' where the rule should end with ';'",
                             "end the rule with ';'")
-        self.result.rules.append(ImportedRule(antecedent, command, start.line))
+        written = [t.text for t in self.tokens[first:self.at] if t.text != ";"]
+        self.result.rules.append(ImportedRule(antecedent, command, start.line,
+                                              " ".join(written)))
 
     def proposition(self) -> tuple[Token, str]:
         first = self.take()

@@ -15,7 +15,6 @@ import re
 
 from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
-    DONT_CARE_HINT,
     ImportedCommand,
     ImportedController,
     ImportedInput,
@@ -23,6 +22,7 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
+    excerpt,
     fuzzylite_quad,
     identifier,
     parse_number,
@@ -122,7 +122,7 @@ class _FisReader:
         #: Mamdani output sets (name -> quadruple) replaced by singletons at their centroids
         self.output_sets: dict[str, tuple[float, float, float, float]] = {}
         self.output_range = (0.0, 1.0)
-        self.result = ImportedController(file)
+        self.result = ImportedController(file, omission="index 0")
         self.fail = self.result.error
         self.system: dict[str, tuple[str, int]] = {}
         self.section = ("", 0)
@@ -144,7 +144,7 @@ class _FisReader:
                 key, equals, value = line.partition("=")
                 key = key.strip()
                 if not equals or _WORD.fullmatch(key) is None:
-                    raise self.fail(line_number, f"'{_excerpt(line)}' is not a 'Key=value' line")
+                    raise self.fail(line_number, f"'{excerpt(line)}' is not a 'Key=value' line")
                 self.entry(key, value.strip(), line_number)
         self.check_system()
         self.check_counts()
@@ -159,7 +159,7 @@ class _FisReader:
         name = inner.rstrip("0123456789")
         index = inner[len(name):]
         if _WORD.fullmatch(name) is None:
-            raise self.fail(line, f"'{_excerpt(text)}' is not a section header like [Input1]")
+            raise self.fail(line, f"'{excerpt(text)}' is not a section header like [Input1]")
         if len(index) > MAX_DIGITS:
             raise self.fail(line, f"the section index of [{name}...] has {len(index)} digits",
                             "number the sections 1, 2, ... in order")
@@ -203,7 +203,7 @@ class _FisReader:
     def count(self, value: str, line: int, key: str) -> int:
         # isdigit alone accepts '²' and other digits int() refuses
         if not (value.isascii() and value.isdigit()) or len(value) > MAX_DIGITS:
-            raise self.fail(line, f"{key}={_excerpt(value)} is not a whole number of at most "
+            raise self.fail(line, f"{key}={excerpt(value)} is not a whole number of at most "
                             f"{MAX_DIGITS} digits", f"write the count, e.g. {key}=3")
         return int(value)
 
@@ -242,7 +242,7 @@ class _FisReader:
 
     def flag(self, key: str, value: str, line: int) -> bool:
         if value not in ("0", "1"):
-            raise self.fail(line, f"{key}={_excerpt(value)} is neither 0 nor 1")
+            raise self.fail(line, f"{key}={excerpt(value)} is neither 0 nor 1")
         return value == "1"
 
     def enabled(self, value: str, line: int) -> None:
@@ -275,7 +275,7 @@ class _FisReader:
         elif key == "Range":
             values = self.vector(value, line, "Range")
             if len(values) != 2 or not values[0] < values[1]:
-                raise self.fail(line, f"Range {_excerpt(value)} is not [low high] with low "
+                raise self.fail(line, f"Range {excerpt(value)} is not [low high] with low "
                                 "below high", "write Range=[low high]")
             self.output_range = (values[0], values[1])
         else:
@@ -300,7 +300,7 @@ class _FisReader:
     def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
         match = _MF.fullmatch(value)
         if match is None:
-            raise self.fail(line, f"'{_excerpt(value)}' is not 'name':'type',[parameters]")
+            raise self.fail(line, f"'{excerpt(value)}' is not 'name':'type',[parameters]")
         return match.group(1), match.group(2), self.vector(f"[{match.group(3)}]", line, "MF")
 
     def vector(self, value: str, line: int, what: str) -> list[float]:
@@ -380,7 +380,7 @@ class _FisReader:
         connection = connection.strip()
         if (not colon or opening < 0 or closing < opening or head[closing + 1:].strip()
                 or connection not in ("1", "2")):
-            raise self.fail(line, f"rule '{_excerpt(text)}' is not 'sets, command (weight) : "
+            raise self.fail(line, f"rule '{excerpt(text)}' is not 'sets, command (weight) : "
                             "connection'", "write e.g. 1 2, 1 (1) : 1")
         indices, comma, outputs = head[:opening].partition(",")
         if comma:
@@ -393,7 +393,7 @@ class _FisReader:
         sets, outputs, weight_text, connection = self.split_rule(text, line)
         weight = parse_number(weight_text.strip(), self.file, line, "rule weight")
         if weight != 1.0:
-            raise self.fail(line, f"a rule weight of {_excerpt(weight_text.strip())}: "
+            raise self.fail(line, f"a rule weight of {excerpt(weight_text.strip())}: "
                             "flctool's rules all weigh 1")
         if connection != "1" and len(sets) > 1:
             raise self.fail(line, "an OR rule (connection 2): flctool's rules are one AND chain "
@@ -405,10 +405,8 @@ class _FisReader:
         antecedent: dict[str, str] = {}
         for variable, index in zip(self.result.inputs, sets, strict=True):
             k = self.index(index, line, f"input '{variable.name}'")
-            if k == 0:
-                raise self.fail(line, f"the rule leaves out input '{variable.name}' (index 0):"
-                                " it fires with the other inputs' minimum alone, which no "
-                                "rule of the full grid (eq. 1-2) does", DONT_CARE_HINT)
+            if k == 0:  # an input left out: build_behaviour refuses it, as in every format
+                continue
             if k < 0:
                 raise self.fail(line, f"NOT (a negative index) on input '{variable.name}'")
             if k > len(variable.sets):
@@ -418,7 +416,7 @@ class _FisReader:
         if not 1 <= k <= len(self.result.commands):
             raise self.fail(line, f"the output has no MF{k}" if k > 0 else
                             "the rule gives no (or a negated) output MF")
-        return ImportedRule(antecedent, self.result.commands[k - 1].name, line)
+        return ImportedRule(antecedent, self.result.commands[k - 1].name, line, text)
 
     def index(self, text: str, line: int, what: str) -> int:
         if len(text) > MAX_DIGITS + 3:
@@ -429,8 +427,3 @@ class _FisReader:
             raise self.fail(line, f"the index {text} of {what} is not a whole number "
                             "(a hedge)")
         return int(value)
-
-
-def _excerpt(text: str, width: int = 60) -> str:
-    """``text`` cut to ``width`` characters for a message."""
-    return text if len(text) <= width else text[:width] + "..."

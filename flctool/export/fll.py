@@ -23,6 +23,7 @@ from flctool.export.imported import (
     Method,
     build_behaviour,
     check_term_arity,
+    excerpt,
     fuzzylite_quad,
     parse_number,
     zero_order_constant,
@@ -120,7 +121,7 @@ class _FllReader:
             key, colon, value = line.partition(":")
             key = key.strip()
             if not colon or _KEY.fullmatch(key) is None:
-                raise self.fail(number_, f"'{_excerpt(line.strip())}' is not a 'key: value' "
+                raise self.fail(number_, f"'{excerpt(line.strip())}' is not a 'key: value' "
                                 "line")
             self.entry(key, value.strip(), number_)
         if not self.result.output_declared:
@@ -237,13 +238,13 @@ class _FllReader:
 
     def boolean(self, key: str, value: str, line: int) -> bool:
         if value not in ("true", "false"):
-            raise self.fail(line, f"{key}: '{_excerpt(value)}' is neither true nor false")
+            raise self.fail(line, f"{key}: '{excerpt(value)}' is neither true nor false")
         return value == "true"
 
     def pair(self, value: str, line: int) -> tuple[float, float]:
         parts = value.split()
         if len(parts) != 2:
-            raise self.fail(line, f"range '{_excerpt(value)}' is not two numbers")
+            raise self.fail(line, f"range '{excerpt(value)}' is not two numbers")
         lo, hi = (parse_number(p, self.file, line, "range") for p in parts)
         return lo, hi
 
@@ -296,7 +297,7 @@ class _FllReader:
         if output != self.result.output_name:
             raise self.fail(line, f"the rule concludes on '{output}', not on the output "
                             f"'{self.result.output_name}'")
-        return ImportedRule(antecedent, command, line)
+        return ImportedRule(antecedent, command, line, text.strip())
 
     def proposition(self, words: list[str], line: int, part: str) -> tuple[str, str]:
         if len(words) == 3 and words[1] == "is":
@@ -307,11 +308,6 @@ class _FllReader:
                             "flctool's rules use plain terms")
         raise self.fail(line, f"'{' '.join(words)}' in a rule's {part} is not "
                         "'variable is term'")
-
-
-def _excerpt(text: str, width: int = 60) -> str:
-    """``text`` cut to ``width`` characters for a message."""
-    return text if len(text) <= width else text[:width] + "..."
 
 
 def _split(words: list[str], separator: str) -> list[list[str]]:

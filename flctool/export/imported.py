@@ -3,7 +3,8 @@
 Each importer parses its format into an :class:`ImportedController`, refusing on the spot any
 construct flctool cannot express. :func:`build_behaviour` then checks the rules against each
 other and validates the result as a behaviour, with every problem located at its line in the
-imported file.
+imported file; a problem that concerns another rule too (a duplicate) names that rule by its
+line and text, never by a behaviour file's field path.
 """
 
 from __future__ import annotations
@@ -127,11 +128,23 @@ class ImportedCommand:
 
 @dataclass
 class ImportedRule:
-    """IF input_1 IS set AND ... THEN output IS command, as read at ``line``."""
+    """IF input_1 IS set AND ... THEN output IS command, as read at ``line``; ``text`` is the
+    rule as the file writes it."""
 
     antecedent: dict[str, str]
     command: str
     line: int
+    text: str = ""
+
+    def named(self) -> str:
+        """The rule as a message about another rule names it: by its line and its text."""
+        written = f" ('{excerpt(self.text)}')" if self.text else ""
+        return f"the rule at line {self.line}{written}"
+
+
+def excerpt(text: str, width: int = 60) -> str:
+    """``text`` cut to ``width`` characters for a message."""
+    return text if len(text) <= width else text[:width] + "..."
 
 
 @dataclass(frozen=True)
@@ -165,6 +178,8 @@ class ImportedController:
     rules: list[ImportedRule] = field(default_factory=list)
     conjunction: Method | None = None
     accumulation: Method | None = None
+    #: How the format writes that a rule leaves an input out, when it has a way (FIS: index 0).
+    omission: str = ""
 
     def error(self, line: int, construct: str, hint: str = "") -> ExportError:
         """An import error at ``line`` of this file (see :func:`unsupported`)."""
@@ -369,7 +384,10 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         marks[("rules", index)] = (rule.line, 1)
     data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command}
                      for rule in imported.rules]
-    return behaviour_from_data(data, SourceMap(file, marks))
+    # A rule check that names another rule names it by line, as the file does. No rule is
+    # expanded as a don't-care (those were refused above), so index k is the file's k-th.
+    return behaviour_from_data(data, SourceMap(file, marks),
+                               rule_names=lambda index: imported.rules[index].named())
 
 
 _NOT_IDENTIFIER = re.compile(r"[^A-Za-z0-9_]")
@@ -438,11 +456,13 @@ def _check_rules_cover_every_input(imported: ImportedController) -> None:
         left_out = [n for n in inputs if n not in rule.antecedent]
         # (a rule naming an unknown input is a typo the behaviour's checks name instead)
         if left_out and all(n in inputs for n in rule.antecedent):
+            names = ", ".join(f"'{n}'" for n in left_out)
+            written = f" ({imported.omission})" if imported.omission else ""
             raise unsupported(
-                imported.file, rule.line, f"the rule leaves out input(s) {', '.join(left_out)}: "
-                "it fires with the other inputs' minimum alone, which no rule of the full grid "
-                "(eq. 1-2) does, so expanding it over the sets would change the output",
-                DONT_CARE_HINT)
+                imported.file, rule.line, f"the rule leaves out input{'s' * (len(left_out) > 1)} "
+                f"{names}{written}: it fires with the other inputs' minimum alone, which no rule "
+                "of the full grid (eq. 1-2) does, so expanding it over the sets would change "
+                "the output", DONT_CARE_HINT)
 
 
 def _check_methods(imported: ImportedController) -> None:

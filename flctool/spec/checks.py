@@ -1,15 +1,19 @@
 """Checks that relate the fields of a behaviour to each other.
 
-Each returns :class:`Problem` objects with the field path, so the loader can attach lines.
+Each returns :class:`Problem` objects with the field path, so the loader can attach lines. A
+problem whose message names another rule is a :class:`RuleProblem`, which the loader words
+the way the file being read names its rules (a behaviour file by field path, an imported
+FLL, FCL or FIS file by line).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Callable, Collection, Iterable, Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from flctool.errors import Problem
+from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
 
@@ -29,6 +33,39 @@ MAX_POPULATION_RULES = 20_000_000
 MAX_GENERATION_STEPS = 20_000_000
 #: Rule problems listed before the rest of the table is skipped.
 MAX_RULE_PROBLEMS = 100
+
+#: How a file names the rule with an index: a behaviour file by its field path (rule_path).
+RuleNamer = Callable[[int], str]
+
+
+def rule_path(index: int) -> str:
+    """How a behaviour file names a rule: by its field path, ``rules[3]``."""
+    return f"rules[{index}]"
+
+
+@dataclass(frozen=True)
+class RuleProblem(Problem):
+    """A problem whose message names rules other than the one it is located at.
+
+    ``parts`` is the message as text and rule indices; ``message`` names those rules by field
+    path, as a behaviour file does, and :meth:`worded` names them the way another file does.
+    """
+
+    parts: tuple[str | int, ...] = ()
+
+    def worded(self, name: RuleNamer) -> str:
+        """The message with each rule named by ``name``."""
+        return _worded(self.parts, name)
+
+
+def rule_problem(path: tuple[PathPart, ...], parts: tuple[str | int, ...],
+                 hint: str = "") -> RuleProblem:
+    """The problem at ``path`` whose message is ``parts`` (text and rule indices)."""
+    return RuleProblem(path, _worded(parts, rule_path), hint, parts=parts)
+
+
+def _worded(parts: tuple[str | int, ...], name: RuleNamer) -> str:
+    return "".join(part if isinstance(part, str) else name(part) for part in parts)
 
 
 def find_problems(behaviour: Behaviour) -> list[Problem]:
@@ -160,9 +197,10 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
     seen: dict[tuple[str, ...], int] = {}
     for index, rule in rules:
         if len(problems) >= MAX_RULE_PROBLEMS:  # a whole broken table need not be listed
-            problems.append(Problem(("rules", index), f"the rules from rules[{index}] on are "
-                                    f"not checked: {len(problems)} problems already",
-                                    "fix the rules above first"))
+            problems.append(rule_problem(
+                ("rules", index), ("the rules from ", index, f" on are not checked: "
+                                   f"{len(problems)} problems already"),
+                "fix the rules above first"))
             break
         path = ("rules", index)
         complete = True
@@ -193,8 +231,8 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
         if complete:
             key = tuple(rule.if_[n] for n in inputs)
             if key in seen:
-                problems.append(Problem(
-                    path, f"duplicate rule: the same antecedent as rules[{seen[key]}]",
+                problems.append(rule_problem(
+                    path, ("duplicate rule: the same antecedent as ", seen[key]),
                     "each combination of sets gets one rule; delete one of them"))
             else:
                 seen[key] = index

@@ -16,7 +16,14 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.plugins import names
 from flctool.registry import did_you_mean
-from flctool.spec.checks import check_input, check_rules, limit_problems
+from flctool.spec.checks import (
+    RuleNamer,
+    RuleProblem,
+    check_input,
+    check_rules,
+    limit_problems,
+    rule_path,
+)
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import foreign_key_message
 from flctool.spec.located import attach_source
@@ -51,8 +58,10 @@ def parse_behaviour(text: str, file: str = "<string>") -> Behaviour:
     return behaviour_from_data(data, source)
 
 
-def behaviour_from_data(data: Any, source: SourceMap | None = None) -> Behaviour:
-    """Validate already-parsed data (e.g. from JSON); ``source`` locates errors if known."""
+def behaviour_from_data(data: Any, source: SourceMap | None = None,
+                        rule_names: RuleNamer = rule_path) -> Behaviour:
+    """Validate already-parsed data (e.g. from JSON); ``source`` locates errors if known, and
+    a message about another rule names it by ``rule_names`` (an imported file: by line)."""
     source = source or SourceMap("<data>")
     if not isinstance(data, dict):
         kind = "empty" if data is None else f"a {type(data).__name__}"
@@ -75,13 +84,20 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None) -> Behaviour
         # Report the cross-field problems of the parts that did validate too, in one pass.
         semantic = [p for p in _partial_problems(data)
                     if not any(_within(p.path, q.path) for q in problems)]
-        problems += [source.problem(p.path, p.message, p.hint) for p in semantic]
+        problems += [_located(p, source, rule_names) for p in semantic]
         raise SpecError(_in_file_order(problems), source.file) from None
-    problems += [source.problem(p.path, p.message, p.hint) for p in semantic]
+    problems += [_located(p, source, rule_names) for p in semantic]
     if problems:
         raise SpecError(_in_file_order(problems), source.file)
     attach_source(behaviour, source)  # later layers locate their errors with it
     return behaviour
+
+
+def _located(problem: Problem, source: SourceMap, rule_names: RuleNamer) -> Problem:
+    """A check's problem at its place in the file, naming other rules as the file does."""
+    message = (problem.worded(rule_names) if isinstance(problem, RuleProblem)
+               else problem.message)
+    return source.problem(problem.path, message, problem.hint)
 
 
 def _in_file_order(problems: list[Problem]) -> list[Problem]:

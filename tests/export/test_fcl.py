@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
-from flctool.errors import ExportError
+from flctool.errors import ExportError, SpecError
 from flctool.export import ExportOptions
 from flctool.export.base import sloped_quad
 from flctool.export.fcl import FclExporter, FclImporter, fcl_number, set_points
@@ -108,6 +108,33 @@ def test_import_names_what_it_cannot_express(old: str, new: str, message: str | 
         return
     with pytest.raises(ExportError, match=message):
         FclImporter().from_string(text, "tiny.fcl")
+
+
+def test_a_duplicate_rule_names_the_other_rules_line(tmp_path: Path) -> None:
+    # The behaviour's own duplicate check, worded as an FCL file names its rules: by line,
+    # with the rule as written (RULE 1 : ...).
+    path = tmp_path / "tiny.fcl"
+    path.write_text(BLOCK.replace("IF x IS high THEN u IS down", "IF x IS low THEN u IS down"),
+                    encoding="utf-8")
+    with pytest.raises(SpecError) as caught:
+        FclImporter().from_file(path)
+    [problem] = caught.value.problems
+    assert (problem.file, problem.line) == (str(path), 23)
+    assert problem.message == ("duplicate rule: the same antecedent as the rule at line 22 "
+                               "('RULE 1 : IF x IS low THEN u IS up')")
+
+
+def test_fuzzylites_rules_without_semicolons_are_named_as_written(tmp_path: Path) -> None:
+    # fuzzylite ends a rule at the line's end: the next rule is not part of the text.
+    path = tmp_path / "tiny.fcl"
+    path.write_text(BLOCK.replace("u IS up;", "u IS up").replace(
+        "RULE 2 : IF x IS high THEN u IS down;", "RULE 2 : IF x IS low THEN u IS down"),
+        encoding="utf-8")
+    with pytest.raises(SpecError) as caught:
+        FclImporter().from_file(path)
+    assert [p.message for p in caught.value.problems] == [
+        "duplicate rule: the same antecedent as the rule at line 22 ('RULE 1 : IF x IS low "
+        "THEN u IS up')"]
 
 
 def test_max_accumulation_of_shared_terms_is_refused() -> None:

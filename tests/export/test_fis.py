@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import itertools
-import re
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +12,7 @@ from flctool import compile_behaviour, load_behaviour
 from flctool.errors import ExportError, SpecError
 from flctool.export.base import sloped_quad
 from flctool.export.fis import FisExporter, FisImporter
+from flctool.export.imported import DONT_CARE_HINT
 from flctool.spec import Behaviour
 
 from .controllers import random_behaviour, random_states
@@ -74,7 +74,6 @@ def test_import_reads_the_subset() -> None:
      r"tiny.fis:14: membership function 'high' is a gaussmf"),
     ("1, 2 (1) : 1", "1, 2 (0.5) : 1", r"tiny.fis:24: a rule weight of 0.5"),
     ("1, 2 (1) : 1", "-1, 2 (1) : 1", r"tiny.fis:24: NOT"),
-    ("1, 2 (1) : 1", "0, 2 (1) : 1", r"tiny.fis:24: the rule leaves out input 'x'"),
     ("NumOutputs=1", "NumOutputs=2", r"tiny.fis:5: NumOutputs=2"),
     ("DefuzzMethod='wtaver'", "DefuzzMethod='wtsum'", r"tiny.fis:7: DefuzzMethod='wtsum'"),
     ("1, 2 (1) : 1", "1, 3 (1) : 1", r"tiny.fis:24: the output has no MF3"),
@@ -97,19 +96,49 @@ def test_an_or_rule_over_two_inputs_is_refused() -> None:
         FisImporter().from_string(text, "x.fis")
 
 
-@pytest.mark.parametrize(("old", "new", "message"), [
-    ("2, 1 (1) : 1", "1, 1 (1) : 1", r"duplicate rule: the same antecedent as rules\[0\]"),
-])
-def test_rule_checks_are_the_behaviours_located_at_the_rule(old: str, new: str,
-                                                            message: str) -> None:
-    # The import checks rules through the behaviour's own checks, not a second copy of them.
-    text = SYSTEM.replace(old, new)
-    assert text != SYSTEM
+def test_a_duplicate_rule_names_the_other_rules_line(tmp_path: Path) -> None:
+    # The behaviour's own duplicate check, worded as a FIS file names its rules: by line.
+    path = tmp_path / "tiny.fis"
+    path.write_text(SYSTEM.replace("2, 1 (1) : 1", "1, 1 (1) : 1"), encoding="utf-8")
     with pytest.raises(SpecError) as caught:
-        FisImporter().from_string(text, "tiny.fis")
+        FisImporter().from_file(path)
     [problem] = caught.value.problems
-    assert (problem.file, problem.line) == ("tiny.fis", 25)
-    assert re.search(message, problem.message), problem.message
+    assert (problem.file, problem.line) == (str(path), 25)
+    assert problem.message == ("duplicate rule: the same antecedent as the rule at line 24 "
+                               "('1, 2 (1) : 1')")
+    assert problem.hint == "each combination of sets gets one rule; delete one of them"
+
+
+#: SYSTEM with a second input y, and rules over both.
+TWO_INPUTS = SYSTEM.replace("NumInputs=1", "NumInputs=2").replace("[Output1]", """\
+[Input2]
+Name='y'
+Range=[0 1]
+NumMFs=2
+MF1='low':'trapmf',[0 0 0.2 0.8]
+MF2='high':'trimf',[0.2 1 1]
+
+[Output1]""").replace("[Rules]\n1, 2 (1) : 1\n2, 1 (1) : 1\n", "[Rules]\n1 1, 2 (1) : 1\n")
+
+
+@pytest.mark.parametrize(("rule", "left_out"), [
+    ("0 1, 2 (1) : 1", "input 'x'"),
+    ("1 0, 2 (1) : 1", "input 'y'"),
+    ("0 0, 2 (1) : 1", "inputs 'x', 'y'"),
+])
+def test_an_input_left_out_by_index_0_is_refused_once(rule: str, left_out: str,
+                                                      tmp_path: Path) -> None:
+    # The parser reads index 0 as the input left out, and the check all formats share refuses
+    # it: one message, naming every input the rule leaves out and how the file says so.
+    path = tmp_path / "two.fis"
+    path.write_text(TWO_INPUTS.replace("1 1, 2 (1) : 1", rule), encoding="utf-8")
+    assert FisImporter().from_string(TWO_INPUTS).rule_count == 4  # the file is valid without it
+    with pytest.raises(ExportError) as caught:
+        FisImporter().from_file(path)
+    assert str(caught.value) == (
+        f"{path}:31: the rule leaves out {left_out} (index 0): it fires with the other inputs' "
+        "minimum alone, which no rule of the full grid (eq. 1-2) does, so expanding it over "
+        f"the sets would change the output (fix: {DONT_CARE_HINT})")
 
 
 def test_names_become_identifiers_unless_two_collide() -> None:

@@ -163,6 +163,38 @@ def test_rule_checks_are_the_behaviours_located_at_the_rule(new: str, message: s
     assert ("tiny.fll", 19 if "duplicate" not in message else 20) in located, caught.value
 
 
+def test_a_duplicate_rule_names_the_other_rules_line(tmp_path: Path) -> None:
+    # The behaviour's own duplicate check, worded as an FLL file names its rules: by line.
+    path = tmp_path / "tiny.fll"
+    path.write_text(ENGINE.replace("if x is high then u is down", "if x is low then u is down"),
+                    encoding="utf-8")
+    with pytest.raises(SpecError) as caught:
+        FllImporter().from_file(path)
+    [problem] = caught.value.problems
+    assert (problem.file, problem.line) == (str(path), 20)
+    assert problem.message == ("duplicate rule: the same antecedent as the rule at line 19 "
+                               "('if x is low then u is up')")
+
+
+def test_a_broken_rule_table_stops_at_the_line_of_the_first_rule_left_unchecked(
+        tmp_path: Path) -> None:
+    from flctool.spec.checks import MAX_RULE_PROBLEMS
+
+    broken = "\n".join(["  rule: if x is nowhere then u is up"] * (MAX_RULE_PROBLEMS + 5))
+    path = tmp_path / "broken.fll"
+    path.write_text(ENGINE.split("  rule:")[0] + broken + "\n", encoding="utf-8")
+    with pytest.raises(SpecError) as caught:
+        FllImporter().from_file(path)
+    problems = caught.value.problems
+    assert len(problems) == MAX_RULE_PROBLEMS + 1
+    assert problems[0].message == "input 'x' has no set 'nowhere'."
+    last = problems[-1]
+    assert last.line == 19 + MAX_RULE_PROBLEMS
+    assert last.message == (f"the rules from the rule at line {19 + MAX_RULE_PROBLEMS} ('if x "
+                            f"is nowhere then u is up') on are not checked: {MAX_RULE_PROBLEMS} "
+                            "problems already")
+
+
 def test_aggregation_merging_shared_terms_is_refused() -> None:
     text = ENGINE.replace("aggregation: none", "aggregation: Maximum").replace(
         "then u is down", "then u is up")

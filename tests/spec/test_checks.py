@@ -53,3 +53,17 @@ def test_a_broken_rule_table_is_reported_up_to_a_limit() -> None:
     assert len(problems) == MAX_RULE_PROBLEMS + 1
     assert problems[-1].message == (f"the rules from rules[{MAX_RULE_PROBLEMS}] on are not "
                                     f"checked: {MAX_RULE_PROBLEMS} problems already")
+
+
+def test_a_duplicate_rule_is_named_the_way_the_file_names_rules() -> None:
+    from flctool.spec.checks import RuleProblem, check_rules
+    from flctool.spec.models import Rule
+
+    rule = Rule.model_validate({"if": {"x": "low"}, "then": "up"})
+    [problem] = check_rules({"x": ("low", "high")}, ("up",), [(3, rule), (7, rule)])
+    assert isinstance(problem, RuleProblem)
+    assert problem.path == ("rules", 7)
+    assert problem.message == "duplicate rule: the same antecedent as rules[3]"  # YAML's way
+    assert problem.worded(lambda index: f"the rule at line {10 + index}") == (
+        "duplicate rule: the same antecedent as the rule at line 13")
+

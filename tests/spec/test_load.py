@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 from flctool.errors import SpecError
-from flctool.spec import load_behaviour, parse_behaviour
+from flctool.spec import behaviour_from_data, load_behaviour, parse_behaviour
+from flctool.spec.yaml_source import SourceMap
 
 GOOD = """\
 flctool: 1
@@ -289,3 +290,21 @@ def test_a_rule_grid_past_the_limit_is_refused_at_once() -> None:
     problems = _problems(text)
     assert problems[0][:2] == (3, "inputs")
     assert "M = 2 x 2" in problems[0][2] and "1,073,741,824 rules" in problems[0][2]
+
+
+@pytest.mark.parametrize("description", ["valid", 5])  # 5: the checks of a partial file
+def test_the_loader_names_other_rules_by_the_namer_it_is_given(description: object) -> None:
+    data = {"flctool": 1, "name": "t", "description": description,
+            "inputs": {"x": {"range": [0, 1], "sets": {"low": [0, 0, 0.4, 0.6],
+                                                        "high": [0.4, 0.6, 1, 1]}}},
+            "output": {"name": "u", "commands": {"up": 1}},
+            "rules": [{"if": {"x": "low"}, "then": "up"}, {"if": {"x": "low"}, "then": "up"}]}
+    source = SourceMap("t.txt", {("rules", 0): (5, 1), ("rules", 1): (6, 1)})
+    with pytest.raises(SpecError) as by_path:
+        behaviour_from_data(data, source)
+    with pytest.raises(SpecError) as by_line:
+        behaviour_from_data(data, source, rule_names=lambda index: f"line {5 + index}")
+    assert [(p.line, p.message) for p in by_path.value.problems if p.line] == [
+        (6, "duplicate rule: the same antecedent as rules[0]")]
+    assert [(p.line, p.message) for p in by_line.value.problems if p.line] == [
+        (6, "duplicate rule: the same antecedent as line 5")]
