@@ -2,8 +2,10 @@
 
 Three ways through, each chosen where it is cheapest:
 
-- **a few states** (``SMALL_BATCH`` or fewer, ``SMALL_DENSE_BATCH`` for a small rule base
-  walked every rule, and :func:`infer_one`): state by state, each
+- **a few states** (:func:`infer_one`; with the controller's own consequents
+  :func:`infer_own` up to ``OWN_SMALL_BATCH_FEW_INPUTS`` or ``OWN_SMALL_BATCH`` states;
+  with a population :func:`infer` up to ``SMALL_BATCH``, ``SMALL_DENSE_BATCH`` for a small
+  rule base walked every rule): state by state, each
   input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
   only the rules combining them summed -- an odometer over the fired sets, last input
   fastest, which is increasing rule order;
