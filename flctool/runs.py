@@ -112,6 +112,16 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
                     if override_path(key) == ("learning", "learner")), None)
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
         data["learning"] = keep_keys_read_by(data["learning"], learner)
+    given = apply_overrides(data, overrides, where)
+    return behaviour_from_data(data, source_of(behaviour).with_overrides(given))
+
+
+def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any],
+                    where: str | Mapping[str, str] = "overrides",
+                    ) -> dict[tuple[PathPart, ...], str]:
+    """Set each override in ``data`` (a behaviour as data, changed in place); returns where
+    each overridden field was given, for :meth:`SourceMap.with_overrides
+    <flctool.spec.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
     given: dict[tuple[PathPart, ...], str] = {}
     for key, value in overrides.items():
         path = list(override_path(key))
@@ -126,7 +136,7 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
             node = child
         node[path[-1]] = value
         given[tuple(path)] = override_label(where, key)
-    return behaviour_from_data(data, source_of(behaviour).with_overrides(given))
+    return given
 
 
 # -- files ---------------------------------------------------------------------------------

@@ -10,7 +10,6 @@ import typer
 
 from flctool.cli.app import app, command_line_labels, console, escape, example, user_errors
 from flctool.cli.progress import Progress
-from flctool.errors import FlcError
 
 
 @app.command(epilog=example(
@@ -28,8 +27,8 @@ def experiment(
     address: Annotated[str | None, typer.Option(
         help="HOST:PORT of a running Ray cluster (with --executor ray).")] = None,
     set_: Annotated[list[str] | None, typer.Option(
-        "--set", help="Override a setting for every run, e.g. --set environment.max_steps=100 "
-        "(repeatable; keys as under 'learning:').")] = None,
+        "--set", help="Override a setting for every run that reads it, e.g. --set "
+        "environment.max_steps=100 (repeatable; keys as under 'learning:').")] = None,
     heldout: Annotated[int, typer.Option(
         min=1, help="Held-out episodes each run's best.yaml is tested on.")] = 500,
     level: Annotated[float | None, typer.Option(
@@ -53,23 +52,18 @@ def experiment(
         make_executor,
         parse_learners,
         prepare_experiment,
+        read_experiment_behaviour,
         write_report,
     )
     from flctool.experiment.runner import JobOutcome
-    from flctool.runs import resolve_behaviour
-    from flctool.spec import load_behaviour
     from flctool.training import parse_assignments
 
     with user_errors():
         names = parse_learners(learners)
         overrides = parse_assignments(set_ or [])
-        for key in ("learner", "learning.learner", "seed", "learning.seed"):
-            if key in overrides:
-                raise FlcError(f"--set {key} is decided by the experiment for each run",
-                               hint="use --learners and --seeds")
         runner = make_executor(executor, workers, address)
-        behaviour = resolve_behaviour(load_behaviour(file), overrides,
-                                      command_line_labels(set_ or []))
+        behaviour = read_experiment_behaviour(file, names, overrides,
+                                              command_line_labels(set_ or []))
         plan = ExperimentPlan(behaviour.name, names, seeds, heldout_episodes=heldout,
                               overrides=overrides)
         folder = out if out is not None else Path("experiments") / behaviour.name

@@ -4,7 +4,9 @@ held-out set.
 An experiment directory holds::
 
     experiment.json     the plan: learners, seeds, held-out episodes and seed, overrides
-    behaviour.yaml      the resolved behaviour every run starts from (the file plus --set)
+    behaviour.yaml      the resolved behaviour every run starts from (the file plus --set);
+                        its learning: may carry the keys of every compared learner
+                        (:mod:`flctool.experiment.behaviour`)
     runs/<learner>-seed<S>/
                         one run directory per (learner, seed), as ``flctool learn`` writes it,
                         plus heldout.json: the held-out evaluation of its best.yaml
@@ -31,6 +33,11 @@ from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
 from flctool.errors import RunDirError
 from flctool.evaluation import evaluate_behaviour
+from flctool.experiment.behaviour import (
+    ExperimentBehaviour,
+    read_experiment_behaviour,
+    share_behaviour,
+)
 from flctool.plugins import names as plugin_names
 from flctool.runs import (
     BEHAVIOUR_FILE,
@@ -41,7 +48,7 @@ from flctool.runs import (
     open_run,
     resolve_behaviour,
 )
-from flctool.spec import Behaviour, behaviour_to_yaml, load_behaviour
+from flctool.spec import Behaviour, load_behaviour
 
 EXPERIMENT_FORMAT = 1
 PLAN_FILE = "experiment.json"
@@ -187,7 +194,8 @@ class Experiment:
     """An experiment directory. Make one with :func:`prepare_experiment`, open one with
     :func:`open_experiment`."""
 
-    def __init__(self, path: Path, plan: ExperimentPlan, behaviour: Behaviour) -> None:
+    def __init__(self, path: Path, plan: ExperimentPlan, behaviour: ExperimentBehaviour,
+                 ) -> None:
         self.path = path
         self.plan = plan
         self.behaviour = behaviour
@@ -198,8 +206,8 @@ class Experiment:
 
     def jobs(self) -> list[Job]:
         """Every (learner, seed), learners in the plan's order, then seeds."""
-        return [Job(learner, seed, resolve_behaviour(self.behaviour, {"learner": learner,
-                                                                      "seed": seed}),
+        return [Job(learner, seed, resolve_behaviour(self.behaviour.of(learner),
+                                                     {"seed": seed}),
                     self.plan.heldout_episodes, self.plan.heldout_seed)
                 for learner in self.plan.learners for seed in range(self.plan.seeds)]
 
@@ -253,21 +261,30 @@ class Executor(ABC):
         """Run every job, job ``j`` in ``root / j.name``, calling ``on_done`` as each ends."""
 
 
-def prepare_experiment(behaviour: Behaviour, plan: ExperimentPlan, path: Path) -> Experiment:
+def prepare_experiment(behaviour: Behaviour | ExperimentBehaviour, plan: ExperimentPlan,
+                       path: Path) -> Experiment:
     """A new experiment directory, or the existing one at ``path`` if it holds the same plan
-    (then running it continues where it stopped)."""
-    if behaviour.learning.stop.seconds is not None:
+    (then running it continues where it stopped). ``behaviour`` is read for the plan's
+    learners (:func:`~flctool.experiment.behaviour.read_experiment_behaviour`), or is one
+    behaviour whose learning keys serve every learner that reads them."""
+    if isinstance(behaviour, Behaviour):
+        behaviour = share_behaviour(behaviour, plan.learners)
+    elif behaviour.learners != plan.learners:
+        raise ValueError(f"the behaviour was read for the learners {behaviour.learners}, "
+                         f"the plan compares {plan.learners}")
+    if any(b.learning.stop.seconds is not None for b in behaviour.behaviours.values()):
         raise RunDirError("learning.stop.seconds: a time budget ends runs at different points "
                           "on different machines, so the experiment would not reproduce",
                           hint="budget episodes or steps instead (stop.episodes, stop.steps)")
-    text = _behaviour_text(behaviour)
     plan_file = path / PLAN_FILE
     if plan_file.is_file():
         existing = open_experiment(path)
-        if existing.plan != plan or _behaviour_text(existing.behaviour) != text:
+        # the same plan: the same options, and each learner's runs start from the same
+        # behaviour (however the directory's behaviour.yaml writes it)
+        if existing.plan != plan or existing.behaviour != behaviour:
             differs = [key for key, value in plan.to_dict().items()
                        if existing.plan.to_dict().get(key) != value]
-            if _behaviour_text(existing.behaviour) != text:
+            if existing.plan.learners == plan.learners and existing.behaviour != behaviour:
                 differs.append("the behaviour")
             raise RunDirError(f"{path} holds an experiment with a different plan (it differs "
                               f"in: {', '.join(differs)})",
@@ -282,7 +299,7 @@ def prepare_experiment(behaviour: Behaviour, plan: ExperimentPlan, path: Path) -
     except OSError as exc:
         raise RunDirError(f"cannot create the experiment directory {path}: {exc.strerror}",
                           hint="choose another --out") from None
-    write_text_atomic(path / BEHAVIOUR_FILE, text)
+    write_text_atomic(path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
     write_text_atomic(plan_file, json.dumps(plan.to_dict(), indent=2) + "\n")
     return Experiment(path, plan, behaviour)
 
@@ -299,14 +316,16 @@ def open_experiment(path: str | Path) -> Experiment:
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise RunDirError(f"{plan_file} cannot be read ({exc})",
                           hint="start the experiment again in another --out") from None
-    return Experiment(path, plan, load_behaviour(path / BEHAVIOUR_FILE))
+    return Experiment(path, plan, read_experiment_behaviour(path / BEHAVIOUR_FILE,
+                                                            plan.learners))
 
 
 def is_experiment(path: Path) -> bool:
     return (path / PLAN_FILE).is_file()
 
 
-def _behaviour_text(behaviour: Behaviour) -> str:
-    return behaviour_to_yaml(behaviour, (
+def _behaviour_text(behaviour: ExperimentBehaviour) -> str:
+    return behaviour.to_yaml(
         f"Resolved by flctool experiment {__version__}: the behaviour file with any "
-        "command-line overrides;\nevery run starts from it with its own learner and seed."))
+        "command-line overrides;\nevery run starts from it with its own learner and seed, "
+        "keeping the learning keys its learner reads.")

@@ -63,7 +63,13 @@ def _styled(value: Any, key: str = "") -> Any:
 
 def behaviour_to_yaml(behaviour: Behaviour, header: str = "", *, defaults: bool = True) -> str:
     """A complete behaviour file; ``header`` lines become ``#`` comments at the top."""
-    data = _styled(behaviour_to_data(behaviour, defaults=defaults))
-    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
+    return data_to_yaml(behaviour_to_data(behaviour, defaults=defaults), header)
+
+
+def data_to_yaml(data: dict[str, Any], header: str = "") -> str:
+    """A behaviour given as data (:func:`behaviour_to_data`'s form) written as
+    :func:`behaviour_to_yaml` writes it."""
+    body = yaml.dump(_styled(data), Dumper=_Dumper, sort_keys=False, allow_unicode=True,
+                     width=100)
     comment = "".join(f"# {line}".rstrip() + "\n" for line in header.splitlines())
     return comment + body

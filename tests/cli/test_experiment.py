@@ -5,9 +5,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import yaml
 from typer.testing import CliRunner
 
 from flctool.cli import app
+from flctool.runs import open_run
 
 from ..conftest import BEHAVIOURS
 
@@ -39,7 +41,7 @@ def test_bad_options_are_clear_errors(tmp_path: Path) -> None:
     cases = [
         (["--learners", "pitt,qlearn"], "unknown learner(s) in --learners: qlearn"),
         (["--executor", "dask"], "unknown executor 'dask'"),
-        (["--set", "seed=3"], "--set seed is decided by the experiment"),
+        (["--set", "seed=3"], "'seed' is decided by the experiment"),
         (["--set", "crossover=2"], "learning.crossover"),
         (["--set", "stop.seconds=5"], "would not reproduce"),
     ]
@@ -61,3 +63,64 @@ def test_another_plan_in_the_same_directory_is_refused(tmp_path: Path) -> None:
                                  *TINY, *out])
     assert second.exit_code == 1
     assert "different plan" in second.output and "seeds" in second.output
+
+
+def test_one_file_carries_the_settings_of_every_compared_learner(tmp_path: Path) -> None:
+    """exploration for the fuzzy_q runs, pitt_crossover for the pitt runs, and a --set of
+    q for the runs that read q: each run's behaviour.yaml holds its learner's keys only."""
+    from flctool.spec import load_behaviour
+    from flctool.spec.learning import FuzzyQConfig, HybridConfig, PittConfig, learner_keys
+
+    from ..experiment.helpers import write_mixed
+
+    file = write_mixed(tmp_path)
+    out = tmp_path / "exp"
+    args = ["experiment", str(file), "--seeds", "2", "--heldout", "10",
+            "--set", "q.temperature=0.2", "--out", str(out)]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    models = {"pitt": PittConfig, "hybrid": HybridConfig, "fuzzy_q": FuzzyQConfig}
+    for learner, model in models.items():
+        for seed in (0, 1):
+            path = out / "runs" / f"{learner}-seed{seed}" / "behaviour.yaml"
+            written = yaml.safe_load(path.read_text())["learning"]
+            assert tuple(written) == learner_keys(model), learner
+            learning = load_behaviour(path).learning  # a valid file of its learner
+            assert (learning.learner, learning.seed, learning.generations) == (learner, seed, 2)
+            assert len(open_run(path.parent).metrics()) == 2
+    assert yaml.safe_load((out / "runs" / "pitt-seed0" / "behaviour.yaml").read_text())[
+        "learning"]["pitt_crossover"] == "one_point"
+    for learner in ("hybrid", "fuzzy_q"):  # the runs that read q
+        assert open_run(out / "runs" / f"{learner}-seed0").behaviour.learning.q.temperature \
+            == 0.2
+    exploration = open_run(out / "runs" / "fuzzy_q-seed0").behaviour.learning.exploration
+    assert (exploration.policy, exploration.epsilon) == ("epsilon_greedy", 0.3)
+    # the same command continues the experiment: the same plan, nothing redone
+    stamp = (out / "runs" / "fuzzy_q-seed1" / "best.yaml").stat().st_mtime_ns
+    again = runner.invoke(app, [*args, "--json"])
+    assert again.exit_code == 0, again.output
+    assert (out / "runs" / "fuzzy_q-seed1" / "best.yaml").stat().st_mtime_ns == stamp
+
+
+def test_keys_no_compared_learner_reads_are_refused(tmp_path: Path) -> None:
+    from ..experiment.helpers import write_mixed
+
+    file = str(write_mixed(tmp_path))
+    out = ["--out", str(tmp_path / "x")]
+    cases = [
+        (["--learners", "pitt,hybrid"],
+         "learning.exploration: 'exploration' is read by the fuzzy_q learner only, which this "
+         "experiment does not compare"),
+        (["--learners", "fuzzy_q", "--set", "q.temperature=0.2", "--set",
+          "common_starts=true"], "command line (--set common_starts): learning.common_starts: "
+         "'common_starts' is read by the pitt and hybrid learners, none of which"),
+        (["--learners", "hybrid,fuzzy_q", "--set", "pitt_crossover=uniform"],
+         "'pitt_crossover' is read by the pitt learner only, none of which this experiment "
+         "compares"),
+    ]
+    for extra, message in cases:
+        result = runner.invoke(app, ["experiment", file, *extra, *out])
+        assert result.exit_code == 1, (extra, result.output)
+        assert message in " ".join(result.output.split()), result.output
+        assert "Traceback" not in result.output
+    assert not (tmp_path / "x").exists()
