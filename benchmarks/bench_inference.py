@@ -44,7 +44,10 @@ from flctool.compile import kernels
 TOLERANCE = 1e-9
 GOALS = {"single_us": 0.6, "batched_vs_naive": 4.0, "every_size_vs_naive": 1.0,
          "vs_pyfuzzylite": 25.0, "vs_skfuzzy": 3000.0}
-SIZES = (1, 2, 4, 8, 10, 16, 100, 1_000, 10_000, 100_000, 1_000_000)
+# Every size up to 8, then both sides of each switch between walks (16/17: state by state
+# or blocks for two inputs; 64/65: one block or two), then powers of ten.
+SIZES = (1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 16, 17, 24, 32, 64, 65, 100, 1_000, 10_000,
+         100_000, 1_000_000)
 STATES_PER_TIMING = 200_000  # small batches are timed as many calls, this many states in all
 
 
@@ -253,7 +256,9 @@ def main() -> None:
         "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": common.machine(),
         "batch": args.batch, "repeats": repeats, "quick": args.quick,
         "tolerance": TOLERANCE, "max_differences": differences,
-        "small_batch": kernels.SMALL_BATCH, "walks_every_rule": controller._layout.dense,
+        "small_batch": kernels.OWN_SMALL_BATCH_FEW_INPUTS if controller.n_inputs <= 2
+        else kernels.OWN_SMALL_BATCH,
+        "walks_every_rule": controller._layout.dense,
         "timing": "CPU time (time.process_time), least of the repeats",
         "against_naive": sizes,
         "output_one": {"us": one_call * 1e6, "naive_us": naive_single * 1e6,

@@ -139,14 +139,7 @@ class Controller:
         many contiguous parts inferred at once (the kernels release the GIL); each state's
         output is computed alone, so the result is identical to ``threads=1``.
         """
-        floats, ints, tables, dense, infer, n_inputs = self._batch
-        single = True
-        population = 1
-        if consequents is not None or tables is None:  # (raises if there are none)
-            table = self._consequents(consequents)
-            single = table.ndim == 1
-            tables = np.array(table.reshape(-1, self.n_rules), dtype=np.intp, order="C")
-            population = tables.shape[0]
+        own_floats, own_ints, own, n_inputs = self._own
         # Any float64 (B, N) array goes to the kernel as it is (it reads strides). (Each
         # attribute read here costs tens of ns, a good part of a call on a few states.)
         shape = states.shape if type(states) is np.ndarray else None
@@ -155,21 +148,32 @@ class Controller:
             states = self._as_states(states)
             shape = states.shape
         count = shape[0]
-        if count == 1 and consequents is None:
-            # One state: the one-state kernel (output_one's, the same bits) costs less than a
-            # batch of one, whose arrays and arguments cost more than its arithmetic.
-            one_floats, one_ints, one = self._one
-            value = one(one_floats, one_ints, states[0])
-            if value != value:  # a NaN input, or no rule fires
-                self._raise_undefined(states, 0)
-            out = np.empty(1)
-            out[0] = value
+        if consequents is None and own is not None and (threads <= 1
+                                                         or count < THREADED_STATES):
+            # This controller's consequents on one core: the kernel entry made for it
+            # (kernels.infer_own), four arrays and no other argument.
+            out = np.empty(count)
+            failed = own(own_floats, own_ints, states, out)
+            if failed >= 0:
+                self._raise_undefined(states, failed)
             return out
+        return self._output_tables(states, consequents, threads)
+
+    def _output_tables(self, states: FloatArray, consequents: IntArray | None,
+                       threads: int) -> FloatArray:
+        # output() with a population, given consequents or several threads.
+        table = self._consequents(consequents)  # (raises if there are none)
+        single = table.ndim == 1
+        tables = np.array(table.reshape(-1, self.n_rules), dtype=np.intp, order="C")
+        population = tables.shape[0]
+        count = states.shape[0]
         out = np.empty(population * count)  # (P, B) flat
         if threads > 1 and count >= THREADED_STATES:
             failed = self._infer_threaded(states, tables, out, threads)
         else:
-            failed = infer(states, floats, ints, tables, out, 0, count, dense)
+            layout = self._layout
+            failed = _kernel("infer")(states, layout.floats, layout.ints, tables, out, 0, count,
+                                      layout.dense)
         if failed >= 0:
             self._raise_undefined(states, failed)
         return out if single else out.reshape(population, count)
@@ -216,21 +220,23 @@ class Controller:
         return np.array(self._consequents(None), dtype=np.intp).reshape(1, self.n_rules)
 
     @cached_property
-    def _batch(self) -> tuple[FloatArray, IntArray, IntArray | None, bool, Callable[..., int],
-                              int]:
-        # What a batched call with this controller's consequents passes, looked up once.
+    def _own(self) -> tuple[FloatArray, IntArray, Callable[..., int] | None, int]:
+        # What output() passes with this controller's consequents, looked up once: the
+        # layout's ints followed by the consequents (see kernels.infer_own), and the entry
+        # (None without consequents: such calls take the general path, which raises).
         layout = self._layout
-        tables = self._tables if self.consequents is not None else None
-        return (layout.floats, layout.ints, tables, layout.dense, _kernel("infer"),
-                self.n_inputs)
+        if self.consequents is None:
+            return layout.floats, layout.ints, None, self.n_inputs
+        ints = np.concatenate([layout.ints, self._tables[0]])
+        return layout.floats, ints, _kernel("infer_own"), self.n_inputs
 
     @cached_property
     def _one(self) -> tuple[FloatArray, IntArray, Callable[..., float]]:
         # What a one-state call passes, looked up once: a call pays only for its checks and
-        # the kernel. The consequents follow the layout's ints (see kernels.infer_one).
-        layout = self._layout
-        ints = np.concatenate([layout.ints, self._tables[0]])
-        return layout.floats, ints, _kernel("infer_one")
+        # the kernel (the same packed arrays as infer_own's).
+        self.require_consequents()  # NotDeployableError without them
+        floats, ints, _, _ = self._own
+        return floats, ints, _kernel("infer_one")
 
     @cached_property
     def _state_shape(self) -> tuple[int]:

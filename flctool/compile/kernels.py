@@ -2,8 +2,10 @@
 
 Three ways through, each chosen where it is cheapest:
 
-- **a few states** (``SMALL_BATCH`` or fewer, ``SMALL_DENSE_BATCH`` for a small rule base
-  walked every rule, and :func:`infer_one`): state by state, each
+- **a few states** (:func:`infer_one`; with the controller's own consequents
+  :func:`infer_own` up to ``OWN_SMALL_BATCH_FEW_INPUTS`` or ``OWN_SMALL_BATCH`` states;
+  with a population :func:`infer` up to ``SMALL_BATCH``, ``SMALL_DENSE_BATCH`` for a small
+  rule base walked every rule): state by state, each
   input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
   only the rules combining them summed -- an odometer over the fired sets, last input
   fastest, which is increasing rule order;
@@ -540,6 +542,13 @@ SMALL_BATCH = 8
 # ballchase, 2 x 3, 2 x 5, 3 x 2 and 4 x 2 sets; with M x N = 81 or more, from 6-8 states).
 SMALL_DENSE_BATCH = 4
 CHEAP_DENSE_RULE_INPUTS = 64
+# infer_own's switch: its state-by-state walk (one table, its work arrays made once) costs
+# about 15 ns a state for one input, 45 for two, 80 for three and 200 for four (fired rules
+# grow as 2^N), the blocks' set-up about 1 us, then 5-50 ns a state. Measured on ballchase
+# and random 1-4 input controllers, state by state is cheaper up to 14-16 states for one or
+# two inputs and 8-10 for more.
+OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2
+OWN_SMALL_BATCH = 8
 
 
 @_jit
@@ -567,6 +576,14 @@ def _infer_small(states: FloatArray, floats: FloatArray, ints: IntArray, tables:
 
 
 @_jit
+def _own_table(ints: IntArray) -> IntArray:
+    # The consequents that follow the layout's ints in infer_one's / infer_own's ``ints``,
+    # as the (1, M) table the shared walks take.
+    table = 5 + 2 * ints[0] + ints[3] * ints[0]
+    return ints[table:].reshape((1, ints.shape[0] - table))
+
+
+@_jit
 def infer_one(floats: FloatArray, ints: IntArray, state: FloatArray) -> float:
     """Eq. 3 for one ``state (N,)``; NaN if an input is NaN or no rule fires (every
     activation underflowed to 0: see :func:`infer`).
@@ -579,8 +596,7 @@ def infer_one(floats: FloatArray, ints: IntArray, state: FloatArray) -> float:
     mus = np.empty(n * max_sets)
     if _state_sets(floats, ints, state, scratch, mus) >= 0:
         return np.nan
-    table = 5 + 2 * n + ints[3] * n  # where the consequents start
-    tables = ints[table:].reshape((1, ints.shape[0] - table))
+    tables = _own_table(ints)
     if n <= 2:
         numerator, denominator = _state_sums(floats, ints, scratch, mus, tables, 0)
     else:
@@ -591,6 +607,53 @@ def infer_one(floats: FloatArray, ints: IntArray, state: FloatArray) -> float:
         numerator, denominator = _listed_sums(floats, ints, rules, alphas, fired, tables, 0)
     low, high = _singleton_bounds(floats, ints)
     return _within(numerator / denominator, low, high)
+
+
+@_jit
+def _own_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray,
+                tables: IntArray) -> int:
+    # infer_own state by state: infer_one's walk for each state, the work arrays made once.
+    n, max_sets = ints[0], ints[2]
+    scratch = np.empty(n * max_sets + 2 * n, np.intp)
+    mus = np.empty(n * max_sets)
+    rules = np.empty(0 if n <= 2 else 64, np.intp)  # grown when more rules fire
+    alphas = np.empty(rules.shape[0])
+    low, high = _singleton_bounds(floats, ints)
+    for b in range(states.shape[0]):
+        if _state_sets(floats, ints, states[b], scratch, mus) >= 0:
+            return b
+        if n <= 2:
+            numerator, denominator = _state_sums(floats, ints, scratch, mus, tables, 0)
+        else:
+            capacity = _state_capacity(ints, scratch)
+            if capacity > rules.shape[0]:
+                rules = np.empty(capacity, np.intp)
+                alphas = np.empty(capacity)
+            fired = _expand_fired(ints, scratch, mus, rules, alphas)
+            numerator, denominator = _listed_sums(floats, ints, rules, alphas, fired, tables, 0)
+        out[b] = _within(numerator / denominator, low, high)
+    return -1
+
+
+@_jit
+def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray) -> int:
+    """Eq. 3 for ``states (B, N)`` into ``out (B,)`` with the controller's own consequents,
+    which follow the layout's ints in ``ints`` as for :func:`infer_one`; returns what
+    :func:`infer` returns.
+
+    The entry point of ``Controller.output`` without a population: four arrays to unbox and
+    nothing to pass that the kernel can find itself, so a call on a few states costs little
+    more than its arithmetic. Up to :data:`OWN_SMALL_BATCH` states
+    (:data:`OWN_SMALL_BATCH_FEW_INPUTS` for one or two inputs) go state by state, more in
+    blocks -- the walks of :func:`infer_one` and :func:`infer`, so the same bits.
+    """
+    tables = _own_table(ints)
+    count = states.shape[0]
+    small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 else OWN_SMALL_BATCH
+    if count <= small:
+        return _own_states(floats, ints, states, out, tables)
+    dense = ints[3] > 0  # the layout keeps the rule grid only for the walk of every rule
+    return _infer_blocks(states, floats, ints, tables, out, 0, count, dense)
 
 
 @_jit
@@ -649,6 +712,7 @@ SIGNATURES: dict[str, tuple[Any, ...]] = {
     "infer": (_STATES, _F1, _I1, _I2, _F1, numba.types.intp, numba.types.intp,
               numba.types.boolean),
     "infer_one": (_F1, _I1, _STATE),
+    "infer_own": (_F1, _I1, _STATES, _F1),
     "active_one": (_F1, _I1, _F1),
     "activations": (_F2, _F1, _I1, _F2),
 }

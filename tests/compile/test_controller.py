@@ -112,8 +112,13 @@ def test_wrong_shapes_and_missing_consequents(minimal_text: str) -> None:
         controller.output(np.zeros((3, 1)), np.array([0, 2]))
     learning = compile_behaviour(parse_behaviour(minimal_text.split("rules:")[0]))
     assert learning.consequents is None
+    for batch in (1, 3, 40):  # state by state and in blocks
+        with pytest.raises(NotDeployableError, match="not deployable"):
+            learning.output(np.zeros((batch, 1)))
     with pytest.raises(NotDeployableError, match="not deployable"):
-        learning.output(np.zeros((1, 1)))
+        learning.output_one(np.zeros(1))
+    # Given consequents, it infers.
+    assert learning.output(np.zeros((3, 1)), np.zeros(learning.n_rules, np.intp)).shape == (3,)
 
 
 def test_with_rules_round_trips(handmade_path: Path) -> None:

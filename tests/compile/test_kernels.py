@@ -252,8 +252,9 @@ def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), n_inputs=st.integers(1, 4),
        batch=st.sampled_from([1, 2, kernels.SMALL_DENSE_BATCH, kernels.SMALL_DENSE_BATCH + 1,
-                               kernels.SMALL_BATCH, kernels.SMALL_BATCH + 1, 63, 64, 65,
-                               130]),
+                               kernels.SMALL_BATCH, kernels.SMALL_BATCH + 1,
+                               kernels.OWN_SMALL_BATCH_FEW_INPUTS,
+                               kernels.OWN_SMALL_BATCH_FEW_INPUTS + 1, 63, 64, 65, 130]),
        population=st.integers(1, 3))
 def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
                                          population: int) -> None:
@@ -274,6 +275,67 @@ def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
     deployed = controller.with_consequents(tables[0])
     np.testing.assert_array_equal(deployed.output(states), expected[0])
     np.testing.assert_array_equal([deployed.output_one(s) for s in states], expected[0])
+
+
+@pytest.mark.parametrize("n_inputs", [1, 2, 3, 4])
+def test_own_consequents_entry_on_both_sides_of_its_switch(n_inputs: int) -> None:
+    """Controller.output without a population goes to kernels.infer_own: state by state up
+    to its switch, in blocks past it (on the walk of every rule and on the fired rules'),
+    bit for bit the plain eq. 1-3, output_one and the population entry (kernels.infer)."""
+    rng = np.random.default_rng(40 + n_inputs)
+    switch = (kernels.OWN_SMALL_BATCH_FEW_INPUTS if n_inputs <= 2
+              else kernels.OWN_SMALL_BATCH)
+    for _ in range(6):
+        controller = compile_behaviour(behaviour_from_data(
+            random_behaviour_data(rng, n_inputs, rules=False)))
+        controller = controller.with_consequents(
+            rng.integers(0, controller.n_commands, size=controller.n_rules))
+        assert controller.consequents is not None
+        for batch in (1, 2, switch - 1, switch, switch + 1, 70):
+            states = awkward_states(controller, rng, batch)
+            expected = [reference_output(controller, s, controller.consequents)
+                        for s in states]
+            output = controller.output(states)
+            np.testing.assert_array_equal(output, expected)
+            np.testing.assert_array_equal(controller.output(states, controller.consequents),
+                                          expected)
+            np.testing.assert_array_equal(sparse_output(controller, states,
+                                                        controller.consequents)[0], expected)
+            np.testing.assert_array_equal([controller.output_one(s) for s in states],
+                                          expected)
+            np.testing.assert_array_equal(controller.output(np.asfortranarray(states)),
+                                          expected)
+
+
+def test_own_consequents_entry_on_the_fired_rules_walk() -> None:
+    # 4 inputs x 5 sets (M = 625): past the switch, infer_own's blocks walk the fired rules.
+    sets = {f"s{j}": [max(0.0, j - 1.0), j - 0.25, j + 0.25, min(4.0, j + 1.0)]
+            for j in range(5)}
+    sets["s0"][:2] = [0.0, 0.0]
+    sets["s4"][2:] = [4.0, 4.0]
+    data = {"flctool": 1, "name": "sparse",
+            "inputs": {f"x{i}": {"range": [0, 4], "sets": sets} for i in range(4)},
+            "output": {"name": "u", "commands": {"a": -1, "b": 0.5, "c": 2}}}
+    rng = np.random.default_rng(8)
+    learning = compile_behaviour(behaviour_from_data(data))
+    controller = learning.with_consequents(rng.integers(0, 3, size=learning.n_rules))
+    assert controller.consequents is not None and not controller._layout.dense
+    for batch in (kernels.OWN_SMALL_BATCH, kernels.OWN_SMALL_BATCH + 1, 70):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)
+
+
+@pytest.mark.parametrize("batch", [3, kernels.OWN_SMALL_BATCH_FEW_INPUTS + 1])
+def test_own_consequents_entry_reports_nan(handmade_path: Path, batch: int) -> None:
+    controller = compile_behaviour(load_behaviour(handmade_path))
+    states = np.full((batch, 2), 0.2)
+    states[batch - 1, 1] = np.nan
+    with pytest.raises(InferenceError, match=f"input 'pan' is NaN in state {batch - 1}"):
+        controller.output(states)
+    layout = controller._layout
+    ints = np.concatenate([layout.ints, controller.require_consequents()])
+    assert kernels.infer_own(layout.floats, ints, states, np.empty(batch)) == batch - 1
 
 
 def test_threads_give_identical_outputs(handmade_path: Path) -> None:
