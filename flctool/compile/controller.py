@@ -4,6 +4,7 @@ Rule order (eq. 1): rule ``m`` is one combination of sets, enumerated with the *
 varying fastest** -- the order of ``itertools.product`` and of ``numpy.ndindex``. For inputs
 with L = (3, 5) sets, rule 0 is (set 0, set 0), rule 1 is (set 0, set 1), ..., rule 5 is
 (set 1, set 0). This order is stable: it is how chromosomes, q tables and exports index rules.
+It is coded once, in plain Python, in :mod:`flctool.compile.rules`.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.compile.membership import trapezoid
+from flctool.compile.rules import rule_consequents, rule_grid
 from flctool.errors import InferenceError, NotDeployableError
 from flctool.spec.models import Behaviour
 
@@ -322,16 +324,10 @@ def compile_behaviour(behaviour: Behaviour) -> Controller:
     names = tuple(behaviour.inputs)
     set_names = tuple(tuple(v.sets) for v in behaviour.inputs.values())
     shape = tuple(len(s) for s in set_names)
-    grid = np.array(list(np.ndindex(*shape)), dtype=np.intp).reshape(math.prod(shape), len(shape))
+    grid = np.array(rule_grid(shape), dtype=np.intp).reshape(math.prod(shape), len(shape))
     commands = tuple(behaviour.output.commands)
-    consequents = None
-    if behaviour.is_deployable:
-        index = {name: k for k, name in enumerate(commands)}
-        consequents = np.empty(len(grid), dtype=np.intp)
-        for rule in behaviour.rules:
-            sets = [set_names[i].index(rule.if_[n]) for i, n in enumerate(names)]
-            consequents[int(np.ravel_multi_index(sets, shape))] = index[rule.then]
-        consequents = _frozen(consequents)
+    order = rule_consequents(behaviour)
+    consequents = None if order is None else _frozen(np.array(order, dtype=np.intp))
     return Controller(
         input_names=names,
         set_names=set_names,
