@@ -13,6 +13,12 @@ What is accepted, and what is an error (every error names the file, line and col
   error (which of the two would be meant?);
 - a cell of an input column must be a number (Python's ``float``); NaN is an error;
   infinities are clipped to the input's range like any value beyond it.
+
+Two readings of a chunk give the same values and the same errors: :meth:`StateReader.chunks`
+(numpy's C parser, falling back to cell-by-cell ``float``) and
+:meth:`StateReader.chunks_in_python` (cell-by-cell ``float`` alone, for a small table in a
+process that never loads numpy; a chunk it refuses is handed to the numpy reading, which
+gives the error, or accepts the few cells numpy's parser reads and ``float`` does not).
 """
 
 from __future__ import annotations
@@ -22,12 +28,13 @@ import io
 import itertools
 import math
 from collections.abc import Iterator, Sequence
-from typing import Any, BinaryIO, TextIO
-
-import numpy as np
-from numpy.typing import NDArray
+from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
 
 from flctool.errors import Problem, SpecError
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
 
 #: Characters of rows parsed, inferred and written per step of a stream (a chunk of 2 MB
 #: holds about 100,000 rows of a few columns).
@@ -100,6 +107,18 @@ class StateReader:
     def chunks(self, size: int = CHUNK_CHARACTERS
                ) -> Iterator[tuple[list[str], NDArray[np.float64]]]:
         """``(lines, states (B, N))`` for about ``size`` characters of rows at a time."""
+        for rows in self.row_chunks(size):
+            yield rows, self.parse(rows)
+
+    def chunks_in_python(self, size: int = CHUNK_CHARACTERS
+                         ) -> Iterator[tuple[list[str], list[list[float]]]]:
+        """:meth:`chunks` with each state a list of Python floats, read without numpy."""
+        for rows in self.row_chunks(size):
+            yield rows, self.parse_in_python(rows)
+
+    def row_chunks(self, size: int = CHUNK_CHARACTERS) -> Iterator[list[str]]:
+        """The data lines of about ``size`` characters at a time, not yet parsed: parse each
+        with :meth:`parse` or :meth:`parse_in_python` before taking the next."""
         while True:
             try:
                 text = self._stream.read(size)
@@ -116,7 +135,7 @@ class StateReader:
             self._line += len(lines)
             rows = self._rows(lines, first)
             if rows:
-                yield rows, self._parse(rows, text)
+                yield rows
 
     def _rows(self, lines: list[str], first: int) -> list[str]:
         """The rows of a chunk, and their line numbers in ``self._numbers``. A blank line is
@@ -146,12 +165,31 @@ class StateReader:
         return self._error(self._blank[0], None, "a blank line between rows",
                            "remove it, or give the missing reading")
 
-    def _parse(self, lines: list[str], text: str) -> NDArray[np.float64]:
-        if '"' not in text:
+    def parse(self, lines: list[str]) -> NDArray[np.float64]:
+        """The inputs of the latest chunk's rows as a (B, N) array."""
+        import numpy as np
+
+        if not any('"' in line for line in lines):
             values = self._parse_plain(lines)
             if values is not None:
                 return values
-        return self._parse_cells(lines)
+        return np.array(self._parse_cells(lines), dtype=np.float64).reshape(
+            len(lines), len(self.columns))
+
+    def parse_in_python(self, lines: list[str]) -> list[list[float]]:
+        """The inputs of the latest chunk's rows as lists of floats, read by ``float`` cell by
+        cell without loading numpy, exactly as :meth:`parse` reads them.
+
+        ``float`` accepts everything numpy's parser does but a few spellings (a number
+        followed by a control character such as 0x1c, which numpy skips as space), and reads
+        the same bits (tests compare them on generated cells); so a chunk with a cell it
+        refuses is read by :meth:`parse`, which raises the same error or accepts those.
+        """
+        try:
+            return self._parse_cells(lines)
+        except SpecError:
+            values: list[list[float]] = self.parse(lines).tolist()
+            return values
 
     def _parse_plain(self, lines: list[str]) -> NDArray[np.float64] | None:
         """The input columns of rows without quotes, read by numpy's C parser (correctly
@@ -162,6 +200,8 @@ class StateReader:
         row has as many cells as the first; else (a text column) it reads the input columns
         once each row's cells are counted.
         """
+        import numpy as np
+
         options: dict[str, Any] = {"delimiter": ",", "dtype": np.float64, "ndmin": 2,
                                    "comments": None, "encoding": None, "quotechar": None}
         try:
@@ -186,29 +226,32 @@ class StateReader:
         """Whether every line has exactly ``len(header) - 1`` commas."""
         return set(map(str.count, lines, itertools.repeat(","))) == {len(self.header) - 1}
 
-    def _parse_cells(self, lines: list[str]) -> NDArray[np.float64]:
+    def _parse_cells(self, lines: list[str]) -> list[list[float]]:
         width = len(self.header)
-        values = np.empty((len(lines), len(self.columns)))
+        values: list[list[float]] = []
         problems: list[Problem] = []
-        for r, (line, number) in enumerate(zip(lines, self._numbers, strict=True)):
+        for line, number in zip(lines, self._numbers, strict=True):
             cells = self._split(line, number)
             if len(cells) != width:
                 problems.append(Problem((), f"expected {width} cells, found {len(cells)}",
                                         file=self.file, line=number))
                 continue
+            row = []
             for c, i in enumerate(self._index):
                 try:
-                    values[r, c] = float(cells[i])
+                    value = float(cells[i])
                 except ValueError:
                     problems.append(Problem((self.columns[c],),
                                             f"'{_shown(cells[i])}' is not a number",
                                             file=self.file, line=number, column=i + 1))
                     continue
-                if math.isnan(values[r, c]):
+                if math.isnan(value):
                     problems.append(Problem((self.columns[c],),
                                             "NaN is a missing reading, not a value",
                                             "filter or replace missing readings",
                                             file=self.file, line=number, column=i + 1))
+                row.append(value)
+            values.append(row)
         if problems:
             if len(problems) > LISTED_PROBLEMS:
                 rest = len(problems) - LISTED_PROBLEMS
@@ -239,16 +282,17 @@ class StateReader:
                                   column=column)], self.file)
 
 
-def format_rows(lines: Sequence[str], values: NDArray[np.float64]) -> str:
+def format_rows(lines: Sequence[str], values: NDArray[np.float64] | Sequence[float]) -> str:
     """The lines with one more cell each: the value's shortest round-trip text (``repr``)."""
-    if len(lines) != values.shape[0]:
-        raise ValueError(f"{len(lines)} lines but {values.shape[0]} values")
+    numbers = values.tolist() if hasattr(values, "tolist") else list(values)
+    if len(lines) != len(numbers):
+        raise ValueError(f"{len(lines)} lines but {len(numbers)} values")
     if not lines:
         return ""
     # One formatting pass in C over a template of the rows as written (their '%' escaped):
     # '%r' of a float is its repr. About 1.2x faster than joining row by row.
     template = ("\n".join(lines) + "\n").replace("%", "%%").replace("\n", ",%r\n")
-    return template % tuple(values.tolist())
+    return template % tuple(numbers)
 
 
 def write_table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:

@@ -6,6 +6,8 @@ import io
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from flctool.errors import SpecError
 from flctool.tabular import StateReader, format_rows, text_stream
@@ -107,3 +109,47 @@ def test_format_rows_keeps_percent_signs_and_formats_like_repr() -> None:
                                                                        strict=True))
     assert format_rows(lines, values) == expected
     assert format_rows([], np.array([])) == ""
+
+
+# -- the plain-Python reading (flctool infer on a small table) ---------------------------------
+
+def _outcome(data: str, in_python: bool) -> tuple[bytes, ...] | str:
+    """What a reading gives for a CSV: each chunk's values as bytes, or the error's text."""
+    reader = StateReader(io.StringIO(data), ["a", "b"], "t.csv", reserved=["y"])
+    try:
+        if in_python:
+            return tuple(np.array(values, dtype=np.float64).tobytes()
+                         for _, values in reader.chunks_in_python(64))
+        return tuple(values.tobytes() for _, values in reader.chunks(64))
+    except SpecError as error:
+        return str(error)
+
+
+_SPELLINGS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+    st.floats(width=32).map(lambda v: f"{v:.9e}"),
+    st.decimals(allow_nan=False, allow_infinity=False).map(str),
+    st.integers(-10**30, 10**30).map(lambda v: f"{v:_}"),
+    # what float() and numpy's parser may read differently: signs, exponents, underscores,
+    # spellings of infinity and NaN, Unicode digits and spaces, control characters
+    st.lists(st.sampled_from([*"0123456789.+-eE_ \t", "inf", "Infinity", "nan", "\x1c",
+                              "\x0b", "\xa0", "\u3000", "\u0661", "\x00", "'", "d", "x"]),
+             max_size=8).map("".join),
+)
+
+
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(_SPELLINGS, _SPELLINGS), min_size=1, max_size=6))
+def test_the_python_reading_accepts_and_refuses_as_numpys(cells: list[tuple[str, str]]
+                                                          ) -> None:
+    # no cell holds the delimiter or a line ending here: those make rows, tested above
+    data = "a,b\n" + "".join(f"{a},{b}\n" for a, b in cells)
+    assert _outcome(data, in_python=True) == _outcome(data, in_python=False)
+
+
+@pytest.mark.parametrize("cell", ["1\x1c", "1_000", "\u0661", "nan", "x", "\x0b2 "])
+def test_the_python_reading_matches_on_spellings_the_parsers_disagree_on(cell: str) -> None:
+    # numpy's parser skips 0x1c as space and float() does not; float() reads '1_000' and
+    # Arabic-Indic digits and numpy's parser does not: the readings still agree
+    for data in (f"a,b\n{cell},1\n", f"a,b\n{cell},1\n1_0,\u0661\n", f'a,b\n"{cell}",1\n'):
+        assert _outcome(data, in_python=True) == _outcome(data, in_python=False)

@@ -2,9 +2,10 @@
 
 Two paths give the same bits (tests compare them):
 
-- a small table (at most :data:`SMALL_TABLE` rows) is inferred in plain Python over the rules
-  that fire (:class:`flctool.learners.trial.SparseRules`, the path learning uses), so a few
-  rows never wait for numba to load or to compile the kernels;
+- a small table (at most :data:`SMALL_TABLE` rows) is read and inferred in plain Python over
+  the rules that fire (:class:`flctool.compile.sparse.SparseRules`, the path learning uses,
+  built from the behaviour without compiling it), so a few rows never load numpy, nor wait
+  for numba to load or to compile the kernels;
 - a larger one goes through :meth:`Controller.output` (compiled kernels) chunk by chunk, so
   memory follows the chunk, not the file.
 
@@ -27,14 +28,14 @@ from flctool.cli.spec_commands import ControllerArgument
 from flctool.errors import FlcError
 
 if TYPE_CHECKING:
-    import numpy as np
-    from numpy.typing import NDArray
-
     from flctool.compile import Controller
+    from flctool.compile.sparse import SparseRules
+    from flctool.spec import Behaviour
 
-#: Tables up to this many rows skip the compiled kernels: in plain Python a row costs a few
-#: microseconds, while loading numba costs about 0.3 s of CPU (and compiling, on a machine's
-#: first run, several seconds).
+#: Tables up to this many rows skip numpy and the compiled kernels: in plain Python a row costs
+#: a few microseconds, while loading numpy costs about 0.1 s of CPU, numba about 0.3 s more
+#: (and compiling, on a machine's first run, several seconds). Counted a chunk at a time: once
+#: a chunk is larger, the rest of the table goes through the kernels.
 SMALL_TABLE = 2_000
 
 
@@ -56,50 +57,53 @@ def infer(
     memory. Writing to stdout, rows before a bad one have already been printed when it is
     reported; with -o the file is written only if every row is good.
     """
-    from flctool.compile import compile_behaviour
+    from flctool.compile.sparse import SparseRules
     from flctool.tabular import StateReader, format_rows
 
     with user_errors():
         behaviour, _ = load_controller(file)
-        controller = compile_behaviour(behaviour)
+        input_names = list(behaviour.inputs)
+        output_name = behaviour.output.name
         if output is not None:
             check_output(output, "output CSV", force=force)
         with _states(input) as (stream, name), _target(output) as target:
-            reader = StateReader(stream, controller.input_names, name,
-                                 reserved=[controller.output_name])
-            target.write(f"{reader.header_line},{controller.output_name}\n")
-            chunks = reader.chunks()
-            first = next(chunks, None)
-            if first is None:
-                return
-            small = first[1].shape[0] <= SMALL_TABLE
-            for lines, states in _chained(first, chunks):
-                if small and states.shape[0] <= SMALL_TABLE:
-                    values = outputs_in_python(controller, states)
+            reader = StateReader(stream, input_names, name, reserved=[output_name])
+            target.write(f"{reader.header_line},{output_name}\n")
+            rules = SparseRules.from_behaviour(behaviour)
+            consequents = _consequents(behaviour)
+            controller: Controller | None = None  # compiled once a chunk is too large
+            for lines in reader.row_chunks():
+                if controller is None and len(lines) <= SMALL_TABLE:
+                    values = outputs_in_python(rules, consequents, reader.parse_in_python(lines))
                 else:
-                    small = False
+                    if controller is None:
+                        from flctool.compile import compile_behaviour
+
+                        controller = compile_behaviour(behaviour)
+                    states = reader.parse(lines)
                     with compiling(), _numba_without_scipy_blas():
-                        values = controller.output(states)
+                        values = controller.output(states).tolist()
                 target.write(format_rows(lines, values))
 
 
-def outputs_in_python(controller: Controller, states: NDArray[np.float64]
-                      ) -> NDArray[np.float64]:
-    """``controller.output(states)`` computed in plain Python over the rules that fire:
-    (B, N) -> (B,), the same bits, without the compiled kernels."""
-    import numpy as np
+def _consequents(behaviour: Behaviour) -> list[int]:
+    from flctool.compile.rules import rule_consequents
 
-    from flctool.learners.trial import SparseRules
-
-    if controller.consequents is None:
+    consequents = rule_consequents(behaviour)
+    if consequents is None:
         raise FlcError("this controller has rules still to learn", hint="flctool learn it")
-    consequents = controller.consequents.tolist()
-    rules = SparseRules(controller)
+    return consequents
+
+
+def outputs_in_python(rules: SparseRules, consequents: list[int],
+                      states: list[list[float]]) -> list[float]:
+    """``controller.output(states)`` computed in plain Python over the rules that fire:
+    B states of N values -> B outputs, the same bits, without numpy or the kernels."""
     values = []
-    for state in states.tolist():
-        fired, alphas, _ = rules.fire(state)
+    for state in states:
+        fired, alphas, _ = rules.activations(state)
         values.append(rules.output(alphas, [consequents[m] for m in fired]))
-    return np.array(values, dtype=np.float64)
+    return values
 
 
 #: What numba's array functions import only to learn whether BLAS is there.
@@ -125,13 +129,6 @@ def _numba_without_scipy_blas() -> Iterator[None]:
     finally:
         if sys.modules.get(_SCIPY_BLAS, 0) is None:
             del sys.modules[_SCIPY_BLAS]
-
-
-def _chained(first: tuple[list[str], NDArray[np.float64]],
-             rest: Iterator[tuple[list[str], NDArray[np.float64]]]
-             ) -> Iterator[tuple[list[str], NDArray[np.float64]]]:
-    yield first
-    yield from rest
 
 
 @contextmanager

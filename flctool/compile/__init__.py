@@ -1,6 +1,30 @@
-"""Compiling a behaviour into frozen arrays, and inference (eq. 1-3)."""
+"""Compiling a behaviour into frozen arrays, and inference (eq. 1-3).
 
-from flctool.compile.controller import Controller, compile_behaviour
-from flctool.compile.membership import trapezoid
+The names below are imported on first use, so that the plain-Python parts of this package
+(:mod:`flctool.compile.rules`, :mod:`flctool.compile.sparse`, :func:`membership.firing_sets
+<flctool.compile.membership.firing_sets>`, :mod:`flctool.compile.defuzzify`) can be used
+without loading numpy (``flctool infer`` on a small table does).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from flctool.compile.controller import Controller, compile_behaviour
+    from flctool.compile.membership import trapezoid
 
 __all__ = ["Controller", "compile_behaviour", "trapezoid"]
+
+_HOMES = {"Controller": "flctool.compile.controller",
+          "compile_behaviour": "flctool.compile.controller",
+          "trapezoid": "flctool.compile.membership"}
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(home), name)

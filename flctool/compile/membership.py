@@ -19,15 +19,18 @@ export), and :func:`firing_sets` for one value, in plain Python floats for the l
 loop, where numpy's per-call overhead would cost more than the arithmetic. Both do the same
 operations in the same order, so they give the same bits (a test checks it over many random
 sets and values).
+
+This module imports numpy only inside :func:`trapezoid`: ``flctool infer`` on a small table
+uses :func:`firing_sets` in a process that never loads numpy.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:
+    from numpy.typing import NDArray
 
 
 def trapezoid(x: NDArray[Any], quads: NDArray[Any]) -> NDArray[Any]:
@@ -36,6 +39,8 @@ def trapezoid(x: NDArray[Any], quads: NDArray[Any]) -> NDArray[Any]:
     Computed in the dtype of ``x`` and ``quads`` (float64 unless both are float32), each
     operation rounded in it.
     """
+    import numpy as np  # here, so that firing_sets (the plain-Python path) never loads it
+
     s = np.asarray(x)
     if s.dtype != np.float32:
         s = s.astype(np.float64)

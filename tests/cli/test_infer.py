@@ -14,25 +14,63 @@ from flctool import compile_behaviour, load_behaviour
 from flctool.cli import app
 from flctool.cli import infer as infer_module
 from flctool.cli.infer import outputs_in_python
+from flctool.compile.rules import rule_consequents
+from flctool.compile.sparse import SparseRules
+from flctool.errors import InferenceError
+from flctool.spec import Behaviour
 
 from ..conftest import BEHAVIOURS
+from ..export.controllers import random_behaviour, random_states
 
 runner = CliRunner()
 HANDMADE = BEHAVIOURS / "ballchase-handmade.yaml"
 
 
-def test_the_python_path_gives_the_kernels_bits() -> None:
-    controller = compile_behaviour(load_behaviour(HANDMADE))
-    rng = np.random.default_rng(7)
+def _controllers() -> list[tuple[str, Behaviour]]:
+    pitch = BEHAVIOURS / "dribble-handmade.yaml"  # a pitch-world behaviour
+    return [("ballchase", load_behaviour(HANDMADE)), ("pitch", load_behaviour(pitch)),
+            *((f"random_{seed}", random_behaviour(seed, max_inputs=4, min_inputs=3))
+              for seed in (3, 4, 5))]
+
+
+@pytest.mark.parametrize(("name", "behaviour"), _controllers(), ids=lambda v: str(v)[:20])
+def test_the_python_path_gives_the_kernels_bits(name: str, behaviour: Behaviour) -> None:
+    controller = compile_behaviour(behaviour)
+    # the rule base built from the behaviour holds the compiled controller's numbers
+    rules = SparseRules.from_behaviour(behaviour)
+    assert vars(rules) == vars(SparseRules(controller))
+    assert rule_consequents(behaviour) == controller.consequents.tolist()  # type: ignore[union-attr]
+    states = random_states(behaviour, 4000, seed=len(name))  # set edges and range ends
     low, high = controller.ranges[:, 0], controller.ranges[:, 1]
-    span = high - low
-    states = low + rng.uniform(-0.1, 1.1, size=(3000, controller.n_inputs)) * span
-    # set edges, range ends and beyond: where rounding differences would show first
-    edges = np.concatenate([q.ravel() for q in controller.quadruples])
-    states[:len(edges), 0] = np.resize(edges, len(edges))
     states[-2:] = [low - 1, high + 1]
-    assert outputs_in_python(controller, states).tobytes() == \
-        controller.output(states).tobytes()
+    states[-4:-2] = [np.full(len(low), -np.inf), np.full(len(low), np.inf)]
+    python = outputs_in_python(rules, rule_consequents(behaviour) or [], states.tolist())
+    assert np.array(python).tobytes() == controller.output(states).tobytes()
+
+
+def test_both_paths_refuse_nan() -> None:
+    behaviour = load_behaviour(HANDMADE)
+    state = [0.2, float("nan")]
+    with pytest.raises(InferenceError, match="NaN"):
+        outputs_in_python(SparseRules.from_behaviour(behaviour),
+                          rule_consequents(behaviour) or [], [state])
+    with pytest.raises(InferenceError, match="NaN"):
+        compile_behaviour(behaviour).output(np.array([state]))
+
+
+def test_a_small_table_is_inferred_without_numpy() -> None:
+    # In a fresh process, as the command runs: neither numpy nor numba is imported.
+    probe = (
+        "import sys\nfrom flctool.cli import run\n"
+        "sys.argv = ['flctool', 'infer', sys.argv[1]]\n"
+        "try:\n    run()\nexcept SystemExit as stop:\n    assert not stop.code, stop.code\n"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'numba')),"
+        " file=sys.stderr)\n")
+    result = subprocess.run([sys.executable, "-c", probe, str(HANDMADE)], input=_rows(10),
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.strip() == "[]"
+    assert result.stdout == runner.invoke(app, ["infer", str(HANDMADE)], input=_rows(10)).stdout
 
 
 def _rows(count: int) -> str:
