@@ -85,6 +85,7 @@ class StateReader:
         self._index = [self.header.index(c) for c in self.columns]
         self._blank: list[int] = []  # blank lines seen since the last row
         self._numbers: Sequence[int] = []  # line numbers of the rows of the current chunk
+        self._quoted = False  # whether the current chunk has a quote
 
     # -- header --------------------------------------------------------------------------
     def _check_header(self, reserved: Sequence[str]) -> None:
@@ -134,6 +135,7 @@ class StateReader:
             first = self._line + 1
             self._line += len(lines)
             rows = self._rows(lines, first)
+            self._quoted = '"' in text  # (one search of the text, not one per line)
             if rows:
                 yield rows
 
@@ -166,10 +168,11 @@ class StateReader:
                            "remove it, or give the missing reading")
 
     def parse(self, lines: list[str]) -> NDArray[np.float64]:
-        """The inputs of the latest chunk's rows as a (B, N) array."""
+        """The inputs of the latest chunk's rows (``lines``, from :meth:`row_chunks`) as a
+        (B, N) array."""
         import numpy as np
 
-        if not any('"' in line for line in lines):
+        if not self._quoted:
             values = self._parse_plain(lines)
             if values is not None:
                 return values
