@@ -129,11 +129,15 @@ class SourceMap:
         return (1, 1) if self.parsed else (None, None)
 
     def problem(self, path: Path, message: str, hint: str = "") -> Problem:
+        path = tuple(path)
         for given, where in self.overrides.items():
-            if tuple(path[: len(given)]) == given:
-                return Problem(path=tuple(path), message=message, hint=hint, file=where)
+            # inside an override, or a key the file does not have that an override made
+            # (``--set exploration.policy=...`` adds ``exploration`` itself)
+            made_by_it = bool(path) and given[: len(path)] == path and path not in self.marks
+            if path[: len(given)] == given or made_by_it:
+                return Problem(path=path, message=message, hint=hint, file=where)
         line, column = self.locate(path)
-        return Problem(path=tuple(path), message=message, hint=hint, file=self.file, line=line,
+        return Problem(path=path, message=message, hint=hint, file=self.file, line=line,
                        column=column)
 
 
