@@ -8,7 +8,9 @@ without loading numpy (``flctool infer`` on a small table does).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from flctool.lazy import lazy_attributes
 
 if TYPE_CHECKING:
     from flctool.compile.controller import Controller, compile_behaviour
@@ -21,10 +23,4 @@ _HOMES = {"Controller": "flctool.compile.controller",
           "trapezoid": "flctool.compile.membership"}
 
 
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(home), name)
+__getattr__ = lazy_attributes(__name__, _HOMES)

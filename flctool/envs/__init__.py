@@ -13,10 +13,10 @@ preflight, does not import numpy.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from flctool.errors import EnvError
+from flctool.lazy import lazy_attributes
 from flctool.plugins import registry
 from flctool.registry import Registry
 from flctool.spec.located import located
@@ -63,14 +63,7 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
         return factory.from_behaviour(behaviour, batch_size)
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'flctool.envs' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value  # later lookups skip this function
-    return value
-
+__getattr__ = lazy_attributes(__name__, _LAZY)
 
 __all__ = ["ENVIRONMENTS", "BatchEnv", "EnvFactory", "SingleEnv", "Step", "check_env",
            "make_env"]
