@@ -76,6 +76,10 @@ class ImportedInput:
     def resolved_quads(self, file: str) -> dict[str, Quad]:
         """Every set's quadruple inside the range (see :func:`inside_range`)."""
         lo, hi = self.resolved_range()
+        if not lo < hi:  # checked first: every set would seem to lie outside a backwards range
+            raise unsupported(file, self.line, f"input '{self.name}' has the range "
+                              f"[{lo!r}, {hi!r}], whose low end is not below its high end",
+                              "write the range low end first, and make it wider than a point")
         return {s.name: inside_range(s, (lo, hi), file) for s in self.sets}
 
 

@@ -78,6 +78,8 @@ def test_import_reads_the_subset() -> None:
     ("DefuzzMethod='wtaver'", "DefuzzMethod='wtsum'", r"tiny.fis:7: DefuzzMethod='wtsum'"),
     ("1, 2 (1) : 1", "1, 3 (1) : 1", r"tiny.fis:24: the output has no MF3"),
     ("1, 2 (1) : 1", "1, 2 (1) : 2", None),  # OR with a single input is the same rule
+    ("Range=[0 1]", "Range=[1 0]",  # not "a set does not reach into the range"
+     r"tiny.fis:\d+: input 'x' has the range \[1.0, 0.0\], whose low end is not below"),
 ])
 def test_import_names_what_it_cannot_express(old: str, new: str, message: str | None) -> None:
     text = SYSTEM.replace(old, new)

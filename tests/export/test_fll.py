@@ -137,6 +137,8 @@ def test_import_reads_the_subset() -> None:
     ("rule: if x is high then u is down", "rule: if x is high then u is up",
      None),  # two rules may share a term without aggregation
     ("  activation: General", "  activation: Highest 1", r"tiny.fll:18: activation Highest"),
+    ("  range: 0.0 1.0", "  range: 1.0 0.0",  # not "a set does not reach into the range"
+     r"tiny.fll:\d+: input 'x' has the range \[1.0, 0.0\], whose low end is not below"),
 ])
 def test_import_names_what_it_cannot_express(old: str, new: str, message: str | None) -> None:
     text = ENGINE.replace(old, new)
