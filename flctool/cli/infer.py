@@ -30,7 +30,6 @@ from flctool.errors import FlcError
 if TYPE_CHECKING:
     from flctool.compile import Controller
     from flctool.compile.sparse import SparseRules
-    from flctool.spec import Behaviour
 
 #: Tables up to this many rows skip numpy and the compiled kernels: in plain Python a row costs
 #: a few microseconds, while loading numpy costs about 0.1 s of CPU, numba about 0.3 s more
@@ -57,6 +56,7 @@ def infer(
     memory. Writing to stdout, rows before a bad one have already been printed when it is
     reported; with -o the file is written only if every row is good.
     """
+    from flctool.compile.rules import rule_consequents
     from flctool.compile.sparse import SparseRules
     from flctool.tabular import StateReader, format_rows
 
@@ -70,7 +70,8 @@ def infer(
             reader = StateReader(stream, input_names, name, reserved=[output_name])
             target.write(f"{reader.header_line},{output_name}\n")
             rules = SparseRules.from_behaviour(behaviour)
-            consequents = _consequents(behaviour)
+            consequents = rule_consequents(behaviour)
+            assert consequents is not None  # load_controller refused rules still to learn
             controller: Controller | None = None  # compiled once a chunk is too large
             for lines in reader.row_chunks():
                 if controller is None and len(lines) <= SMALL_TABLE:
@@ -84,15 +85,6 @@ def infer(
                     with compiling(), _numba_without_scipy_blas():
                         values = controller.output(states).tolist()
                 target.write(format_rows(lines, values))
-
-
-def _consequents(behaviour: Behaviour) -> list[int]:
-    from flctool.compile.rules import rule_consequents
-
-    consequents = rule_consequents(behaviour)
-    if consequents is None:
-        raise FlcError("this controller has rules still to learn", hint="flctool learn it")
-    return consequents
 
 
 def outputs_in_python(rules: SparseRules, consequents: list[int],

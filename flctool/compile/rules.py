@@ -9,6 +9,7 @@ the order of ``itertools.product`` (see :mod:`flctool.compile.controller`).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Sequence
 
 from flctool.spec.models import Behaviour
@@ -35,7 +36,7 @@ def rule_consequents(behaviour: Behaviour) -> list[int] | None:
     set_names = [list(v.sets) for v in behaviour.inputs.values()]
     shape = [len(sets) for sets in set_names]
     command = {name: k for k, name in enumerate(behaviour.output.commands)}
-    consequents = [0] * len(rule_grid(shape))
+    consequents = [0] * math.prod(shape)
     for rule in behaviour.rules:
         sets = [set_names[i].index(rule.if_[name]) for i, name in enumerate(names)]
         consequents[rule_index(sets, shape)] = command[rule.then]
