@@ -39,8 +39,6 @@ CHUNK_EPISODES = 1024
 FIRST_CHUNK, CHUNK_SECONDS = 64, 2.0
 #: Most episodes one list of seeds may name.
 MAX_LISTED_SEEDS = 10_000_000
-#: Training episodes use seeds from 2^32 up (flctool.learners.base.TRAIN_SEED_LOW).
-TRAINING_SEEDS_FROM = 2**32
 #: Episodes and the seed that draws their seeds when neither is given.
 DEFAULT_EPISODES, DEFAULT_SEED = 1000, 0
 

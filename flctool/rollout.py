@@ -136,6 +136,13 @@ class EvaluationResult:
                 "mean_return": self.mean_return.to_dict()}
 
 
+#: Training episodes draw their seeds from [TRAIN_SEED_LOW, TRAIN_SEED_HIGH), above every seed
+#: :func:`evaluation_seeds` gives, so an evaluation never replays a training start (the
+#: learners import these; model selection's validation seeds lie above both).
+TRAIN_SEED_LOW = 2**32
+TRAIN_SEED_HIGH = 2**62
+
+
 def evaluation_seeds(seed: int, episodes: int) -> NDArray[np.int64]:
     """``episodes`` distinct episode seeds drawn from ``seed`` (what ``flctool evaluate
     --seed`` uses). Evaluations with different seeds almost surely share no episode (two

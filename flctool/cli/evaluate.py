@@ -82,13 +82,12 @@ def evaluate_command(
     from flctool.envs import make_env
     from flctool.evaluation import (
         DEFAULT_EPISODES,
-        TRAINING_SEEDS_FROM,
         batch_size,
         defines_success,
         evaluate_behaviour,
         parse_seeds,
     )
-    from flctool.rollout import trace_episode
+    from flctool.rollout import TRAIN_SEED_LOW, trace_episode
 
     listed: list[int] | None = None
     if seeds is not None:
@@ -103,8 +102,8 @@ def evaluate_command(
         if trace is not None:
             check_output(trace, "trace", force=force)
         controller = compile_behaviour(behaviour)
-        if listed is not None and max(listed) >= TRAINING_SEEDS_FROM:
-            err_console.print(f"[yellow]warning:[/] seeds from {TRAINING_SEEDS_FROM} up are "
+        if listed is not None and max(listed) >= TRAIN_SEED_LOW:
+            err_console.print(f"[yellow]warning:[/] seeds from {TRAIN_SEED_LOW} up are "
                               "the range training episodes use; these are not held out",
                               highlight=False)
         with compiling():  # load (or, on a machine's first run, compile) the kernels

@@ -8,11 +8,12 @@ the adapter protocol.
 from __future__ import annotations
 
 from flctool.envs.base import BatchEnv
-from flctool.learners.base import TRAIN_SEED_LOW, GenerationResult, Learner, train
+from flctool.learners.base import GenerationResult, Learner, train
 from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback, StopAtFitness
 from flctool.learners.metrics import GenerationMetrics
 from flctool.plugins import registry
 from flctool.registry import Registry
+from flctool.rollout import TRAIN_SEED_LOW
 from flctool.spec.located import located
 from flctool.spec.models import Behaviour
 

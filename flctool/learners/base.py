@@ -33,6 +33,7 @@ from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate, Selection
 from flctool.learners.trial import SparseRules
+from flctool.rollout import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
 from flctool.spec.learning import LearningConfig
 from flctool.spec.models import Behaviour
 
@@ -51,8 +52,6 @@ class RuleStrengths(Protocol):
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
-TRAIN_SEED_LOW = 2**32
-TRAIN_SEED_HIGH = 2**62
 
 
 @dataclass(frozen=True)
