@@ -25,6 +25,7 @@ from flctool.spec.learning import (
     DEFAULT_LEARNER,
     EARLIER_RECORD_KEYS,
     keep_keys_read_by,
+    learners_text,
     readers_of,
 )
 from flctool.spec.load import read_behaviour_text
@@ -153,7 +154,7 @@ def _split(learning: dict[str, Any], own: Any, learners: Sequence[str], source: 
             extra[key] = value
         elif not recorded:
             problems.append(source.problem(
-                ("learning", key), f"'{key}' is read by {_learners_text(readers)}, which "
+                ("learning", key), f"'{key}' is read by {learners_text(readers)}, which "
                 "this experiment does not compare",
                 f"remove it, or add {' or '.join(readers)} to --learners"))
     return own_section, extra, problems
@@ -175,7 +176,7 @@ def _override_problems(overrides: Mapping[str, Any], learners: Sequence[str],
             continue
         readers = readers_of(path[1])
         if readers and not any(learner in readers for learner in learners):
-            problems.append(Problem(path, f"'{path[1]}' is read by {_learners_text(readers)}, "
+            problems.append(Problem(path, f"'{path[1]}' is read by {learners_text(readers)}, "
                                     "none of which this experiment compares",
                                     f"leave it out, or add {' or '.join(readers)} to --learners",
                                     file=label))
@@ -185,9 +186,3 @@ def _override_problems(overrides: Mapping[str, Any], learners: Sequence[str],
 def _first_reader(key: str, learners: Sequence[str]) -> str:
     readers = readers_of(key)
     return next(learner for learner in learners if learner in readers)
-
-
-def _learners_text(names: Sequence[str]) -> str:
-    if len(names) == 1:
-        return f"the {names[0]} learner only"
-    return f"the {', '.join(names[:-1])} and {names[-1]} learners"

@@ -7,7 +7,7 @@ names that model, so ``learning:`` is the union of the models of every learner t
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
@@ -168,10 +168,17 @@ def foreign_key_message(key: str, learner: str) -> str | None:
     if not readers or learner in readers:
         return None
     if len(readers) == 1:
-        return (f"'{key}' is read by the {readers[0]} learner only; remove it or set "
+        return (f"'{key}' is read by {learners_text(readers)}; remove it or set "
                 f"learner: {readers[0]}")
-    return (f"'{key}' is read by the {', '.join(readers[:-1])} and {readers[-1]} learners, "
-            f"not by {learner}; remove it or set learner to one of them")
+    return (f"'{key}' is read by {learners_text(readers)}, not by {learner}; remove it or "
+            "set learner to one of them")
+
+
+def learners_text(names: Sequence[str]) -> str:
+    """``the pitt learner only``, or ``the pitt and hybrid learners``: who reads a key."""
+    if len(names) == 1:
+        return f"the {names[0]} learner only"
+    return f"the {', '.join(names[:-1])} and {names[-1]} learners"
 
 
 #: The keys of the one flat ``learning:`` model of earlier versions, which wrote every one of
