@@ -7,7 +7,7 @@ mode, or 0o666 less the umask), a symbolic link is written through to the file i
 anything that is not a regular file (a device, a directory) is refused, never replaced.
 
 A process killed between creating its temporary file and renaming it leaves the temporary
-file behind (``.NAME.XXXXXXXX.tmp``); :func:`remove_stale_temporaries` deletes those once no
+file behind (``.NAME.<8 hex digits>.tmp``); :func:`remove_stale_temporaries` deletes those once no
 writer can be running.
 
 Every writer of flctool goes through here: single files (:func:`write_bytes_atomic`), output
