@@ -48,7 +48,6 @@ from typing import Any
 
 import numpy as np
 
-from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
@@ -64,6 +63,7 @@ from flctool.spec import (
 from flctool.spec.learning import keep_keys_read_by
 from flctool.spec.located import source_of
 from flctool.spec.rules import with_rules
+from flctool.version import __version__
 
 RUN_FORMAT = 1
 BEHAVIOUR_FILE = "behaviour.yaml"

@@ -37,6 +37,7 @@ from flctool.learners.trial import SparseRules
 from flctool.rollout import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
 from flctool.spec.learning import LearningConfig
 from flctool.spec.models import Behaviour
+from flctool.spec.rule_order import rule_index
 
 
 class RuleStrengths(Protocol):
@@ -292,7 +293,7 @@ def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:
     rules, chosen = [], []
     for rule in behaviour.rules:
         index = [sets[i].index(rule.if_[name]) for i, name in enumerate(names)]
-        rules.append(int(np.ravel_multi_index(index, shape)))
+        rules.append(rule_index(index, shape))
         chosen.append(commands.index(rule.then))
     return np.array(rules, dtype=np.intp), np.array(chosen, dtype=np.intp)
 
