@@ -78,7 +78,7 @@ class Learner(ABC):
     config: LearningConfig
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
     fuzzy_q: RuleStrengths | None = None
-    #: How the hall of fame ranks candidates (see :class:`~flctool.learners.selection.ModelSelection`).
+    #: How the hall of fame ranks candidates (see :class:`ModelSelection`).
     rank_by: ClassVar[str] = "fitness"
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
