@@ -32,8 +32,9 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import SupportsFloat
 
 from flctool.errors import LearnError
 from flctool.spec.models import Behaviour, InputVariable
@@ -241,3 +242,15 @@ def with_sets(behaviour: Behaviour, sets: dict[str, dict[str, Quad]]) -> Behavio
     for name, quads in sets.items():
         data["inputs"][name]["sets"] = {s: list(q) for s, q in quads.items()}
     return behaviour_from_data(data)
+
+
+def set_gene_count(behaviour: Behaviour) -> int:
+    """The length G of ``behaviour``'s set genome (0 when it learns no sets)."""
+    return 0 if getattr(behaviour.learning, "sets", None) is None else SetCodec(behaviour).size
+
+
+def with_set_genes(behaviour: Behaviour, genes: Iterable[SupportsFloat] | None) -> Behaviour:
+    """``behaviour`` with the sets of the set genome ``genes`` (None: as it is)."""
+    if genes is None:
+        return behaviour
+    return SetCodec(behaviour).decode([float(g) for g in genes])
