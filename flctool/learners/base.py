@@ -307,8 +307,23 @@ class Learner(ABC):
     def selection_record(self) -> dict[str, Any]:
         """What run.json shows of selection and spending: the validated candidates, the
         best, the episodes and steps of training and of selection, why the run stopped."""
-        return {**self.selection.record(), "usage": self.usage.to_dict(),
-                "stop_reason": self.stop_reason}
+        record = {**self.selection.record(), "usage": self.usage.to_dict(),
+                  "stop_reason": self.stop_reason}
+        genes = self.selected_sets()
+        if self.codec is not None and genes is not None:
+            record["sets"] = self.sets_record(genes)
+        return record
+
+    def sets_record(self, genes: FloatArray) -> dict[str, Any]:
+        """What run.json shows of the returned controller's learned sets: the interpretability
+        measures of each learned input (coverage, neighbour overlap, each set's movement)."""
+        from flctool.sets.measures import interpretability
+
+        assert self.codec is not None
+        learned = self.codec.decode(np.asarray(genes).tolist())
+        return {"genes": np.asarray(genes).tolist(),
+                "inputs": interpretability(self.behaviour, learned,
+                                           [c.name for c in self.codec.inputs])}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` saved; :class:`LearnError` (and the learner left
