@@ -71,10 +71,10 @@ _ENVIRONMENT = "flctool.spec.environment"
 
 BUILTIN: dict[str, tuple[Plugin, ...]] = {
     "learner": (
-        Plugin("pitt", "flctool.learners.pitt:PittLearner", f"{_LEARNING}:PittConfig"),
+        Plugin("pitt", "flctool.learners.genetic:PittLearner", f"{_LEARNING}:PittConfig"),
         Plugin("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner",
                f"{_LEARNING}:FuzzyQConfig"),
-        Plugin("hybrid", "flctool.learners.hybrid:HybridLearner", f"{_LEARNING}:HybridConfig"),
+        Plugin("hybrid", "flctool.learners.genetic:HybridLearner", f"{_LEARNING}:HybridConfig"),
     ),
     "environment": (
         Plugin("ballchase-sim", "flctool.envs.ballchase:BallchaseSim",

@@ -8,7 +8,6 @@ consequents. Structure and types are checked here; the checks that relate fields
 
 from __future__ import annotations
 
-import itertools
 import math
 from typing import TYPE_CHECKING, Annotated, Any, Union
 
@@ -29,6 +28,7 @@ from flctool.spec.checks import find_problems
 from flctool.spec.environment import default_gymnasium_ranges
 from flctool.spec.learning import DEFAULT_LEARNER, HybridConfig, section_for_learner
 from flctool.spec.located import SourceRef
+from flctool.spec.rule_order import rule_grid
 
 # The sections chosen by name are unions built from the plugins (flctool.plugins): the config
 # models of the built-in learners and adapters and of any an installed package adds, chosen by
@@ -194,8 +194,10 @@ class Behaviour(Section):
         return math.prod(len(v.sets) for v in self.inputs.values())
 
     def antecedents(self) -> list[tuple[str, ...]]:
-        """Every rule's set names in grid order: the last input varies fastest (eq. 1)."""
-        return list(itertools.product(*(tuple(v.sets) for v in self.inputs.values())))
+        """Every rule's set names in rule order (eq. 1, :mod:`flctool.spec.rule_order`)."""
+        sets = [tuple(v.sets) for v in self.inputs.values()]
+        return [tuple(sets[i][j] for i, j in enumerate(rule))
+                for rule in rule_grid([len(s) for s in sets])]
 
     def missing_rules(self) -> list[tuple[str, ...]]:
         """Antecedents that have no rule yet; empty for a deployable controller."""
