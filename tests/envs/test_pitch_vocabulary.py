@@ -142,7 +142,7 @@ def test_all_any_and_held_outcomes() -> None:
     # walking 60 mm a step from x = -1000: x >= -700 after 5 steps
     held = base + ("    - {all: [{when: threshold, channel: x, min: -700}, "
                    "{when: threshold, channel: y, max: 1}], held: 3, reward: 1, success: true}\n")
-    env, reward, terminated, _, steps = _run(held, 0.0)
+    _, reward, terminated, _, steps = _run(held, 0.0)
     assert (reward, terminated, steps) == (1.0, True, 7)
     either = base + ("    - {any: [{when: threshold, channel: x, min: -700}, "
                      "{when: off_pitch}], reward: 2, success: true}\n")
