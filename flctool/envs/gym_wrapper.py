@@ -123,8 +123,9 @@ def register_envs() -> None:
     """Register the ids (idempotent)."""
     entry = f"{__name__}:PitchGymEnv"
     registry = gym.envs.registration.registry
-    ids = {"flctool/Pitch-v0": {"normalise": True},
-           "flctool/PitchDiscrete-v0": {"normalise": True, "discrete": True}}
+    ids: dict[str, dict[str, Any]] = {"flctool/Pitch-v0": {"normalise": True},
+                                      "flctool/PitchDiscrete-v0": {"normalise": True,
+                                                                   "discrete": True}}
     for name, path in shipped_pitch_behaviours().items():
         ids[f"flctool/{name}-v0"] = {"behaviour": str(path), "normalise": True}
         ids[f"flctool/{name}-discrete-v0"] = {"behaviour": str(path), "normalise": True,
