@@ -31,7 +31,7 @@ from flctool.rollout import evaluate, evaluation_seeds
 from flctool.runs import BEST_FILE, create_run, resolve_behaviour
 
 ROOT = Path(__file__).resolve().parents[1]
-THRESHOLDS = {"cartpole": 475.0, "mountaincar": -110.0}
+THRESHOLDS = {"cartpole": 475.0, "mountaincar": -110.0, "pendulum": -200.0}
 
 
 def run_one(name: str, seed: int, overrides: dict[str, Any], episodes: int,

@@ -84,6 +84,8 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for variant, flag in (("consequents", False), ("sets", True)):
         scores = [r["score"] for r in rows if r["sets"] is flag]
+        if not scores:
+            continue
         used = [r["episodes"] for r in rows if r["sets"] is flag]
         cpu = [r["train_cpu_seconds"] for r in rows if r["sets"] is flag]
         out[variant] = {"median": statistics.median(scores), "worst": min(scores),
@@ -101,6 +103,8 @@ def main() -> None:
     parser.add_argument("--tasks", default=",".join(TASKS))
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--variants", default="consequents,sets", help=(
+        "which runs to make: consequents (the file as it is), sets (with learning.sets)"))
     parser.add_argument("--json", type=Path, default=Path("sets_vs_consequents.json"))
     args = parser.parse_args()
     results: list[dict[str, Any]] = []
@@ -109,7 +113,7 @@ def main() -> None:
         for task in args.tasks.split(","):
             rows = []
             for seed in range(args.seeds):
-                for with_sets in (False, True):
+                for with_sets in [v == "sets" for v in args.variants.split(",")]:
                     row = run_one(task, seed, with_sets, args.episodes, Path(tmp))
                     rows.append(row)
                     print(f"{task:15} seed {seed:2d} {'sets' if with_sets else 'cons':4} "
@@ -117,10 +121,10 @@ def main() -> None:
                           f"cpu {row['train_cpu_seconds']:6.1f} s", flush=True)
             results += rows
             summary[task] = s = summarise(rows)
-            c, t = s["consequents"], s["sets"]
-            print(f"{task}: consequents median {c['median']:.3f} worst {c['worst']:.3f} | "
-                  f"+sets median {t['median']:.3f} worst {t['worst']:.3f} | "
-                  f"Mann-Whitney p {s['mann_whitney_p']:.3g}", flush=True)
+            print(f"{task}: " + " | ".join(
+                f"{v} median {s[v]['median']:.3f} worst {s[v]['worst']:.3f}"
+                for v in ("consequents", "sets") if v in s)
+                + f" | Mann-Whitney p {s['mann_whitney_p']:.3g}", flush=True)
             args.json.write_text(json.dumps({"episodes": args.episodes, "seeds": args.seeds,
                                              "summary": summary, "runs": results},
                                             indent=2) + "\n")
