@@ -522,6 +522,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
             "left to learn."),
     "plot": ("flctool.cli.plot", "Plot learning curves, strengths, a trajectory and the "
              "controller as PNG and SVG files."),
+    "run": ("flctool.cli.run", "Deploy a controller on a robot: publish its command at the "
+            "control rate from the latest inputs, with a watchdog that publishes stop at once "
+            "on a stale, NaN or out-of-range input or a lost publisher, and again on Ctrl-C."),
     "serve": ("flctool.cli.serve", "Serve a behaviour's simulator over the robot-link "
               "protocol (docs/robot-link.md), for trying the link without a robot and as an "
               "example for bridge writers."),

@@ -678,21 +678,28 @@ class PitchSim(BatchEnv):
 
     def episode_fitness(self, returns: FloatArray, lengths: NDArray[np.int64],
                         success: BoolArray) -> FloatArray:
-        """Trial fitness for the GA, (B,) each; faster success scores higher.
-
-        success after L steps: ``2 - L / max_steps`` in [1, 2]; any other ending after L
-        steps: ``0.5 * L / max_steps`` in [0, 0.5] (a time-out gives 0.5) -- lasting longer
-        before a failure is better than failing at once, and any success beats every failure.
-        """
+        """Trial fitness for the GA, (B,) each: :func:`timed_fitness`."""
         del returns
-        fraction = np.asarray(lengths, dtype=np.float64) / self.max_steps
-        return np.where(np.asarray(success, dtype=bool), 2.0 - fraction, 0.5 * fraction)
+        return timed_fitness(lengths, success, self.max_steps)
 
     def trace_state(self) -> dict[str, FloatArray]:
         """Robot pose (mm, deg in [-180, 180)) and ball position, each (B,)."""
         heading = np.remainder(self.heading * _DEG + 180.0, 360.0) - 180.0
         return {"robot_x": self.x, "robot_y": self.y, "robot_heading": heading,
                 "ball_x": self.ball_x, "ball_y": self.ball_y}
+
+
+def timed_fitness(lengths: NDArray[np.int64], success: BoolArray, max_steps: int) -> FloatArray:
+    """Trial fitness where faster success scores higher, (B,) each.
+
+    success after L steps: ``2 - L / max_steps`` in [1, 2]; any other ending after L
+    steps: ``0.5 * L / max_steps`` in [0, 0.5] (a time-out gives 0.5) -- lasting longer
+    before a failure is better than failing at once, and any success beats every failure.
+    """
+    fraction = np.asarray(lengths, dtype=np.float64) / max_steps
+    result: FloatArray = np.where(np.asarray(success, dtype=bool), 2.0 - fraction,
+                                  0.5 * fraction)
+    return result
 
 
 def _stack(columns: list[FloatArray], batch: int) -> FloatArray:
