@@ -78,9 +78,9 @@ def _run_ros2(file: Path, robot: Path | None, episodes: int | None,
     if episodes is not None and config.episode.status is None:
         raise FlcError("--episodes needs an episode status topic to count episodes",
                        hint=f"add environment.episode.status to {where}, or use --duration")
-    from flctool.ros2.deploy import ControllerNode
-
     import numpy as np
+
+    from flctool.ros2.deploy import ControllerNode
 
     flc = compile_behaviour(behaviour)
     # Load (or compile) the kernels now: the first tick must not stall the node for seconds.

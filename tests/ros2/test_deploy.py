@@ -18,8 +18,8 @@ import pytest
 
 from flctool import compile_behaviour
 from flctool.envs import make_env
-from flctool.ros2.deploy import Deployment
 from flctool.rollout import evaluate, evaluation_seeds
+from flctool.ros2.deploy import Deployment
 from flctool.spec import behaviour_to_yaml, load_behaviour
 from flctool.spec.ros2 import InputSource, Ros2Config
 
@@ -141,11 +141,11 @@ def test_the_node_stops_within_the_watchdog_bound_and_recovers() -> None:
             node.deployment.sources[1] = config_valid
             moment = time.monotonic()
             sensors.pan_value = value
-            assert wait_until(lambda: sensors.first_stop_after(moment) is not None, 5.0)
+            assert wait_until(lambda t=moment: sensors.first_stop_after(t) is not None, 5.0)
             delays[name] = sensors.first_stop_after(moment) - moment  # type: ignore[operator]
             sensors.pan_value = 10.0
             again = time.monotonic()
-            assert wait_until(lambda: sensors.driving_after(again), 5.0), lines
+            assert wait_until(lambda t=again: sensors.driving_after(t), 5.0), lines
         # lost publisher: the pan publisher leaves the graph
         moment = time.monotonic()
         sensors.graph.node.destroy_publisher(sensors.pan)

@@ -3,6 +3,7 @@ when a file is loaded, with located errors, and no ROS installed needed."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 
@@ -123,10 +124,8 @@ def test_any_field_path_text_parses_or_is_refused_cleanly(text: str) -> None:
         assert "field path" in str(error) or "slice" in str(error)
         return
     for type_name in ("sensor_msgs/LaserScan", "nav_msgs/Odometry"):
-        try:
+        with contextlib.suppress(ValueError):  # a path into fields it lacks: a clear refusal
             field_type(type_name, path)
-        except ValueError:
-            pass
 
 
 def _rosbags_store() -> object:
