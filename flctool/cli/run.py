@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from flctool.cli.app import app, example, load_controller, report_interrupted, user_errors
 from flctool.cli.spec_commands import ControllerArgument
 from flctool.errors import FlcError
+
+if TYPE_CHECKING:
+    from flctool.spec import Behaviour
 
 
 def _log(text: str) -> None:
@@ -40,24 +43,26 @@ def run(
                                                  "topic).")] = None,
     duration: Annotated[float | None, typer.Option(min=0.001, help="Stop after this many "
                                                    "seconds.")] = None,
+    rate: Annotated[float | None, typer.Option(min=0.001, max=1000, help="Control rate in Hz "
+                                               "(default: the environment's rate).")] = None,
 ) -> None:
     """Deploy a controller on a robot: publish its command at the control rate from the
     latest inputs, with a watchdog that publishes stop at once on a stale, NaN or
     out-of-range input or a lost publisher, and again on Ctrl-C."""
     with user_errors():
+        behaviour, source = load_controller(file)
         if not ros2:
             raise FlcError("flctool run deploys over ROS 2 only: add --ros2",
                            hint="for the robot link or a simulator, use flctool evaluate")
-        _run_ros2(file, robot, episodes, duration)
+        _run_ros2(behaviour, source, robot, episodes, duration, rate)
 
 
-def _run_ros2(file: Path, robot: Path | None, episodes: int | None,
-              duration: float | None) -> None:
+def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: int | None,
+              duration: float | None, rate: float | None) -> None:
     from flctool.compile import compile_behaviour
     from flctool.spec import load_behaviour
     from flctool.spec.ros2 import Ros2Config
 
-    behaviour, source = load_controller(file)
     config = behaviour.environment
     where = str(source)
     if robot is not None:
@@ -75,6 +80,8 @@ def _run_ros2(file: Path, robot: Path | None, episodes: int | None,
         raise FlcError(f"{source}'s environment is not a ROS 2 robot",
                        hint="name the robot's topics with --robot ROBOT.yaml (a behaviour "
                        "with environment: {adapter: ros2, ...})")
+    if rate is not None:
+        config = config.model_copy(update={"rate": rate})
     if episodes is not None and config.episode.status is None:
         raise FlcError("--episodes needs an episode status topic to count episodes",
                        hint=f"add environment.episode.status to {where}, or use --duration")

@@ -35,17 +35,17 @@ def serve(
     ros2: Annotated[bool, typer.Option("--ros2", help="Serve the simulator as a ROS 2 robot "
                                        "(topics under --namespace, docs/ros2.md) instead of "
                                        "over the robot link.")] = False,
-    namespace: Annotated[str, typer.Option(help="--ros2: the robot's namespace; its topics "
-                                           "are NAMESPACE/<input>, /cmd_vel, /reset, "
+    namespace: Annotated[str, typer.Option(help="The ROS 2 robot's namespace (--ros2); its "
+                                           "topics are NAMESPACE/<input>, /cmd_vel, /reset, "
                                            "/status, /reward, /odom.")] = "/robot",
-    auto_reset: Annotated[bool, typer.Option("--auto-reset", help="--ros2: start an episode "
-                                             "at once and the next when one ends, from "
-                                             "consecutive seeds (for 'flctool run --ros2', "
-                                             "which never resets).")] = False,
-    seed: Annotated[int, typer.Option(min=0, help="--ros2 --auto-reset: the first episode's "
-                                      "seed.")] = 0,
-    episodes: Annotated[int | None, typer.Option(min=1, help="--ros2: exit after this many "
-                                                 "episodes have ended.")] = None,
+    auto_reset: Annotated[bool, typer.Option("--auto-reset", help="Start an episode at once "
+                                             "and the next when one ends, from consecutive "
+                                             "seeds (--ros2; for 'flctool run --ros2', which "
+                                             "never resets).")] = False,
+    seed: Annotated[int, typer.Option(min=0, help="The first episode's seed (--ros2 "
+                                      "--auto-reset).")] = 0,
+    episodes: Annotated[int | None, typer.Option(min=1, help="Exit after this many episodes "
+                                                 "have ended (--ros2).")] = None,
 ) -> None:
     """Serve a behaviour's simulator over the robot-link protocol (docs/robot-link.md), for
     trying the link without a robot and as an example for bridge writers."""
