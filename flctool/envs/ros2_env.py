@@ -128,10 +128,20 @@ class Ros2Env(BatchEnv):
         if self.reset_publisher is not None:
             writers.append(self.reset_publisher)
         missing += [f"no subscriber on {publisher.topic_name}" for publisher in writers
-                    if publisher.get_subscription_count() == 0]
+                    if not self._robot_listens(publisher)]
         if self.reset_client is not None and not self.reset_client.service_is_ready():
             missing.append(f"no reset service {self.config.episode.reset.service}")  # type: ignore[union-attr]
         return missing
+
+    def _robot_listens(self, publisher: Any) -> bool:
+        """Whether a subscriber other than a recorder is on ``publisher``'s topic, and every
+        subscriber the graph shows is matched (so a message published now reaches the robot:
+        a recorder's subscription, matched first, must not pass for the robot's)."""
+        from flctool.ros2.bags import RECORDER_NODE
+
+        found = self.graph.node.get_subscriptions_info_by_topic(publisher.topic_name)
+        return publisher.get_subscription_count() >= len(found) and any(
+            info.node_name != RECORDER_NODE for info in found)
 
     def _wait_for_peers(self, timeout: float, when: str) -> None:
         if self.graph.wait(lambda: not self._missing_peers(), timeout):

@@ -61,7 +61,9 @@ class SimRobot:
         self._published = 0.0  # time.monotonic() of the last observations published
         self._lock = threading.Lock()
         self.graph = RosGraph(node, namespace)
-        qos = Qos()
+        # a deeper history than ROS 2's default 10, so that a recorder that falls behind for
+        # a moment loses nothing
+        qos = Qos(depth=100)
         prefix = namespace.rstrip("/") + "/" if namespace else ""
         self.float64 = message_class("std_msgs/Float64")
         self.string = message_class("std_msgs/String")
