@@ -62,7 +62,7 @@ class _Spy:
 
         self.graph = RosGraph("spy")
         self.commands: list[tuple[float, float, float]] = []
-        self.graph.node.create_subscription(
+        self.subscription = self.graph.node.create_subscription(
             __import__("geometry_msgs.msg", fromlist=["Twist"]).Twist, topic,
             lambda m: self.commands.append((time.monotonic(), m.linear.x, m.angular.z)), 10)
 
@@ -120,6 +120,7 @@ def test_a_faulty_input_stops_the_robot_within_the_bound(fault: str) -> None:
         flc = compile_behaviour(behaviour)
         with Ros2Env(config, behaviour.name, behaviour.input_names,
                      dict(behaviour.output.commands)) as env:
+            assert wait_until(lambda: spy.subscription.get_publisher_count() > 0, 10.0)
             observation = env.reset_one(3)
             started = 0.0
             with pytest.raises(LinkError) as caught:
