@@ -39,7 +39,7 @@ from __future__ import annotations
 import bisect
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -75,6 +75,21 @@ _MOTION_COLUMNS = 3
 _UNIFORMS = 5  # robot and ball placement; then 3 per obstacle, 2 per opponent, 2 for a launch
 
 
+class Drive(Protocol):
+    """How the crisp output becomes the robot's motion (mean and std of forward, sideways,
+    rotation), for one episode or B."""
+
+    order: tuple[str, ...]
+    values: FloatArray
+    reads: bool  # whether it reads the channels' readings (a composition's parts do)
+
+    def one(self, action: float, readings: Sequence[float] = (),
+            ) -> tuple[list[float], list[float]]: ...
+
+    def batch(self, actions: FloatArray, readings: Sequence[FloatArray] = (),
+              ) -> tuple[list[FloatArray], list[FloatArray]]: ...
+
+
 class _Drive:
     """How the crisp output ``a`` becomes the robot's motion: the sorted singletons' motions
     blended piecewise linearly (crisp), or the nearest one's."""
@@ -95,9 +110,12 @@ class _Drive:
         self.mean_arrays = [np.array(column) for column in self.mean]
         self.std_arrays = [np.array(column) for column in self.std]
         self.nearest = nearest or len(order) == 1
+        self.reads = False
 
-    def batch(self, actions: FloatArray) -> tuple[list[FloatArray], list[FloatArray]]:
-        """Mean and std columns, each (B,), for actions (B,)."""
+    def batch(self, actions: FloatArray, readings: Sequence[FloatArray] = (),
+              ) -> tuple[list[FloatArray], list[FloatArray]]:
+        """Mean and std columns, each (B,), for actions (B,) (a composition's parts read
+        ``readings``, the channels' readings before the step)."""
         values = self.values
         a = np.clip(actions, values[0], values[-1])
         if self.nearest:
@@ -109,7 +127,8 @@ class _Drive:
             w = np.where(gap > 0, (a - values[j]) / np.where(gap > 0, gap, 1.0), 0.0)
         return _blend(self.mean_arrays, self.std_arrays, j, w)
 
-    def one(self, action: float) -> tuple[list[float], list[float]]:
+    def one(self, action: float, readings: Sequence[float] = (),
+            ) -> tuple[list[float], list[float]]:
         values = self.values_list
         count = len(values)
         # a Python float: numpy scalars would make every operation below several times slower
@@ -176,24 +195,26 @@ class PitchSim(BatchEnv):
     def __init__(self, world: World, commands: dict[str, float], motion: dict[str, Motion],
                  noise: dict[str, MotionNoise], channels: tuple[str, ...],
                  observation_names: tuple[str, ...] | None = None, votes: bool = False,
-                 ) -> None:
+                 extra_channels: tuple[str, ...] = (), drive: Drive | None = None) -> None:
         self.world = world
         self.votes = votes
         self.channels = channels
         self.observation_names = observation_names or channels
         self.max_steps = world.max_steps
-        self.drive = _Drive(commands, motion, noise, world.nearest)
+        self.drive: Drive = drive or _Drive(commands, motion, noise, world.nearest)
         self.command_order = self.drive.order
         self.action_bounds = (float(self.drive.values[0]), float(self.drive.values[-1]))
         derived = {d.name: d for d in world.derived}
-        noisy = ["ball_size", "pan"] + [c for c in PITCH_CHANNELS[2:] if c in channels] + [
-            d.name for d in world.derived if d.name in channels]
+        # the observations, then what only a composition's parts read
+        read = (*channels, *(c for c in dict.fromkeys(extra_channels) if c not in channels))
+        self.n_observations = len(channels)
+        noisy = ["ball_size", "pan"] + [c for c in PITCH_CHANNELS[2:] if c in read] + [
+            d.name for d in world.derived if d.name in read]
         column = {c: _MOTION_COLUMNS + i for i, c in enumerate(noisy)}
         self.columns = _MOTION_COLUMNS + len(noisy)
-        self.observers = [(c, noise_kind(c, derived), world.noise[c], column[c])
-                          for c in channels]
+        self.observers = [(c, noise_kind(c, derived), world.noise[c], column[c]) for c in read]
         self.rules = _Rules(world)
-        needed = set(channels).union(*(rule.test.channels() for rule in world.outcomes),
+        needed = set(read).union(*(rule.test.channels() for rule in world.outcomes),
                                      (channel for channel, _, _ in world.rewards))
         self.derived = tuple(d for d in world.derived if d.name in needed)
         self.needed = Groups.of(frozenset(needed), world)
@@ -209,8 +230,16 @@ class PitchSim(BatchEnv):
         if problems:
             raise SpecError(problems)
         channels = tuple(config.channel_of(name) for name in behaviour.input_names)
-        return cls(world_from_config(config), dict(behaviour.output.commands), config.motion,
-                   config.noise, channels, behaviour.input_names, config.action == "vote")
+        world = world_from_config(config)
+        if config.compose:
+            from flctool.envs.pitch_compose import composed_drive
+
+            drive, extra = composed_drive(behaviour, config, channels)
+            return cls(world, dict(behaviour.output.commands), config.motion, config.noise,
+                       channels, behaviour.input_names, config.action == "vote",
+                       extra_channels=extra, drive=drive)
+        return cls(world, dict(behaviour.output.commands), config.motion, config.noise,
+                   channels, behaviour.input_names, config.action == "vote")
 
     # -- the poses, from whichever engine ran last -------------------------------------------
     def _pose(self, name: str) -> FloatArray:
@@ -394,7 +423,8 @@ class _OneEpisode:
         s = self.state
         values, _ = sim.read(FLOATS, s, math.cos(s.heading), math.sin(s.heading),
                              self.noise[: sim.columns])
-        self.obs: FloatArray = np.array(values, dtype=np.float64)
+        self.readings = values
+        self.obs: FloatArray = np.array(values[: sim.n_observations], dtype=np.float64)
 
     def step(self, action: float) -> tuple[FloatArray, float, bool, bool]:
         if self.terminated or self.truncated:
@@ -402,7 +432,7 @@ class _OneEpisode:
         if action != action:
             raise EnvError("the action is NaN", hint="check the controller's output")
         sim, world = self.sim, self.sim.world
-        mean, std = sim.drive.one(action)
+        mean, std = sim.drive.one(action, self.readings)
         columns = sim.columns
         row = columns * min(self.t + 1, sim.max_steps)
         z = self.noise[row : row + columns]
@@ -417,7 +447,9 @@ class _OneEpisode:
         if world.rewards:
             reward = reward + float(sim.rules.shaping(true))
         self.terminated, self.truncated = code > 0, timeout
-        self.obs = obs = np.array(readings, dtype=np.float64)  # returned, kept, never mutated
+        self.readings = readings
+        # returned, kept, never mutated
+        self.obs = obs = np.array(readings[: sim.n_observations], dtype=np.float64)
         return obs, reward, code > 0, timeout
 
     def success(self) -> BoolArray:
@@ -447,7 +479,8 @@ class _Batch:
         s = self.state
         values, _ = sim.read(ARRAYS, s, ARRAYS.cos(s.heading), ARRAYS.sin(s.heading),
                              self.noise[:, 0])
-        self.obs = _stack(values, batch)
+        self.readings = values
+        self.obs = _stack(values[: sim.n_observations], batch)
 
     def step(self, actions: FloatArray) -> Step:
         if np.isnan(actions).any():
@@ -456,7 +489,7 @@ class _Batch:
         active = ~(self.terminated | self.truncated)
         rows = np.minimum(self.t + 1, sim.max_steps)
         z = self.noise[np.arange(batch), rows]  # (B, columns)
-        mean, std = sim.drive.batch(actions)
+        mean, std = sim.drive.batch(actions, self.readings)
         before = self.state
         s = before.copy()
         cos_h, sin_h = advance(ARRAYS, world, s, mean, std, [z[:, 0], z[:, 1], z[:, 2]])
@@ -472,7 +505,11 @@ class _Batch:
         s.held = [np.where(active, a, b) for a, b in zip(s.held, before.held, strict=True)]
         self.state = s
         self.t = self.t + active
-        self.obs = np.where(active[:, None], _stack(values, batch), self.obs)
+        if sim.drive.reads:
+            self.readings = [np.where(active, new, old)
+                             for new, old in zip(values, self.readings, strict=True)]
+        self.obs = np.where(active[:, None], _stack(values[: sim.n_observations], batch),
+                            self.obs)
         ended = code > 0
         timeout = active & ~ended & (self.t >= sim.max_steps)
         success = np.asarray(sim.rules.successes)[code] & ended

@@ -15,6 +15,7 @@ from pydantic import AfterValidator, Field, ValidationInfo, field_validator, mod
 from flctool.errors import FlcError, PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.base import Name, Section
+from flctool.spec.compose import MAX_PARTS
 from flctool.spec.pitch_vocabulary import (
     BallVelocity,
     DerivedChannel,
@@ -496,6 +497,10 @@ class PitchConfig(AdapterConfig):
         "distance, offset, angle, velocity)"))
     rewards: list[StepReward] = Field(default_factory=list, max_length=16, description=(
         "rewards given after every step: scale times a channel's true value"))
+    compose: dict[Name, str | dict[str, Any]] = Field(
+        default_factory=dict, max_length=MAX_PARTS, description=(
+            "a composed behaviour: each output command -> the behaviour (file, relative to "
+            "this one) that runs while the command is chosen; loading inlines the parts"))
     sensors: dict[Name, str] = Field(default_factory=dict, description=(
         "behaviour input name -> channel it reads; an input not listed reads the channel of "
         "its own name"))
@@ -565,6 +570,8 @@ class PitchConfig(AdapterConfig):
         problems += vocabulary_problems(self.points, self.channels, PITCH_CHANNELS,
                                         self.outcomes, self.rewards, self.start.ball_velocity,
                                         len(self.opponents))
+        if self.compose:
+            problems += self._compose_problems(commands)
         if self.start.ball_velocity is not None and not self.ball.movable:
             problems.append(Problem(("environment", "start", "ball_velocity"),
                                     "the ball is not movable (ball.movable: false)",
@@ -578,7 +585,41 @@ class PitchConfig(AdapterConfig):
             problems.append(Problem(("environment", "outcomes"), "no outcome is a success",
                                     "mark the outcome the behaviour aims at with success: true"))
         return problems + self._start_problems() + command_table_problems(
-            self.motion, self.noise, commands)
+            self.motion, self.noise, self.walked_commands(commands))
+
+    def _compose_problems(self, commands: tuple[str, ...]) -> list[Problem]:
+        """Each command names a part, each part is a command; the parts' commands walk."""
+        where = ("environment", "compose")
+        problems = [Problem((*where,), f"the command '{name}' has no part", "give every "
+                            f"output command a behaviour: '{name}: {name}.yaml'")
+                    for name in commands if name not in self.compose]
+        problems += [Problem((*where, name), f"'{name}' is not an output command."
+                             f"{did_you_mean(name, commands)}", "name one output command per "
+                             "part") for name in self.compose if name not in commands]
+        for name, part in self.compose.items():
+            inputs = part.get("inputs") if isinstance(part, dict) else None
+            part_env = part.get("environment") if isinstance(part, dict) else None
+            sensors = part_env.get("sensors") if isinstance(part_env, dict) else None
+            sensors = sensors if isinstance(sensors, dict) else {}
+            for input_name in inputs if isinstance(inputs, dict) else ():
+                channel = sensors.get(input_name, input_name)
+                if channel not in self.known_channels:
+                    problems.append(Problem(
+                        (*where, name), f"the part's input '{input_name}' reads '{channel}', "
+                        "which this world does not have", "declare it under "
+                        "environment.channels here: the parts read the composing world"))
+        return problems
+
+    def walked_commands(self, commands: tuple[str, ...]) -> tuple[str, ...]:
+        """The commands the robot executes: the output's, or for a composition its parts'."""
+        if not self.compose:
+            return commands
+        walked: dict[str, None] = {}
+        for part in self.compose.values():
+            output = part.get("output") if isinstance(part, dict) else None
+            table = output.get("commands") if isinstance(output, dict) else None
+            walked.update(dict.fromkeys(table if isinstance(table, dict) else ()))
+        return tuple(walked)
 
     def _start_problems(self) -> list[Problem]:
         """Start boxes that reach off the pitch, or leave no room for a ball ahead."""

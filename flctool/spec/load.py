@@ -24,6 +24,8 @@ from flctool.spec.checks import (
     limit_problems,
     rule_path,
 )
+from flctool.spec.compose import inline_parts
+from flctool.spec.dump import behaviour_to_data
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import foreign_key_message
 from flctool.spec.located import attach_source
@@ -71,6 +73,8 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None,
     if version_problem is not None:  # other errors in a file of another version are noise
         raise SpecError([version_problem], source.file)
     data, source, problems = expand_dont_care(data, source)  # rules leaving out inputs
+    data, part_problems = inline_parts(data, source, load_behaviour, behaviour_to_data)
+    problems += part_problems
     # Numbers first: pydantic would quietly turn `true` into 1 and "1.5" into 1.5.
     problems += _number_problems(data, source)
     semantic: list[Problem] = []
