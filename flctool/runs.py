@@ -53,6 +53,7 @@ from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
     Behaviour,
     behaviour_to_yaml,
@@ -249,7 +250,7 @@ class Run:
             checkpoint = read_checkpoint(data, Expected(
                 behaviour.rule_count, len(behaviour.output.commands), generation=generation,
                 max_population=behaviour.learning.population, strengths=strengths,
-                metrics=True))
+                metrics=True, set_genes=set_gene_count(behaviour)))
         except LearnError as error:
             raise self._damaged(generation, error.args[0]) from None
         return data, checkpoint
@@ -354,7 +355,9 @@ class Run:
                               hint="pick an individual in that range")
         provenance = _provenance(self, generation, individual, float(fitness[individual]),
                                  None)
-        return with_rules(self.behaviour, population[individual]), provenance
+        genes = None if checkpoint.set_genes is None else checkpoint.set_genes[individual]
+        return with_rules(with_set_genes(self.behaviour, genes), population[individual]), \
+            provenance
 
     def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
@@ -362,7 +365,8 @@ class Run:
         candidate = selection.best if selection is not None else None
         if candidate is None:
             return None
-        behaviour = with_rules(self.behaviour, candidate.consequents)
+        behaviour = with_rules(with_set_genes(self.behaviour, candidate.sets),
+                               candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
                                       candidate.fitness, validation)
@@ -541,7 +545,8 @@ class RunRecorder(Callback):
             generation, individual, consequents, fitness, candidate = learner.selected()
             validation = (candidate.validation.to_dict()
                           if candidate is not None and candidate.validation else None)
-            self._write_best(with_rules(run.behaviour, consequents),
+            learned = with_set_genes(run.behaviour, learner.selected_sets())
+            self._write_best(with_rules(learned, consequents),
                              _provenance(run, generation, individual, fitness, validation))
             run.write_info("running", self.best, learner.selection_record())
         return True
