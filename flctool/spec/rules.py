@@ -23,7 +23,7 @@ from typing import Any, SupportsInt
 from flctool.errors import FlcError, PathPart, Problem
 from flctool.spec.checks import MAX_RULES
 from flctool.spec.models import Behaviour, Rule
-from flctool.spec.yaml_source import SourceMap
+from flctool.spec.yaml_source import Mark, SourceMap
 
 
 def expand_dont_care(data: Any, source: SourceMap) -> tuple[Any, SourceMap, list[Problem]]:
@@ -110,7 +110,7 @@ def _renumbered(source: SourceMap, origin: list[int]) -> SourceMap:
              if not (len(path) >= 2 and path[0] == "rules")}
     raw = {path: text for path, text in source.raw.items()
            if not (len(path) >= 2 and path[0] == "rules")}
-    by_rule: dict[int, list[tuple[tuple[PathPart, ...], tuple[int, int]]]] = {}
+    by_rule: dict[int, list[tuple[tuple[PathPart, ...], Mark]]] = {}
     for path, mark in source.marks.items():
         if len(path) >= 2 and path[0] == "rules" and isinstance(path[1], int):
             by_rule.setdefault(path[1], []).append((path[2:], mark))

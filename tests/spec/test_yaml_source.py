@@ -101,7 +101,7 @@ def test_a_large_file_reads_like_a_small_one() -> None:
     assert len(body) > yaml_source._LIBYAML_FROM  # read by libyaml, where installed
     data, source = read_yaml(body, "big.yaml")
     assert data["k2999"] == [2999, "yes", 10, "1:00", None, True, 16]
-    assert source.marks[("k2999", 1)] == (3000, 15)
+    assert source.locate(("k2999", 1)) == (3000, 15)
     for bad, message in (("x: " + "[" * 100 + "]" * 100, f"nested more than {MAX_DEPTH} deep"),
                          ("x: &a [1, *a]", "refers to the list or map that contains it"),
                          ("x: !!int abc", "'abc' is not an integer")):
