@@ -118,7 +118,12 @@ def _renumbered(source: SourceMap, origin: list[int]) -> SourceMap:
         for rest, mark in by_rule.get(index, []):
             renumbered: tuple[PathPart, ...] = ("rules", k, *rest)
             marks[renumbered] = mark
-    return SourceMap(source.file, marks, raw, source.parsed, source.overrides)
+    items = dict(source.items)
+    rule_items = items.pop(("rules",), None)
+    for k, index in enumerate(origin):
+        if rule_items is not None and index < len(rule_items):
+            marks[("rules", k)] = rule_items[index]
+    return SourceMap(source.file, marks, raw, source.parsed, source.overrides, items)
 
 
 def with_rules(behaviour: Behaviour, consequents: Iterable[SupportsInt]) -> Behaviour:

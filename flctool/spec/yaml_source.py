@@ -12,7 +12,8 @@ import copy
 import functools
 import re
 import sys
-from collections.abc import Mapping
+from array import array
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -117,18 +118,34 @@ class SourceMap:
     #: where, e.g. ``command line (--set q.alpha)``: a problem inside one is placed there.
     overrides: dict[Path, str] = field(default_factory=dict)
 
+    #: The marks of the items of each list (by the list's path), packed, in item order: a
+    #: list of a million numbers costs 8 bytes a mark here, not a path and an entry in
+    #: :attr:`marks`.
+    items: Mapping[Path, Sequence[int]] = field(default_factory=dict)
+
     def with_overrides(self, overrides: dict[Path, str]) -> SourceMap:
         """This map with more fields given elsewhere (see :attr:`overrides`)."""
         return SourceMap(self.file, self.marks, self.raw, self.parsed,
-                         {**self.overrides, **overrides})
+                         {**self.overrides, **overrides}, self.items)
+
+    def mark(self, path: Path) -> tuple[int, int] | None:
+        """The (line, column) where the file gives ``path``, if it does."""
+        mark = self.marks.get(path)
+        if mark is not None:
+            return unpack(mark)
+        if path and isinstance(path[-1], int):
+            items = self.items.get(path[:-1])
+            if items is not None and 0 <= path[-1] < len(items):
+                return unpack(items[path[-1]])
+        return None
 
     def locate(self, path: Path) -> tuple[int | None, int | None]:
         """The position of ``path``, or of its nearest ancestor that the file has (the start
         of the file for an empty one)."""
         for end in range(len(path), -1, -1):
-            mark = self.marks.get(tuple(path[:end]))
+            mark = self.mark(tuple(path[:end]))
             if mark is not None:
-                return unpack(mark)
+                return mark
         return (1, 1) if self.parsed else (None, None)
 
     def problem(self, path: Path, message: str, hint: str = "") -> Problem:
@@ -136,7 +153,7 @@ class SourceMap:
         for given, where in self.overrides.items():
             # inside an override, or a key the file does not have that an override made
             # (``--set exploration.policy=...`` adds ``exploration`` itself)
-            made_by_it = bool(path) and given[: len(path)] == path and path not in self.marks
+            made_by_it = bool(path) and given[: len(path)] == path and self.mark(path) is None
             if path[: len(given)] == given or made_by_it:
                 return Problem(path=path, message=message, hint=hint, file=where)
         line, column = self.locate(path)
@@ -231,6 +248,13 @@ def _plain_tag(value: str) -> str:
     return _CORE.resolve(yaml.ScalarNode, value, (True, False))
 
 
+@functools.lru_cache(maxsize=4096)
+def _plain(text: str) -> Any:
+    """The value of a plain scalar without a tag: one object for each text that recurs."""
+    value = _scalar(str(text), _plain_tag(text))
+    return sys.intern(value) if isinstance(value, str) and len(value) <= _INTERNED else value
+
+
 _CORE = _CoreResolver()
 
 
@@ -258,7 +282,7 @@ class _Anchored:
     value: Any = None
     #: The field paths inside it (relative), with their marks and raw texts, so that a
     #: repetition is located like the original.
-    marks: list[tuple[Path, Mark]] = field(default_factory=list)
+    marks: list[tuple[Path, int]] = field(default_factory=list)
     raw: list[tuple[Path, str]] = field(default_factory=list)
     values: int = 0  # values it holds, itself included
     done: bool = False
@@ -275,9 +299,10 @@ class _Builder:
     (line, column) pair in the :class:`SourceMap`, and the building is a loop over the events
     with a stack of open lists and maps, so no nesting can exhaust Python's stack."""
 
-    def __init__(self, source: SourceMap, marks: dict[Path, Mark]) -> None:
+    def __init__(self, source: SourceMap, marks: dict[Path, Mark],
+                 items: dict[Path, array[int]]) -> None:
         self.source = source
-        self.marks = marks  # source.marks, which the builder fills in
+        self.marks, self.items = marks, items  # source's, which the builder fills in
         self.problems: list[Problem] = []
         self.values = 0
         self.aliased = 0  # values built again because an alias repeats them
@@ -372,7 +397,7 @@ class _Builder:
         mark = _mark(event)
         top.key, top.drop = key, False
         if key in top.value:
-            first_line = unpack(self.source.marks[key_path])[0]
+            first_line = unpack(self.marks[key_path])[0]
             self.problems.append(Problem(
                 path=key_path, message=f"duplicate key '{key}' (first given on line "
                 f"{first_line}); YAML would silently keep only the last one",
@@ -384,8 +409,13 @@ class _Builder:
         return True
 
     # -- bookkeeping ---------------------------------------------------------------------
-    def _mark(self, path: Path, mark: Mark) -> None:
-        self.marks.setdefault(path, mark)
+    def _mark(self, path: Path, mark: int) -> None:
+        top = self.stack[-1] if self.stack else None
+        if top is not None and not top.is_map and len(path) == len(top.path) + 1 \
+                and path[:-1] == top.path:
+            self.items[top.path].append(mark)  # the next item of the list being built
+        else:
+            self.marks.setdefault(path, mark)
         for anchored in self.recording:
             anchored.marks.append((path[len(anchored.path):], mark))
 
@@ -410,8 +440,7 @@ class _Builder:
             return None
         if name in self.anchors:
             raise yaml.composer.ComposerError(
-                f"found duplicate anchor {name!r}; first occurrence", None,
-                "second occurrence", event.start_mark)
+                None, None, f"found duplicate anchor {name!r}", event.start_mark)
         anchored = _Anchored(path, values=self.values)  # the count so far, until it is done
         self.anchors[name] = anchored
         return anchored
@@ -426,9 +455,10 @@ class _Builder:
             self._mark(path, mark)
         value: Any = None
         try:
-            value = _scalar(str(event.value), _tag(event, yaml.ScalarNode))
-            if isinstance(value, str) and len(value) <= _INTERNED:
-                value = sys.intern(value)  # names recur: one copy each
+            if event.tag is None and event.implicit[0]:
+                value = _plain(event.value)
+            else:
+                value = _scalar(str(event.value), _tag(event, yaml.ScalarNode))
         except _Refused as refused:
             if kept:
                 self.problems.append(self.source.problem(path, *refused.args))
@@ -462,6 +492,8 @@ class _Builder:
                     f"{'map' if is_map else 'list'}", "remove the tag"))
             value = None
         frame = _Open(is_map, value, path, kept, anchored)
+        if not is_map and kept and value is not None:
+            self.items[path] = array("q")
         if not kept or value is None:
             self.skipping += 1
         self.stack.append(frame)
@@ -488,6 +520,7 @@ class _Builder:
                 event.start_mark)
         if not anchored.done:
             if kept:
+                self._mark(path, _mark(event))
                 self.problems.append(self.source.problem(
                     path, "an alias refers to the list or map that contains it, so the value "
                     "would be infinite", "remove the alias (*name) or point it elsewhere"))
@@ -513,13 +546,14 @@ def read_yaml(text: str, file: str) -> tuple[Any, SourceMap]:
     the bounds MAX_DEPTH, MAX_VALUES, MAX_INT_DIGITS and MAX_FILE_CHARS.
     """
     marks: dict[Path, Mark] = {}
-    source = SourceMap(file, marks, parsed=True)
+    items: dict[Path, array[int]] = {}
+    source = SourceMap(file, marks, parsed=True, items=items)
     if len(text) > MAX_FILE_CHARS:
         raise SpecError([Problem((), f"the file has {len(text):,} characters, more than the "
                                  f"{MAX_FILE_CHARS:,} a behaviour file may have", file=file)],
                         file)
     parser: Any = None
-    builder = _Builder(source, marks)
+    builder = _Builder(source, marks, items)
     try:
         parser = (_CParser(text) if len(text) > _LIBYAML_FROM and _CParser is not None
                   else _Parser(text))
