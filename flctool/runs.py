@@ -47,7 +47,6 @@ from typing import Any
 
 import numpy as np
 
-from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
 from flctool.dirlock import DirectoryLock, LockHeld, is_locked
 from flctool.envs.base import BatchEnv
@@ -64,6 +63,7 @@ from flctool.spec import (
 from flctool.spec.learning import keep_keys_read_by
 from flctool.spec.located import source_of
 from flctool.spec.rules import with_rules
+from flctool.version import __version__
 
 RUN_FORMAT = 1
 BEHAVIOUR_FILE = "behaviour.yaml"
@@ -422,9 +422,11 @@ class Run:
         """Train from the last checkpoint (or from scratch) to ``learning.generations``.
 
         ``learner`` (made by :func:`~flctool.learners.make_learner` for this run's behaviour)
-        or ``env`` replace the ones built from the behaviour. The environment is closed when
-        training ends, however it ends (a robot over a link is sent ``stop``).
+        or ``env`` replace the ones built from the behaviour. An environment built here is
+        closed when training ends, however it ends (a robot over a link is sent ``stop``); a
+        given one, or a given learner's, is left to its opener.
         """
+        built = learner is None and env is None
         if learner is None:
             learner = make_learner(self.behaviour, env)
         try:
@@ -440,7 +442,8 @@ class Run:
                 train(learner, [RunRecorder(self), *callbacks])
                 return self.summary()
         finally:
-            learner.env.close()
+            if built:
+                learner.env.close()
 
     def summary(self) -> RunSummary:
         info = self.info()
@@ -589,7 +592,7 @@ class RunRecorder(Callback):
                           if candidate is not None and candidate.validation else None)
             self._write_best(with_rules(run.behaviour, consequents),
                              _provenance(run, generation, individual, fitness, validation))
-            run.write_info("running", self.best, learner.selection.record())
+            run.write_info("running", self.best, learner.selection_record())
         return True
 
     def _write_best(self, behaviour: Behaviour, provenance: dict[str, Any]) -> None:
@@ -620,7 +623,7 @@ class RunRecorder(Callback):
             # however the above ends (a full disk fails best.yaml first): never 'running'
             selection = None  # kept from run.json, unless this session recorded generations
             if learner is not None and self._recorded:
-                selection = learner.selection.record()
+                selection = learner.selection_record()
             # a run whose best.yaml could not be written is not finished: resume writes it
             self.run.write_info("finished" if finished and written else "stopped",
                                 self.best or self.run.info().get("best"), selection)
