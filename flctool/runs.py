@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import csv
 import errno
-import fcntl
 import io
 import json
 import math
@@ -50,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
+from flctool.dirlock import DirectoryLock, LockHeld, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
@@ -312,38 +312,24 @@ class Run:
         resumed while it is still training would corrupt it)."""
         path = self.path / LOCK_FILE
         _refuse_links(self.path, path)
+        lock = DirectoryLock(path)
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+            lock.acquire()
+        except LockHeld as held:
+            raise RunDirError(
+                f"{self.path} is being trained by another flctool process"
+                f"{f' (pid {held.holder})' if held.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
         except OSError as exc:
             raise _write_error(path, exc) from None
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 32).decode("ascii", "replace").strip()
-                raise RunDirError(
-                    f"{self.path} is being trained by another flctool process"
-                    f"{f' (pid {holder})' if holder.isdigit() else ''}",
-                    hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{os.getpid()}\n".encode())
             yield
         finally:
-            os.close(fd)  # closing releases the lock
+            lock.release()
 
     def is_locked(self) -> bool:
         """Whether a process (this one included) holds the run's lock now."""
-        try:
-            fd = os.open(self.path / LOCK_FILE, os.O_RDONLY | os.O_NOFOLLOW)
-        except OSError:
-            return False
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-        except BlockingIOError:
-            return True
-        finally:
-            os.close(fd)
-        return False
+        return is_locked(self.path / LOCK_FILE)
 
     def _damaged(self, generation: int, problem: str) -> RunDirError:
         path = self.checkpoint_path(generation)
@@ -611,23 +597,30 @@ class RunRecorder(Callback):
     def on_end(self) -> None:
         learner = self.learner
         finished = learner is not None and learner.finished
-        # The checkpoints are the record: a stop between a checkpoint and best.yaml (Ctrl-C,
-        # an error) still leaves best.yaml and run.json naming the last checkpoint's best.
-        if self.run.checkpoint_generations():
-            try:
-                behaviour, provenance = self.run.behaviour_for()
-            except FlcError:
-                pass  # a damaged checkpoint: report what the run knew, not a second error
-            else:
-                if provenance != self.best:
-                    self._write_best(behaviour, provenance)
-        selection = None  # kept from run.json, unless this session recorded generations
-        if learner is not None and self._recorded:
-            selection = learner.selection_record()
-        if self._unsynced is not None:
-            _fsync(self._unsynced)  # the last checkpoint (see the policy above)
-        self.run.write_info("finished" if finished else "stopped",
-                            self.best or self.run.info().get("best"), selection)
+        written = False  # whether best.yaml and the last checkpoint are on disk
+        try:
+            # The checkpoints are the record: a stop between a checkpoint and best.yaml
+            # (Ctrl-C, an error) still leaves best.yaml and run.json naming the last
+            # checkpoint's best.
+            if self.run.checkpoint_generations():
+                try:
+                    behaviour, provenance = self.run.behaviour_for()
+                except FlcError:
+                    pass  # a damaged checkpoint: report what the run knew, not a second error
+                else:
+                    if provenance != self.best:
+                        self._write_best(behaviour, provenance)
+            if self._unsynced is not None:
+                _fsync(self._unsynced)  # the last checkpoint (see the policy above)
+            written = True
+        finally:
+            # however the above ends (a full disk fails best.yaml first): never 'running'
+            selection = None  # kept from run.json, unless this session recorded generations
+            if learner is not None and self._recorded:
+                selection = learner.selection_record()
+            # a run whose best.yaml could not be written is not finished: resume writes it
+            self.run.write_info("finished" if finished and written else "stopped",
+                                self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------
