@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
+from flctool.spec.set_learning import set_learning_problems
 
 if TYPE_CHECKING:
     from flctool.spec.models import Behaviour, InputVariable, Rule
@@ -73,8 +74,9 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
                               behaviour.learning.population, behaviour.learning.trials,
                               behaviour.learning.generations,
                               getattr(behaviour.environment, "max_steps", None))
-    for name, variable in behaviour.inputs.items():
-        problems += check_input(name, variable)
+    sets_problems = [p for name, variable in behaviour.inputs.items()
+                     for p in check_input(name, variable)]
+    problems += sets_problems
     if behaviour.output.name in behaviour.inputs:
         problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
                                 ", like an input", "give the output a name of its own"))
@@ -84,6 +86,8 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
     if isinstance(environment, AdapterConfig):
         problems += environment.fit_problems(behaviour.input_names,
                                              tuple(behaviour.output.commands))
+    if not sets_problems:  # learning the sets starts from valid ones
+        problems += set_learning_problems(behaviour)
     return problems
 
 
@@ -195,6 +199,8 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
     """Rule references against ``inputs`` (input name -> its set names) and ``commands``."""
     problems: list[Problem] = []
     seen: dict[tuple[str, ...], int] = {}
+    known = {name: frozenset(sets) for name, sets in inputs.items()}  # O(1) look-ups
+    commands_known = frozenset(commands)
     for index, rule in rules:
         if len(problems) >= MAX_RULE_PROBLEMS:  # a whole broken table need not be listed
             problems.append(rule_problem(
@@ -211,7 +217,7 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
                     (*path, "if", input_name), f"rule names an unknown input '{input_name}'."
                     f"{did_you_mean(input_name, tuple(inputs))}",
                     f"use one of the inputs: {', '.join(inputs)}"))
-            elif set_name not in inputs[input_name]:
+            elif set_name not in known[input_name]:
                 complete = False
                 sets = tuple(inputs[input_name])
                 problems.append(Problem(
@@ -223,7 +229,7 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
             problems.append(Problem(
                 (*path, "if"), f"rule gives no set for input(s) {', '.join(missing)}",
                 "name every input once in each rule (the rule grid is complete, eq. 1)"))
-        if rule.then not in commands:
+        if rule.then not in commands_known:
             problems.append(Problem(
                 (*path, "then"), f"unknown command '{rule.then}'."
                 f"{did_you_mean(rule.then, tuple(commands))}",

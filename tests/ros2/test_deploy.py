@@ -166,6 +166,7 @@ def test_the_node_stops_within_the_watchdog_bound_and_recovers() -> None:
     assert node.stop_times  # run publishes stop as it leaves
 
 
+@pytest.mark.slow
 def test_flctool_run_drives_the_served_robot_to_the_evaluate_success_rate(tmp_path: Any) -> None:
     """`flctool run --ros2` over the reference robot succeeds as often as `flctool evaluate`
     says (within its 95 % interval)."""
@@ -189,6 +190,7 @@ def test_flctool_run_drives_the_served_robot_to_the_evaluate_success_rate(tmp_pa
     assert "stop published; leaving" in result.stderr
 
 
+@pytest.mark.slow
 def test_flctool_run_stops_when_the_robot_dies_and_publishes_stop_on_ctrl_c(
         tmp_path: Any) -> None:
     controller = tmp_path / "controller.yaml"

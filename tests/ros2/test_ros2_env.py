@@ -154,6 +154,7 @@ def _records(path: Path) -> tuple[list[str], Any]:
             load_behaviour(path / "best.yaml").rules)
 
 
+@pytest.mark.slow
 def test_learning_survives_the_robot_killed_mid_run_and_resumes_to_the_same_run(
         tmp_path: Path) -> None:
     """The robot node killed during learning: a clear error and exit 1, the checkpoints
