@@ -26,10 +26,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
-from flctool.compile.membership import trapezoid
+from flctool.compile.membership import memberships
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
 from flctool.runs import Run
 from flctool.spec import Behaviour
+from flctool.spec.shapes import set_row
 
 FloatArray = NDArray[np.float64]
 FORMATS = ("png", "svg")
@@ -231,9 +232,12 @@ def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
         variable = behaviour.inputs[name]
         low, high = variable.range
         for set_name, quad in variable.sets.items():
-            # the membership is linear between the corners: drawn through them
-            xs = np.clip(np.array(quad, dtype=np.float64), low, high)
-            axes.plot(xs, trapezoid(xs, np.array([quad], dtype=np.float64))[:, 0],
+            code, row = set_row(quad)
+            # a trapezoid is linear between its corners: drawn through them; another shape
+            # through 400 points of the range
+            xs = (np.clip(np.array(row, dtype=np.float64), low, high) if code == 0
+                  else np.linspace(low, high, 400))
+            axes.plot(xs, memberships(xs, np.array([row], dtype=np.float64), [code])[:, 0],
                       label=set_name)
         axes.set_xlim(low, high)
         axes.set_ylim(-0.05, 1.1)

@@ -84,6 +84,7 @@ def show(file: ControllerArgument) -> None:
     from rich.table import Table
 
     from flctool.spec import load_behaviour
+    from flctool.spec.shapes import is_trapezoid
 
     with user_errors():
         behaviour = load_behaviour(controller_file(file))
@@ -95,8 +96,11 @@ def show(file: ControllerArgument) -> None:
         unit = f" {variable.unit}" if variable.unit else ""
         span = f"[{variable.range[0]:g}, {variable.range[1]:g}]{unit}"
         for i, (set_name, quad) in enumerate(variable.sets.items()):
+            # a set of another shape: its name, then its parameters (flctool.spec.shapes)
+            cells = ([f"{v:g}" for v in quad] if is_trapezoid(quad) else
+                     [f"{quad.kind} {' '.join(f'{v:g}' for v in quad.params)}", "", "", ""])
             sets.add_row(name if i == 0 else "", span if i == 0 else "", set_name,
-                         *(f"{v:g}" for v in quad), end_section=i == len(variable.sets) - 1)
+                         *cells, end_section=i == len(variable.sets) - 1)
     console.print(sets)
     commands = Table(title=f"output '{behaviour.output.name}'", title_justify="left")
     commands.add_column("command")

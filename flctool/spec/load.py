@@ -233,6 +233,8 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     chosen = None
     if len(loc) >= 2 and loc[0] in _CHOSEN_BY and loc[1] in names(_CHOSEN_BY[loc[0]][0]):
         chosen = str(loc.pop(1))
+    if len(loc) >= 5 and loc[0] == "inputs" and loc[2] == "sets" and loc[4] in _SET_FORMS:
+        loc.pop(4)  # the form of a set (models.FuzzySet), chosen by how it is written
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
@@ -292,6 +294,8 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     return source.problem(tuple(loc), message, hint)
 
 
+#: The tags of models.FuzzySet's forms.
+_SET_FORMS = ("trapezoid", "shape")
 #: The sections whose model a key chooses among plugins: section -> (plugin kind, key).
 _CHOSEN_BY = {"environment": ("environment", "adapter"), "learning": ("learner", "learner")}
 
