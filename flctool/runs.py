@@ -50,18 +50,16 @@ import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
 from flctool.envs.base import BatchEnv
-from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
+from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
     Behaviour,
-    behaviour_from_data,
-    behaviour_to_data,
     behaviour_to_yaml,
     load_behaviour,
 )
-from flctool.spec.learning import keep_keys_read_by
-from flctool.spec.located import source_of
+from flctool.spec.overrides import Override, resolve_behaviour
 from flctool.spec.rules import with_rules
 from flctool.version import __version__
 
@@ -77,66 +75,6 @@ LOCK_FILE = "run.lock"
 #: rules = 20 million consequents, writes about 200 MB).
 MAX_CHECKPOINT_BYTES = 1 << 30
 _CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
-
-
-# -- resolving a behaviour for a run ------------------------------------------------------
-def override_path(key: str) -> tuple[str, ...]:
-    """The field path an override key names: ``q.alpha`` is ``learning.q.alpha``; keys may
-    also start with ``learning.`` or ``environment.``."""
-    path = tuple(key.split("."))
-    return path if path[0] in ("learning", "environment") else ("learning", *path)
-
-
-def override_label(where: str | Mapping[str, str], key: str) -> str:
-    """Where the override ``key`` was given: ``where`` names the place of every override
-    (``overrides (q.alpha)``), or each key's own (``command line (--set q.alpha)``)."""
-    if isinstance(where, str):
-        return f"{where} ({key})"
-    return where.get(key, f"overrides ({key})")
-
-
-def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
-                      where: str | Mapping[str, str] = "overrides") -> Behaviour:
-    """The behaviour with ``overrides`` applied and validated like the file itself.
-
-    Keys are dotted paths under ``learning:`` (``seed``, ``q.temperature``), or start with
-    ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``; one
-    about an overridden field is placed where the override was given -- ``where``, a label
-    for all of them (``"overrides"`` reads ``overrides (q.alpha)``) or one per key (the
-    command line says ``command line (--set q.alpha)``) -- and any other at its line in the
-    behaviour's file. Overriding ``learner`` drops the keys of the behaviour's learner that
-    the new one does not read; keys the overrides give must be the new learner's.
-    """
-    data = behaviour_to_data(behaviour)
-    learner = next((value for key, value in overrides.items()
-                    if override_path(key) == ("learning", "learner")), None)
-    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
-        data["learning"] = keep_keys_read_by(data["learning"], learner)
-    given = apply_overrides(data, overrides, where)
-    return behaviour_from_data(data, source_of(behaviour).with_overrides(given))
-
-
-def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any],
-                    where: str | Mapping[str, str] = "overrides",
-                    ) -> dict[tuple[PathPart, ...], str]:
-    """Set each override in ``data`` (a behaviour as data, changed in place); returns where
-    each overridden field was given, for :meth:`SourceMap.with_overrides
-    <flctool.spec.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
-    given: dict[tuple[PathPart, ...], str] = {}
-    for key, value in overrides.items():
-        path = list(override_path(key))
-        node = data
-        for depth, part in enumerate(path[:-1]):
-            child = node.setdefault(part, {})
-            if not isinstance(child, dict):
-                raise SpecError([Problem(
-                    tuple(path[: depth + 1]), f"'{'.'.join(path[: depth + 1])}' is a value, "
-                    f"not a section, so '{key}' cannot be set", "set the value itself",
-                    file=override_label(where, key))], override_label(where, key))
-            node = child
-        node[path[-1]] = value
-        given[tuple(path)] = override_label(where, key)
-    return given
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -312,7 +250,7 @@ class Run:
             checkpoint = read_checkpoint(data, Expected(
                 behaviour.rule_count, len(behaviour.output.commands), generation=generation,
                 max_population=behaviour.learning.population, strengths=strengths,
-                metrics=True))
+                metrics=True, set_genes=set_gene_count(behaviour)))
         except LearnError as error:
             raise self._damaged(generation, error.args[0]) from None
         return data, checkpoint
@@ -417,7 +355,9 @@ class Run:
                               hint="pick an individual in that range")
         provenance = _provenance(self, generation, individual, float(fitness[individual]),
                                  None)
-        return with_rules(self.behaviour, population[individual]), provenance
+        genes = None if checkpoint.set_genes is None else checkpoint.set_genes[individual]
+        return with_rules(with_set_genes(self.behaviour, genes), population[individual]), \
+            provenance
 
     def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
@@ -425,7 +365,8 @@ class Run:
         candidate = selection.best if selection is not None else None
         if candidate is None:
             return None
-        behaviour = with_rules(self.behaviour, candidate.consequents)
+        behaviour = with_rules(with_set_genes(self.behaviour, candidate.sets),
+                               candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
                                       candidate.fitness, validation)
@@ -517,8 +458,8 @@ class Run:
             raise RunDirError(f"{self.path} already has {done[-1] + 1} generations; "
                               f"--generations {generations} would not add any",
                               hint=f"give more than {done[-1] + 1}")
-        behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
-                                      {"generations": "the new generation budget"})
+        behaviour = resolve_behaviour(self.behaviour, [Override(
+            "generations", generations, "the new generation budget")])
         with self.lock():
             _write(self.path, self.path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
         self.behaviour = behaviour
@@ -604,7 +545,8 @@ class RunRecorder(Callback):
             generation, individual, consequents, fitness, candidate = learner.selected()
             validation = (candidate.validation.to_dict()
                           if candidate is not None and candidate.validation else None)
-            self._write_best(with_rules(run.behaviour, consequents),
+            learned = with_set_genes(run.behaviour, learner.selected_sets())
+            self._write_best(with_rules(learned, consequents),
                              _provenance(run, generation, individual, fitness, validation))
             run.write_info("running", self.best, learner.selection_record())
         return True

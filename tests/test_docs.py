@@ -205,6 +205,7 @@ PAGES_WITH_CODE = [p for p in PAGES if any(b.runnable() for b in extract_blocks(
 
 @pytest.mark.parametrize("page", PAGES_WITH_CODE,
                          ids=[str(p.relative_to(ROOT)) for p in PAGES_WITH_CODE])
+@pytest.mark.slow
 def test_page_code_blocks_run(page: Path, tmp_path: Path) -> None:
     """A page's blocks run in order in one folder, so a block sees what earlier ones made."""
     cwd = _workspace(tmp_path)

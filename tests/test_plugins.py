@@ -133,7 +133,7 @@ def test_with_a_plugin_installed_the_readme_runs(installed_copy: dict[str, str])
     # The part of the README's test command that a plugin once broke: its code blocks,
     # the schema check among them.
     result = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                             "tests/test_docs.py", "-k", "README"],
+                             "tests/test_docs.py", "-k", "README", "-m", "slow"],
                             cwd=ROOT, env=installed_copy, capture_output=True, text=True,
                             timeout=600)
     assert result.returncode == 0, result.stdout[-3000:]

@@ -43,11 +43,12 @@ from typer._click.utils import make_default_short_help
 from typer.core import TyperGroup
 from typer.main import get_command_from_info, get_command_name
 
-from flctool.errors import FlcError, SpecError
+from flctool.errors import FlcError, Problem, SpecError
 from flctool.version import __version__
 
 if TYPE_CHECKING:
     from flctool.spec import Behaviour
+    from flctool.spec.overrides import Override
 
 #: Exit codes, the same for every command.
 EXIT_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 1, 2, 130
@@ -380,15 +381,34 @@ def user_errors() -> Iterator[None]:
 
 
 # -- input -----------------------------------------------------------------------------------
-def command_line_labels(assignments: list[str],
-                        options: dict[str, str] | None = None) -> dict[str, str]:
-    """Where each override came from, for messages: ``--set key=value`` gives
-    ``command line (--set key)``; ``options`` maps keys set by an option to the option
-    (``{"seed": "--seed"}``)."""
-    labels = {key: f"command line (--set {key})"
-              for key in (text.partition("=")[0].strip() for text in assignments)}
-    labels.update({key: f"command line ({option})" for key, option in (options or {}).items()})
-    return labels
+def command_line_overrides(assignments: Sequence[str],
+                           options: Mapping[str, tuple[str, Any]] | None = None,
+                           ) -> list[Override]:
+    """The overrides a command line gives, each placed where it was given: ``--set
+    key=value`` (the value read as YAML, or kept as text if it is not YAML) is at
+    ``command line (--set key)``; ``options`` maps a key an option sets to the option and its
+    value (``{"seed": ("--seed", 3)}``), at ``command line (--seed)``; None values are left
+    out."""
+    import yaml
+
+    from flctool.spec.overrides import Override
+
+    overrides: list[Override] = []
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SpecError([Problem(("--set",), f"'{text}' is not key=value",
+                                     "write e.g. --set q.temperature=0.2", file="command line")],
+                            "command line")
+        try:
+            parsed = yaml.safe_load(value) if value.strip() else ""
+        except yaml.YAMLError:  # not YAML: the text itself
+            parsed = value
+        overrides.append(Override(key, parsed, f"command line (--set {key})"))
+    overrides += [Override(key, value, f"command line ({option})")
+                  for key, (option, value) in (options or {}).items() if value is not None]
+    return overrides
 
 
 def controller_file(path: Path) -> Path:

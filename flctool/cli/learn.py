@@ -11,7 +11,7 @@ import typer
 
 from flctool.cli.app import (
     app,
-    command_line_labels,
+    command_line_overrides,
     console,
     err_console,
     escape,
@@ -25,6 +25,7 @@ from flctool.plugins import names
 
 if TYPE_CHECKING:
     from flctool.runs import RunSummary
+    from flctool.spec.overrides import Override
     from flctool.training import Training
 
 
@@ -61,29 +62,25 @@ def learn(
 
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
-    from flctool.training import parse_assignments, resume_run, start_run
+    from flctool.training import resume_run, start_run
 
     with user_errors():
-        overrides = parse_assignments(set_ or [])
-        options: dict[str, str] = {}
-        for key, option, value in (("learner", "--learner", learner), ("seed", "--seed", seed),
-                                   ("population", "--population", population)):
-            if value is not None:
-                overrides[key], options[key] = value, option
+        overrides = command_line_overrides(set_ or [], {
+            "learner": ("--learner", learner), "seed": ("--seed", seed),
+            "population": ("--population", population)})
         if resume is not None:
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
-            training = resume_run(resume, file, overrides, generations,
-                                  where=command_line_labels(set_ or [], options))
+            overrides, budget = _budget(overrides, generations)
+            training = resume_run(resume, file, overrides, budget)
         else:
             if file is None:
                 raise RunDirError("give a behaviour file to learn, or --resume a run directory",
                                   hint="flctool learn behaviours/ballchase.yaml")
-            if generations is not None:
-                overrides["generations"], options["generations"] = generations, "--generations"
-            training = start_run(file, overrides, out,
-                                 where=command_line_labels(set_ or [], options))
+            overrides += command_line_overrides([], {"generations": ("--generations",
+                                                                     generations)})
+            training = start_run(file, overrides, out)
         run, behaviour = training.run, training.run.behaviour
         err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
@@ -99,6 +96,19 @@ def learn(
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
+
+
+def _budget(overrides: list[Override], generations: int | None,
+            ) -> tuple[list[Override], Override | None]:
+    """A resumed run's new budget, from --generations or --set generations=N (which must
+    agree), and the other overrides."""
+    budgets = [o for o in overrides if o.path == ("learning", "generations")]
+    budgets += command_line_overrides([], {"generations": ("--generations", generations)})
+    if len({repr(o.value) for o in budgets}) > 1:
+        given = " and ".join(o.where.removeprefix("command line ") for o in budgets)
+        raise RunDirError(f"{given} ask for different budgets",
+                          hint="give the new total once")
+    return [o for o in overrides if o not in budgets], budgets[0] if budgets else None
 
 
 def resume_command(path: Path) -> str:

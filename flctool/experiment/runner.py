@@ -45,9 +45,9 @@ from flctool.runs import (
     Run,
     create_run,
     open_run,
-    resolve_behaviour,
 )
 from flctool.spec import Behaviour, load_behaviour
+from flctool.spec.overrides import resolve_behaviour
 from flctool.version import __version__
 
 EXPERIMENT_FORMAT = 1

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
+from flctool.spec.set_learning import set_learning_problems
 from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
 if TYPE_CHECKING:
@@ -74,8 +75,9 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
                               behaviour.learning.population, behaviour.learning.trials,
                               behaviour.learning.generations,
                               getattr(behaviour.environment, "max_steps", None))
-    for name, variable in behaviour.inputs.items():
-        problems += check_input(name, variable)
+    sets_problems = [p for name, variable in behaviour.inputs.items()
+                     for p in check_input(name, variable)]
+    problems += sets_problems
     if behaviour.output.name in behaviour.inputs:
         problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
                                 ", like an input", "give the output a name of its own"))
@@ -85,6 +87,8 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
     if isinstance(environment, AdapterConfig):
         problems += environment.fit_problems(behaviour.input_names,
                                              tuple(behaviour.output.commands))
+    if not sets_problems:  # learning the sets starts from valid ones
+        problems += set_learning_problems(behaviour)
     return problems
 
 

@@ -207,3 +207,11 @@ def test_coverage_holds_wherever_the_check_accepts(m1: float, s1: float, m2: flo
     xs = np.linspace(-5.0, 5.0, 20_001)[:, None]
     assert controller.memberships(xs)[0].max(axis=1).min() >= 1e-6
     assert math.isfinite(float(controller.output(xs).max()))
+
+
+def test_learning_the_sets_of_a_shaped_input_is_refused_at_the_set() -> None:
+    text = _input("      a: [0, 0, 5, 10]\n      b: {gauss: [10, 3]}\n") + (
+        "learning:\n  learner: hybrid\n  sets:\n    inputs: all\n")
+    problems = _problems(text)
+    assert any(line == 8 and path == "inputs.x.sets.b" and "only trapezoid partitions can "
+               "be learned" in message for line, path, message in problems), problems

@@ -234,6 +234,7 @@ def test_options_is_a_keyword_and_an_empty_block_is_read() -> None:
 
 @pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
                          ids=lambda s: getattr(s, "name", str(s)))
+@pytest.mark.slow
 def test_fuzzylite6_reads_the_fuzzylite_dialect(source: object, tmp_path: Path) -> None:
     """fuzzylite 6 reads --dialect fuzzylite and agrees within 1e-12 apart from its 1e-6
     tolerance, 20 % past the range's ends too."""

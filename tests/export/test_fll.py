@@ -42,6 +42,7 @@ def fuzzylite_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     return result
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("exact_fuzzylite")
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
 def test_pyfuzzylite_matches_on_10000_states(path: object) -> None:
@@ -52,6 +53,7 @@ def test_pyfuzzylite_matches_on_10000_states(path: object) -> None:
     assert np.max(np.abs(got - compile_behaviour(behaviour).output(states))) <= 1e-9
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("exact_fuzzylite")
 @pytest.mark.parametrize("seed", [3, 11, 12])
 def test_pyfuzzylite_matches_random_controllers(seed: int) -> None:
@@ -253,6 +255,7 @@ def test_an_infinite_point_inside_a_term_is_refused() -> None:
 
 @pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
                          ids=lambda s: getattr(s, "name", str(s)))
+@pytest.mark.slow
 def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
     """The fuzzylite 6 command line reads the export and agrees within 1e-12, apart from its
     1e-6 tolerance; the states include set corners and states 20 % out of range."""
