@@ -33,9 +33,9 @@ from __future__ import annotations
 
 import csv
 import errno
-import fcntl
 import io
 import json
+import math
 import os
 import re
 import time
@@ -49,10 +49,13 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
+from flctool.dirlock import DirectoryLock, LockHeld, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.learners.budget import Usage
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.rollout import Estimate
 from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
     Behaviour,
@@ -159,11 +162,51 @@ def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
 
 def _provenance(run: Run, generation: int, individual: int, fitness: float,
                 validation: Mapping[str, Any] | None) -> dict[str, Any]:
-    provenance = {"learner": run.learner, "seed": run.seed, "generation": generation,
+    return _provenance_record(run.learner, run.seed, generation, individual, fitness,
+                              validation)
+
+
+def _provenance_record(learner: str, seed: int, generation: int, individual: int,
+                       fitness: float, validation: Mapping[str, Any] | None) -> dict[str, Any]:
+    provenance = {"learner": learner, "seed": seed, "generation": generation,
                   "individual": individual, "fitness": fitness}
     if validation is not None:
         provenance["validation"] = dict(validation)
     return provenance
+
+
+@dataclass(frozen=True)
+class BestController:
+    """Where a run's best controller (``best.yaml``) came from, and what it scored."""
+
+    learner: str
+    seed: int
+    generation: int
+    individual: int
+    #: Its mean fitness over its training trials.
+    fitness: float
+    #: Its mean fitness over the run's validation episodes; None if it was not validated.
+    validation: Estimate | None = None
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> BestController:
+        """From run.json's ``best`` (:meth:`to_dict`)."""
+        validation = record.get("validation")
+
+        def number(key: str) -> float:
+            value = validation[key] if validation is not None else None
+            return math.nan if value is None else float(value)
+
+        return cls(str(record["learner"]), int(record["seed"]), int(record["generation"]),
+                   int(record["individual"]), float(record["fitness"]),
+                   None if validation is None else Estimate(
+                       number("value"), number("low"), number("high"), int(validation["n"])))
+
+    def to_dict(self) -> dict[str, Any]:
+        """As run.json records it (NaN as null)."""
+        return _provenance_record(self.learner, self.seed, self.generation, self.individual,
+                                  self.fitness, self.validation.to_dict()
+                                  if self.validation is not None else None)
 
 
 @dataclass(frozen=True)
@@ -175,19 +218,26 @@ class RunSummary:
     seed: int
     generations: int  # generations completed in the run (all sessions)
     status: str
-    best: dict[str, Any]
+    #: The run's best controller so far; None before its first generation.
+    best: BestController | None
     last: GenerationMetrics | None
     selection: dict[str, Any] | None = None  # run.json's record of model selection
 
     @property
-    def usage(self) -> dict[str, int]:
-        """Episodes and steps the run spent on training and on selection (validation)."""
-        return dict((self.selection or {}).get("usage") or {})
+    def usage(self) -> Usage | None:
+        """Episodes and steps the run spent on training and on selection (validation); None
+        if the run recorded none."""
+        recorded = (self.selection or {}).get("usage")
+        return Usage(**{name: int(recorded[name]) for name in Usage().to_dict()}) \
+            if recorded else None
 
     def to_dict(self) -> dict[str, Any]:
+        usage = self.usage
         return {"run": str(self.path), "learner": self.learner, "seed": self.seed,
-                "generations": self.generations, "status": self.status, "best": self.best,
-                "usage": self.usage, "selection": self.selection,
+                "generations": self.generations, "status": self.status,
+                "best": self.best.to_dict() if self.best is not None else {},
+                "usage": usage.to_dict() if usage is not None else {},
+                "selection": self.selection,
                 "last": self.last.row() if self.last else None,
                 "best_file": str(self.path / BEST_FILE)}
 
@@ -262,38 +312,24 @@ class Run:
         resumed while it is still training would corrupt it)."""
         path = self.path / LOCK_FILE
         _refuse_links(self.path, path)
+        lock = DirectoryLock(path)
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+            lock.acquire()
+        except LockHeld as held:
+            raise RunDirError(
+                f"{self.path} is being trained by another flctool process"
+                f"{f' (pid {held.holder})' if held.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
         except OSError as exc:
             raise _write_error(path, exc) from None
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 32).decode("ascii", "replace").strip()
-                raise RunDirError(
-                    f"{self.path} is being trained by another flctool process"
-                    f"{f' (pid {holder})' if holder.isdigit() else ''}",
-                    hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{os.getpid()}\n".encode())
             yield
         finally:
-            os.close(fd)  # closing releases the lock
+            lock.release()
 
     def is_locked(self) -> bool:
         """Whether a process (this one included) holds the run's lock now."""
-        try:
-            fd = os.open(self.path / LOCK_FILE, os.O_RDONLY | os.O_NOFOLLOW)
-        except OSError:
-            return False
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-        except BlockingIOError:
-            return True
-        finally:
-            os.close(fd)
-        return False
+        return is_locked(self.path / LOCK_FILE)
 
     def _damaged(self, generation: int, problem: str) -> RunDirError:
         path = self.checkpoint_path(generation)
@@ -406,9 +442,11 @@ class Run:
         # Only the last checkpoint is read: a summary of a long run costs one file, not all.
         last = (GenerationMetrics.from_row(self.checkpoint(done[-1])["metrics"]) if done
                 else None)
+        best = info.get("best")
         return RunSummary(self.path, self.learner, self.seed, len(done),
-                          str(info.get("status", "unknown")), dict(info.get("best") or {}),
-                          last, info.get("selection"))
+                          str(info.get("status", "unknown")),
+                          BestController.from_record(best) if best else None, last,
+                          info.get("selection"))
 
     def info(self) -> dict[str, Any]:
         """run.json; a run that says 'running' but whose lock nobody holds was killed (or
@@ -559,23 +597,30 @@ class RunRecorder(Callback):
     def on_end(self) -> None:
         learner = self.learner
         finished = learner is not None and learner.finished
-        # The checkpoints are the record: a stop between a checkpoint and best.yaml (Ctrl-C,
-        # an error) still leaves best.yaml and run.json naming the last checkpoint's best.
-        if self.run.checkpoint_generations():
-            try:
-                behaviour, provenance = self.run.behaviour_for()
-            except FlcError:
-                pass  # a damaged checkpoint: report what the run knew, not a second error
-            else:
-                if provenance != self.best:
-                    self._write_best(behaviour, provenance)
-        selection = None  # kept from run.json, unless this session recorded generations
-        if learner is not None and self._recorded:
-            selection = learner.selection_record()
-        if self._unsynced is not None:
-            _fsync(self._unsynced)  # the last checkpoint (see the policy above)
-        self.run.write_info("finished" if finished else "stopped",
-                            self.best or self.run.info().get("best"), selection)
+        written = False  # whether best.yaml and the last checkpoint are on disk
+        try:
+            # The checkpoints are the record: a stop between a checkpoint and best.yaml
+            # (Ctrl-C, an error) still leaves best.yaml and run.json naming the last
+            # checkpoint's best.
+            if self.run.checkpoint_generations():
+                try:
+                    behaviour, provenance = self.run.behaviour_for()
+                except FlcError:
+                    pass  # a damaged checkpoint: report what the run knew, not a second error
+                else:
+                    if provenance != self.best:
+                        self._write_best(behaviour, provenance)
+            if self._unsynced is not None:
+                _fsync(self._unsynced)  # the last checkpoint (see the policy above)
+            written = True
+        finally:
+            # however the above ends (a full disk fails best.yaml first): never 'running'
+            selection = None  # kept from run.json, unless this session recorded generations
+            if learner is not None and self._recorded:
+                selection = learner.selection_record()
+            # a run whose best.yaml could not be written is not finished: resume writes it
+            self.run.write_info("finished" if finished and written else "stopped",
+                                self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------

@@ -247,6 +247,8 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
     """Rule references against ``inputs`` (input name -> its set names) and ``commands``."""
     problems: list[Problem] = []
     seen: dict[tuple[str, ...], int] = {}
+    known = {name: frozenset(sets) for name, sets in inputs.items()}  # O(1) look-ups
+    commands_known = frozenset(commands)
     for index, rule in rules:
         if len(problems) >= MAX_RULE_PROBLEMS:  # a whole broken table need not be listed
             problems.append(rule_problem(
@@ -263,7 +265,7 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
                     (*path, "if", input_name), f"rule names an unknown input '{input_name}'."
                     f"{did_you_mean(input_name, tuple(inputs))}",
                     f"use one of the inputs: {', '.join(inputs)}"))
-            elif set_name not in inputs[input_name]:
+            elif set_name not in known[input_name]:
                 complete = False
                 sets = tuple(inputs[input_name])
                 problems.append(Problem(
@@ -275,7 +277,7 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
             problems.append(Problem(
                 (*path, "if"), f"rule gives no set for input(s) {', '.join(missing)}",
                 "name every input once in each rule (the rule grid is complete, eq. 1)"))
-        if rule.then not in commands:
+        if rule.then not in commands_known:
             problems.append(Problem(
                 (*path, "then"), f"unknown command '{rule.then}'."
                 f"{did_you_mean(rule.then, tuple(commands))}",

@@ -16,6 +16,7 @@ from pydantic import BaseModel, ValidationError
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.plugins import names
 from flctool.registry import did_you_mean
+from flctool.spec.bounded import no_collection
 from flctool.spec.checks import (
     RuleNamer,
     RuleProblem,
@@ -55,8 +56,9 @@ def read_behaviour_text(path: str | Path) -> str:
 
 def parse_behaviour(text: str, file: str = "<string>") -> Behaviour:
     """Validate behaviour YAML given as text (``file`` names it in messages)."""
-    data, source = read_yaml(text, file)
-    return behaviour_from_data(data, source)
+    with no_collection():  # see flctool.spec.bounded
+        data, source = read_yaml(text, file)
+        return behaviour_from_data(data, source)
 
 
 def behaviour_from_data(data: Any, source: SourceMap | None = None,
@@ -167,22 +169,46 @@ def _number_problems(data: Any, source: SourceMap) -> list[Problem]:
     (``true`` -> 1, ``"2"`` -> 2.0) without a word."""
     problems: list[Problem] = []
 
+    # The annotation of a part depends on the part and the annotation holding it (and, for a
+    # section chosen by 'adapter', on that): looked up once each, not once per value.
+    steps: dict[tuple[Any, Any], Any] = {}
+    numeric: dict[Any, bool] = {}
+
+    def step(annotation: Any, part: PathPart, container: Any) -> Any:
+        if isinstance(container, dict) and "adapter" in container:
+            return _step(annotation, part, container)
+        key = (id(annotation), part if isinstance(part, str) or _positional(annotation)
+               else int)
+        if key not in steps:
+            steps[key] = (_step(annotation, part, container), annotation)
+        return steps[key][0]
+
     def walk(value: Any, annotation: Any, path: tuple[PathPart, ...]) -> None:
         if isinstance(value, dict):
             for key, item in value.items():
-                inner = _step(annotation, key, value)
+                inner = step(annotation, key, value)
                 if inner is not None:
                     walk(item, inner, (*path, key))
         elif isinstance(value, list):
             for index, item in enumerate(value):
-                inner = _step(annotation, index, value)
+                inner = step(annotation, index, value)
                 if inner is not None:
                     walk(item, inner, (*path, index))
-        elif isinstance(value, (bool, str)) and _numeric(annotation):
-            problems.append(_not_a_number(value, source.raw.get(path), source, path))
+        elif isinstance(value, (bool, str)):
+            if id(annotation) not in numeric:
+                numeric[id(annotation)] = _numeric(annotation)
+            if numeric[id(annotation)]:
+                problems.append(_not_a_number(value, source.raw.get(path), source, path))
 
     walk(data, Behaviour, ())
     return problems
+
+
+def _positional(annotation: Any) -> bool:
+    """Whether the items of a list at ``annotation`` may differ in type by position (a
+    fixed-length tuple), so an index cannot stand for all."""
+    return any(typing.get_origin(m) is tuple and Ellipsis not in typing.get_args(m)
+               for m in _members(annotation))
 
 
 def _numeric(annotation: Any) -> bool:
