@@ -255,6 +255,8 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
     hint = ""
     # The plugin whose model read the section the error is in, if it is a chosen one.
     chosen = CHOSEN[loc[0]].chosen(data.get(loc[0])) if loc and loc[0] in CHOSEN else None
+    if len(loc) >= 5 and loc[0] == "inputs" and loc[2] == "sets" and loc[4] in _SET_FORMS:
+        loc.pop(4)  # the form of a set (models.FuzzySet), chosen by how it is written
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
@@ -312,6 +314,10 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
         if not isinstance(got, (dict, list)):
             message = f"{message[0].lower()}{message[1:]}, got {got!r}"
     return source.problem(tuple(loc), message, hint)
+
+
+#: The tags of models.FuzzySet's forms.
+_SET_FORMS = ("trapezoid", "shape")
 
 
 def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:
