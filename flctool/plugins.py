@@ -89,6 +89,7 @@ BUILTIN: dict[str, tuple[Plugin, ...]] = {
                f"{_ENVIRONMENT}:GymnasiumConfig"),
         Plugin("robot-link", "flctool.envs.robot_link:RobotLinkEnv",
                f"{_ENVIRONMENT}:RobotLinkConfig"),
+        Plugin("ros2", "flctool.envs.ros2_env:Ros2Env", "flctool.spec.ros2:Ros2Config"),
     ),
     "exporter": (
         Plugin("yaml", "flctool.export.yaml_format:YamlExporter", suffixes=(".yaml", ".yml")),
