@@ -14,7 +14,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
-from flctool.plugins import names
+from flctool.plugins import blamed, names
 from flctool.registry import did_you_mean
 from flctool.spec.bounded import no_collection
 from flctool.spec.checks import (
@@ -160,7 +160,8 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
         except ValidationError:
             return problems
         if isinstance(config, AdapterConfig):
-            problems += config.fit_problems(tuple(inputs), tuple(commands))
+            with blamed("environment", config.adapter):
+                problems += config.fit_problems(tuple(inputs), tuple(commands))
     return problems
 
 
