@@ -37,6 +37,7 @@ from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
 
 from flctool.errors import Problem, SpecError
+from flctool.inputs import not_utf8
 
 if TYPE_CHECKING:
     import numpy as np
@@ -92,8 +93,8 @@ class StateReader:
         self._line = 1  # 1-based number of the last line read
         try:
             first = stream.readline()
-        except UnicodeDecodeError as error:  # a stream that does not escape them
-            raise self._not_utf8_here(1, None) from None
+        except UnicodeDecodeError:  # a stream that does not escape them
+            raise self._not_utf8_here(1, None, 0) from None
         self._check_decoded(first, 1)
         if not first.strip():
             raise self._error(1, None, "the CSV is empty; it needs a header row naming the "
@@ -146,7 +147,7 @@ class StateReader:
                 if text and not text.endswith("\n"):
                     text += self._stream.readline()  # complete the last line
             except UnicodeDecodeError:  # a stream that does not escape them
-                raise self._not_utf8_here(self._line + 1, None) from None
+                raise self._not_utf8_here(self._line + 1, None, 0) from None
             if not text:
                 return
             self._check_decoded(text, self._line + 1)
@@ -300,10 +301,7 @@ class StateReader:
 
     def _not_utf8_here(self, line: int, column: int | None, byte: int | None = None,
                        utf16: bool = False) -> SpecError:
-        what = ("the CSV is UTF-16 text (it starts with a UTF-16 byte order mark), not UTF-8"
-                if utf16 else "the CSV is not UTF-8 text" + (
-                    f" (byte 0x{byte:02x})" if byte is not None else ""))
-        return self._error(line, column, what, "save it as UTF-8 text")
+        return not_utf8(self.file, "CSV", line, column, None if utf16 else byte)
 
     def _error(self, line: int | None, column: int | None, message: str,
                hint: str = "") -> SpecError:
