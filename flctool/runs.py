@@ -35,6 +35,7 @@ import csv
 import errno
 import io
 import json
+import math
 import os
 import re
 import time
@@ -52,7 +53,9 @@ from flctool.dirlock import DirectoryLock, LockHeld, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.learners.budget import Usage
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.rollout import Estimate
 from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
     Behaviour,
@@ -159,11 +162,51 @@ def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
 
 def _provenance(run: Run, generation: int, individual: int, fitness: float,
                 validation: Mapping[str, Any] | None) -> dict[str, Any]:
-    provenance = {"learner": run.learner, "seed": run.seed, "generation": generation,
+    return _provenance_record(run.learner, run.seed, generation, individual, fitness,
+                              validation)
+
+
+def _provenance_record(learner: str, seed: int, generation: int, individual: int,
+                       fitness: float, validation: Mapping[str, Any] | None) -> dict[str, Any]:
+    provenance = {"learner": learner, "seed": seed, "generation": generation,
                   "individual": individual, "fitness": fitness}
     if validation is not None:
         provenance["validation"] = dict(validation)
     return provenance
+
+
+@dataclass(frozen=True)
+class BestController:
+    """Where a run's best controller (``best.yaml``) came from, and what it scored."""
+
+    learner: str
+    seed: int
+    generation: int
+    individual: int
+    #: Its mean fitness over its training trials.
+    fitness: float
+    #: Its mean fitness over the run's validation episodes; None if it was not validated.
+    validation: Estimate | None = None
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> BestController:
+        """From run.json's ``best`` (:meth:`to_dict`)."""
+        validation = record.get("validation")
+
+        def number(key: str) -> float:
+            value = validation[key] if validation is not None else None
+            return math.nan if value is None else float(value)
+
+        return cls(str(record["learner"]), int(record["seed"]), int(record["generation"]),
+                   int(record["individual"]), float(record["fitness"]),
+                   None if validation is None else Estimate(
+                       number("value"), number("low"), number("high"), int(validation["n"])))
+
+    def to_dict(self) -> dict[str, Any]:
+        """As run.json records it (NaN as null)."""
+        return _provenance_record(self.learner, self.seed, self.generation, self.individual,
+                                  self.fitness, self.validation.to_dict()
+                                  if self.validation is not None else None)
 
 
 @dataclass(frozen=True)
@@ -175,19 +218,26 @@ class RunSummary:
     seed: int
     generations: int  # generations completed in the run (all sessions)
     status: str
-    best: dict[str, Any]
+    #: The run's best controller so far; None before its first generation.
+    best: BestController | None
     last: GenerationMetrics | None
     selection: dict[str, Any] | None = None  # run.json's record of model selection
 
     @property
-    def usage(self) -> dict[str, int]:
-        """Episodes and steps the run spent on training and on selection (validation)."""
-        return dict((self.selection or {}).get("usage") or {})
+    def usage(self) -> Usage | None:
+        """Episodes and steps the run spent on training and on selection (validation); None
+        if the run recorded none."""
+        recorded = (self.selection or {}).get("usage")
+        return Usage(**{name: int(recorded[name]) for name in Usage().to_dict()}) \
+            if recorded else None
 
     def to_dict(self) -> dict[str, Any]:
+        usage = self.usage
         return {"run": str(self.path), "learner": self.learner, "seed": self.seed,
-                "generations": self.generations, "status": self.status, "best": self.best,
-                "usage": self.usage, "selection": self.selection,
+                "generations": self.generations, "status": self.status,
+                "best": self.best.to_dict() if self.best is not None else {},
+                "usage": usage.to_dict() if usage is not None else {},
+                "selection": self.selection,
                 "last": self.last.row() if self.last else None,
                 "best_file": str(self.path / BEST_FILE)}
 
@@ -392,9 +442,11 @@ class Run:
         # Only the last checkpoint is read: a summary of a long run costs one file, not all.
         last = (GenerationMetrics.from_row(self.checkpoint(done[-1])["metrics"]) if done
                 else None)
+        best = info.get("best")
         return RunSummary(self.path, self.learner, self.seed, len(done),
-                          str(info.get("status", "unknown")), dict(info.get("best") or {}),
-                          last, info.get("selection"))
+                          str(info.get("status", "unknown")),
+                          BestController.from_record(best) if best else None, last,
+                          info.get("selection"))
 
     def info(self) -> dict[str, Any]:
         """run.json; a run that says 'running' but whose lock nobody holds was killed (or

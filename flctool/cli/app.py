@@ -530,6 +530,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
                    "tests and whether the paper's claims hold."),
     "export": ("flctool.cli.export_commands", "Export a controller so that it runs elsewhere, "
                "with the same outputs."),
+    "fit-sim": ("flctool.cli.bags", "Fit the simulator's motion and noise tables (per command: "
+                "forward, sideways and rotation per step, their standard deviations) to logged "
+                "commands and odometry; writes an environment: section and reports the fit."),
     "import": ("flctool.cli.export_commands", "Import a controller from FLL, FCL or FIS as a "
                "behaviour file."),
     "infer": ("flctool.cli.infer", "Run a deployable controller on states from CSV; adds the "
@@ -541,6 +544,15 @@ COMMANDS: dict[str, tuple[str, str]] = {
             "left to learn."),
     "plot": ("flctool.cli.plot", "Plot learning curves, strengths, a trajectory and the "
              "controller as PNG and SVG files."),
+    "record": ("flctool.cli.bags", "Record a learning or deployment session over ROS 2 (inputs, "
+               "commands, status, rewards, and any --topic) as an MCAP bag, until --duration or "
+               "Ctrl-C."),
+    "replay": ("flctool.cli.bags", "Run a controller over a bag's recorded inputs: at each "
+               "recorded command, its output from the latest inputs, beside the recorded one "
+               "and their difference (CSV)."),
+    "run": ("flctool.cli.run", "Deploy a controller on a robot: publish its command at the "
+            "control rate from the latest inputs, with a watchdog that publishes stop at once "
+            "on a stale, NaN or out-of-range input or a lost publisher, and again on Ctrl-C."),
     "serve": ("flctool.cli.serve", "Serve a behaviour's simulator over the robot-link "
               "protocol (docs/robot-link.md), for trying the link without a robot and as an "
               "example for bridge writers."),

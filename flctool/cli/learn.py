@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -141,17 +142,17 @@ def _report(summary: RunSummary) -> None:
         console.print(f"last generation: mean fitness {last.mean:.3f} (std {last.std:.3f}), "
                       f"best {last.best:.3f}; {last.wall_time:.2f} s of training")
     usage = summary.usage
-    if usage:
-        console.print(f"used {usage['training_episodes']} training episodes "
-                      f"({usage['training_steps']} steps) and {usage['selection_episodes']} "
-                      f"selection episodes ({usage['selection_steps']} steps)")
-    if best:
-        validation = best.get("validation")
-        score = (f"validated mean fitness {validation['value']:.3f} [{validation['low']:.3f}, "
-                 f"{validation['high']:.3f}] over {validation['n']} episodes"
-                 if validation and validation.get("low") is not None
-                 else f"fitness {best['fitness']:.3f} in training")
-        console.print(f"best controller: generation {best['generation']}, individual "
-                      f"{best['individual']}, {score} -> "
+    if usage is not None:
+        console.print(f"used {usage.training_episodes} training episodes "
+                      f"({usage.training_steps} steps) and {usage.selection_episodes} "
+                      f"selection episodes ({usage.selection_steps} steps)")
+    if best is not None:
+        validation = best.validation
+        score = (f"validated mean fitness {validation.value:.3f} [{validation.low:.3f}, "
+                 f"{validation.high:.3f}] over {validation.n} episodes"
+                 if validation is not None and not math.isnan(validation.low)
+                 else f"fitness {best.fitness:.3f} in training")
+        console.print(f"best controller: generation {best.generation}, individual "
+                      f"{best.individual}, {score} -> "
                       f"{escape(str(summary.path / 'best.yaml'))}")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

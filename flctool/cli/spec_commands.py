@@ -91,6 +91,7 @@ def show(
     from rich.table import Table
 
     from flctool.spec import load_behaviour
+    from flctool.spec.shapes import is_trapezoid
 
     with user_errors():
         behaviour = load_behaviour(controller_file(file))
@@ -106,8 +107,11 @@ def show(
         unit = f" {variable.unit}" if variable.unit else ""
         span = f"[{variable.range[0]:g}, {variable.range[1]:g}]{unit}"
         for i, (set_name, quad) in enumerate(variable.sets.items()):
+            # a set of another shape: its name, then its parameters (flctool.spec.shapes)
+            cells = ([f"{v:g}" for v in quad] if is_trapezoid(quad) else
+                     [f"{quad.kind} {' '.join(f'{v:g}' for v in quad.params)}", "", "", ""])
             sets.add_row(name if i == 0 else "", span if i == 0 else "", set_name,
-                         *(f"{v:g}" for v in quad), end_section=i == len(variable.sets) - 1)
+                         *cells, end_section=i == len(variable.sets) - 1)
     console.print(sets)
     commands = Table(title=f"output '{behaviour.output.name}'", title_justify="left")
     commands.add_column("command")
@@ -131,7 +135,8 @@ def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) ->
     the same inputs and sets (then they are not one behaviour before and after learning)."""
     from rich.table import Table
 
-    from flctool.sets.measures import movements, partition_measures
+    from flctool.sets.measures import movements, partition_measures, trapezoid_sets
+    from flctool.spec.shapes import is_trapezoid
 
     layout = {n: (v.range, tuple(v.sets)) for n, v in behaviour.inputs.items()}
     if layout != {n: (v.range, tuple(v.sets)) for n, v in reference.inputs.items()}:
@@ -150,8 +155,9 @@ def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) ->
             table.add_row(name if i == 0 else "", m.set, _quad(m.before), _quad(m.after),
                           f"{m.largest:.4g}{unit}", f"{100 * m.fraction:.1f} %",
                           end_section=i == len(rows) - 1)
-    measures = [(name, partition_measures(v.range, v.sets))
-                for name, v in behaviour.inputs.items()]
+    measures = [(name, partition_measures(v.range, trapezoid_sets(v.sets)))
+                for name, v in behaviour.inputs.items()
+                if all(is_trapezoid(s) for s in v.sets.values())]
     table.caption = "; ".join(
         f"{name}: coverage {m['coverage']:.3g}, neighbour overlap "
         + (f"{m['least_overlap']:.3g}..{m['greatest_overlap']:.3g}"

@@ -12,6 +12,7 @@ import yaml
 
 from flctool.spec.bounded import no_collection
 from flctool.spec.models import Behaviour
+from flctool.spec.shapes import SHAPES
 
 
 def behaviour_to_data(behaviour: Behaviour, *, defaults: bool = True) -> dict[str, Any]:
@@ -52,7 +53,8 @@ _Dumper.add_representer(_FlowMap, lambda d, v: d.represent_mapping(
 
 def _styled(value: Any, key: str = "") -> Any:
     if isinstance(value, dict):
-        if key == "rule":
+        if key == "rule" or (len(value) == 1 and next(iter(value)) in SHAPES):
+            # a rule, or a set of a shape: {gauss: [0.5, 0.1]}
             return _FlowMap({k: _styled(v) for k, v in value.items()})
         return {k: _styled(v, k) for k, v in value.items()}
     if isinstance(value, list):

@@ -15,7 +15,7 @@ from pydantic import BaseModel, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.inputs import read_input
-from flctool.plugins import names
+from flctool.plugins import blamed, names
 from flctool.registry import did_you_mean
 from flctool.spec.bounded import no_collection
 from flctool.spec.checks import (
@@ -155,7 +155,8 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
         except ValidationError:
             return problems
         if isinstance(config, AdapterConfig):
-            problems += config.fit_problems(tuple(inputs), tuple(commands))
+            with blamed("environment", config.adapter):
+                problems += config.fit_problems(tuple(inputs), tuple(commands))
     return problems
 
 
@@ -249,6 +250,8 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
     hint = ""
     # The plugin whose model read the section the error is in, if it is a chosen one.
     chosen = CHOSEN[loc[0]].chosen(data.get(loc[0])) if loc and loc[0] in CHOSEN else None
+    if len(loc) >= 5 and loc[0] == "inputs" and loc[2] == "sets" and loc[4] in _SET_FORMS:
+        loc.pop(4)  # the form of a set (models.FuzzySet), chosen by how it is written
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
@@ -306,6 +309,10 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
         if not isinstance(got, (dict, list)):
             message = f"{message[0].lower()}{message[1:]}, got {got!r}"
     return source.problem(tuple(loc), message, hint)
+
+
+#: The tags of models.FuzzySet's forms.
+_SET_FORMS = ("trapezoid", "shape")
 
 
 def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:

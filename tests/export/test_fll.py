@@ -119,8 +119,10 @@ def test_import_reads_the_subset() -> None:
 
 
 @pytest.mark.parametrize(("old", "new", "message"), [
-    ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1",
-     r"tiny.fll:7: a Gaussian term"),
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Cosine 0.8 0.1",
+     r"tiny.fll:7: a Cosine term"),
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1 0.5",
+     r"tiny.fll:7: the term 'high' has height 0.5"),
     ("term: up Constant 1.0", "term: up Triangle 0.0 0.5 1.0",
      r"tiny.fll:14: output term 'up' is a Triangle.*Mamdani"),
     ("rule: if x is low then u is up", "rule: if x is low or x is high then u is up",
@@ -132,7 +134,7 @@ def test_import_reads_the_subset() -> None:
     ("rule: if x is low then u is up", "rule: if x is low then u is up with 0.5",
      r"tiny.fll:19: a rule weight of 0.5"),
     ("term: low Trapezoid 0.0 0.0 0.2 0.8", "term: low Trapezoid 0.0 0.0 0.2 0.8 0.5",
-     r"tiny.fll:6: a term of height 0.5"),
+     r"tiny.fll:6: the term 'low' has height 0.5"),
     ("  defuzzifier: WeightedAverage TakagiSugeno", "  defuzzifier: Centroid 100",
      r"tiny.fll:12: defuzzifier Centroid"),
     ("RuleBlock: rules", "OutputVariable: v\nRuleBlock: rules", r"tiny.fll:15: a second output"),
