@@ -95,6 +95,21 @@ class SpecError(FlcError):
         return str(self.args[0])
 
 
+class InputFileError(SpecError):
+    """A file the user named cannot be read as text: missing, a folder, unreadable, or not
+    UTF-8 (then located at its first byte that is not). Worded by :mod:`flctool.inputs`,
+    the same for every command."""
+
+    @property
+    def problem(self) -> Problem:
+        return self.problems[0]
+
+    def __str__(self) -> str:  # one line: the file (and place) and what is wrong
+        problem = self.problem
+        fix = f" (fix: {problem.hint})" if problem.hint else ""
+        return f"{problem.location()}: {problem.message}{fix}"
+
+
 class InferenceError(FlcError):
     """Inference was asked something it cannot answer (NaN input, wrong shape)."""
 

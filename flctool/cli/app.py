@@ -43,7 +43,8 @@ from typer._click.utils import make_default_short_help
 from typer.core import TyperGroup
 from typer.main import get_command_from_info, get_command_name
 
-from flctool.errors import FlcError, Problem, SpecError
+from flctool.errors import FlcError, InputFileError, Problem, SpecError
+from flctool.inputs import no_such_file
 from flctool.version import __version__
 
 if TYPE_CHECKING:
@@ -255,6 +256,9 @@ def print_message(message: str, hint: str = "") -> None:
 
 def print_error(error: FlcError) -> None:
     """Render a flctool error for a person: one located line per problem."""
+    if isinstance(error, InputFileError):  # one line: the file and what is wrong with it
+        say(str(error), "error:", "red", err=True)
+        return
     if isinstance(error, SpecError):
         count = len(error.problems)
         say(f"{error.file or 'input'} has {count} problem{'s' if count != 1 else ''}",
@@ -423,8 +427,7 @@ def controller_file(path: Path) -> Path:
                            "one generation (flctool learn)")
         return best
     if not path.exists():
-        raise FlcError(f"{path}: no such file or directory",
-                       hint="give a behaviour file or a run directory")
+        raise no_such_file(path, "behaviour file or run directory")
     return path
 
 
@@ -440,15 +443,11 @@ def load_controller(path: Path) -> tuple[Behaviour, Path]:
 
 
 def read_user_file(path: Path, what: str) -> str:
-    """The text of a file the user named; an unreadable one is a clear error, not a traceback."""
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as error:
-        raise FlcError(f"{path}: the {what} is not UTF-8 text (byte {error.start})",
-                       hint="save it as UTF-8 text") from None
-    except OSError as error:
-        raise FlcError(f"cannot read the {what} {path}: {error.strerror}",
-                       hint="check the path") from None
+    """The text of a file the user named; an unreadable one is a clear error, not a traceback
+    (worded by :mod:`flctool.inputs`, as every command words it)."""
+    from flctool.inputs import read_input
+
+    return read_input(path, what)
 
 
 # -- output ----------------------------------------------------------------------------------
