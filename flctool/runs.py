@@ -3,7 +3,8 @@
 A run directory holds::
 
     behaviour.yaml          the resolved behaviour: the file, its seed, command-line overrides
-    run.json                learner, seed, status (running / stopped / finished), best so far,
+    run.json                learner, seed, status (running / stopped / finished /
+                            not_learned: no better than a baseline), best so far,
                             and the model-selection record: every validated candidate, the
                             episodes and steps of training and of selection, why it stopped
     metrics.csv             one row per generation: generation, mean, std, best, min fitness,
@@ -53,6 +54,7 @@ from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.learners.confirmation import Confirmed
 from flctool.spec import (
     Behaviour,
     behaviour_from_data,
@@ -66,6 +68,10 @@ from flctool.spec.rules import with_rules
 from flctool.version import __version__
 
 RUN_FORMAT = 1
+#: The status of a run that ended without a controller clearly better than the baselines.
+NOT_LEARNED = "not_learned"
+#: The statuses of a run that has run to its end (all its generations, or a budget).
+ENDED = ("finished", NOT_LEARNED)
 BEHAVIOUR_FILE = "behaviour.yaml"
 RUN_FILE = "run.json"
 METRICS_FILE = "metrics.csv"
@@ -210,22 +216,54 @@ def _append(root: Path, path: Path, text: str) -> None:
 def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
     validation = provenance.get("validation")
     measured = (f"fitness {provenance['fitness']!r} in training, validated mean fitness "
-                f"{validation['value']!r} over {validation['n']} validation episodes"
+                f"{validation['value']!r} over {validation['n']} validation episodes "
+                "(the best of the candidates on them: optimistic)"
                 if validation else f"fitness {provenance['fitness']!r}")
+    confirmation = provenance.get("confirmation")
+    confirmed = (f"Confirmed on {confirmation['episodes']} fresh episodes: "
+                 f"{confirmation_text(confirmation)}.\n" if confirmation else "")
     return (f"Learned by flctool {__version__} with the {provenance['learner']} learner "
             f"(seed {provenance['seed']}) in run {run_name}:\n"
             f"generation {provenance['generation']}, individual {provenance['individual']}, "
-            f"{measured}.\n"
+            f"{measured}.\n{confirmed}"
             "Deployable: flctool validate / evaluate / export take it as it is.")
 
 
+def confirmation_text(confirmation: Mapping[str, Any]) -> str:
+    """``mean fitness 1.90 [1.84, 1.95], success rate 0.96 [0.87, 0.99], mean return ...``:
+    a confirmation record (:meth:`~flctool.learners.confirmation.Confirmed.record`) as
+    words."""
+    parts = []
+    for key, label in (("mean_fitness", "mean fitness"), ("success_rate", "success rate"),
+                       ("mean_return", "mean return")):
+        estimate = confirmation[key]
+        if estimate["value"] is None:
+            continue
+        interval = ("" if estimate["low"] is None
+                    else f" [{estimate['low']:.3f}, {estimate['high']:.3f}]")
+        parts.append(f"{label} {estimate['value']:.3f}{interval}")
+    return ", ".join(parts)
+
+
 def _provenance(run: Run, generation: int, individual: int, fitness: float,
-                validation: Mapping[str, Any] | None) -> dict[str, Any]:
+                validation: Mapping[str, Any] | None,
+                confirmation: Mapping[str, Any] | None = None) -> dict[str, Any]:
     provenance = {"learner": run.learner, "seed": run.seed, "generation": generation,
                   "individual": individual, "fitness": fitness}
     if validation is not None:
         provenance["validation"] = dict(validation)
+    if confirmation is not None:
+        provenance["confirmation"] = dict(confirmation)
     return provenance
+
+
+def _confirmation_of(confirmations: Iterable[Confirmed], consequents: Any,
+                     ) -> dict[str, Any] | None:
+    """The record of the latest confirmation of the controller ``consequents``, if any."""
+    for confirmed in reversed(list(confirmations)):
+        if np.array_equal(confirmed.consequents, consequents):
+            return confirmed.record()
+    return None
 
 
 @dataclass(frozen=True)
@@ -415,20 +453,23 @@ class Run:
             raise RunDirError(f"{self.path}: generation {generation} has individuals "
                               f"0..{len(population) - 1}, not {individual}",
                               hint="pick an individual in that range")
+        confirmations = checkpoint.selection.confirmations if checkpoint.selection else []
         provenance = _provenance(self, generation, individual, float(fitness[individual]),
-                                 None)
+                                 None, _confirmation_of(confirmations, population[individual]))
         return with_rules(self.behaviour, population[individual]), provenance
 
     def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
         selection = self._read_checkpoint(generation)[1].selection
         candidate = selection.best if selection is not None else None
-        if candidate is None:
+        if selection is None or candidate is None:
             return None
         behaviour = with_rules(self.behaviour, candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
-                                      candidate.fitness, validation)
+                                      candidate.fitness, validation,
+                                      _confirmation_of(selection.confirmations,
+                                                       candidate.consequents))
 
     # -- training ------------------------------------------------------------------------
     def train(self, callbacks: Iterable[Callback] = (), env: BatchEnv | None = None,
@@ -602,7 +643,9 @@ class RunRecorder(Callback):
             validation = (candidate.validation.to_dict()
                           if candidate is not None and candidate.validation else None)
             self._write_best(with_rules(run.behaviour, consequents),
-                             _provenance(run, generation, individual, fitness, validation))
+                             _provenance(run, generation, individual, fitness, validation,
+                                         _confirmation_of(learner.confirmation.confirmed,
+                                                          consequents)))
             run.write_info("running", self.best, learner.selection_record())
         return True
 
@@ -629,8 +672,10 @@ class RunRecorder(Callback):
             selection = learner.selection_record()
         if self._unsynced is not None:
             _fsync(self._unsynced)  # the last checkpoint (see the policy above)
-        self.run.write_info("finished" if finished else "stopped",
-                            self.best or self.run.info().get("best"), selection)
+        status = "finished" if finished else "stopped"
+        if finished and learner is not None and learner.learned is False:
+            status = NOT_LEARNED  # no better than a baseline (flctool.learners.baselines)
+        self.run.write_info(status, self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------

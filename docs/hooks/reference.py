@@ -313,13 +313,16 @@ EQUATIONS: dict[str, str] = {
     "selection": ("an addition to the paper: which controller the run returns, chosen on "
                   "validation episodes instead of one noisy trial"),
     "selection.candidates": "an addition: the best distinct controllers kept for validation",
+    "selection.confirmation": ("an addition: fresh episodes the returned controller is confirmed "
+                               "on, the figure a run reports (seeds disjoint from all others)"),
     "selection.episodes": ("an addition: validation episodes per candidate (seeds disjoint from "
                            "training and from evaluate)"),
     "stop": "an addition: the run's budget; the paper stops after a number of generations",
     "stop.episodes": "an addition: stop after this many episodes, selection included",
     "stop.steps": "an addition: stop after this many environment steps",
     "stop.seconds": "an addition: stop after this much training time",
-    "stop.target": "an addition: stop once the validated controller reaches this fitness",
+    "stop.target": ("an addition: stop once the selected controller's confirmation on fresh "
+                    "episodes reaches this success rate, return or fitness"),
 }
 
 

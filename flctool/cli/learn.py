@@ -53,6 +53,10 @@ def learn(
     set_: Annotated[list[str] | None, typer.Option(
         "--set", help="Override a learning hyperparameter, e.g. --set q.temperature=0.2 "
         "(repeatable; keys as under 'learning:').")] = None,
+    baseline: Annotated[list[Path] | None, typer.Option(
+        "--baseline", help="A hand-made controller of the same rules that the learned one "
+        "must beat (repeatable); constant commands and random tables are always compared.")]
+    = None,
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print a JSON summary instead of text (progress stays on stderr).")]
     = False,
@@ -71,6 +75,10 @@ def learn(
             if value is not None:
                 overrides[key], options[key] = value, option
         if resume is not None:
+            if baseline:
+                raise RunDirError("--baseline is given when a run starts; a resumed run "
+                                  "compares with the baselines it started with",
+                                  hint="leave out --baseline")
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
@@ -83,7 +91,8 @@ def learn(
             if generations is not None:
                 overrides["generations"], options["generations"] = generations, "--generations"
             training = start_run(file, overrides, out,
-                                 where=command_line_labels(set_ or [], options))
+                                 where=command_line_labels(set_ or [], options),
+                                 baselines=baseline or [])
         run, behaviour = training.run, training.run.behaviour
         err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
@@ -99,6 +108,27 @@ def learn(
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
+    if summary.status == "not_learned":  # flctool.runs.NOT_LEARNED (kept lazy)
+        from flctool.learners.baselines import NOT_LEARNED_HINT
+
+        verdict = (summary.selection or {}).get("baseline") or {}
+        difference = verdict.get("difference") or {}
+        err_console.print(
+            f"[yellow]not learned:[/] the learned controller is not clearly better than the "
+            f"baseline '{escape(str(verdict.get('baseline')))}' (mean fitness "
+            f"{verdict.get('baseline_fitness', float('nan')):.3f}; difference "
+            f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
+            f"{_number(difference.get('high'))}] over the same {difference.get('n')} "
+            f"episodes)\n  try: {NOT_LEARNED_HINT}", highlight=False)
+        raise typer.Exit(NOT_LEARNED_EXIT)
+
+
+#: The exit code of a run that ended without learning (docs/cli.md).
+NOT_LEARNED_EXIT = 3
+
+
+def _number(value: object) -> str:
+    return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
 
 
 def resume_command(path: Path) -> str:
@@ -123,6 +153,8 @@ def _train(training: Training, show_progress: bool) -> RunSummary:
 
 
 def _report(summary: RunSummary) -> None:
+    from flctool.runs import confirmation_text
+
     best = summary.best
     console.print(f"[green]{summary.status}[/] {summary.learner} (seed {summary.seed}): "
                   f"{summary.generations} generations in {escape(str(summary.path))}")
@@ -133,15 +165,32 @@ def _report(summary: RunSummary) -> None:
     usage = summary.usage
     if usage:
         console.print(f"used {usage['training_episodes']} training episodes "
-                      f"({usage['training_steps']} steps) and {usage['selection_episodes']} "
-                      f"selection episodes ({usage['selection_steps']} steps)")
+                      f"({usage['training_steps']} steps), {usage['selection_episodes']} "
+                      f"selection ({usage['selection_steps']} steps), "
+                      f"{usage.get('confirmation_episodes', 0)} confirmation "
+                      f"({usage.get('confirmation_steps', 0)} steps) and "
+                      f"{usage.get('baseline_episodes', 0)} baseline episodes "
+                      f"({usage.get('baseline_steps', 0)} steps)")
     if best:
-        validation = best.get("validation")
-        score = (f"validated mean fitness {validation['value']:.3f} [{validation['low']:.3f}, "
-                 f"{validation['high']:.3f}] over {validation['n']} episodes"
-                 if validation and validation.get("low") is not None
-                 else f"fitness {best['fitness']:.3f} in training")
         console.print(f"best controller: generation {best['generation']}, individual "
-                      f"{best['individual']}, {score} -> "
-                      f"{escape(str(summary.path / 'best.yaml'))}")
+                      f"{best['individual']} -> {escape(str(summary.path / 'best.yaml'))}")
+        confirmation = best.get("confirmation")
+        if confirmation:
+            console.print(f"  confirmed on {confirmation['episodes']} fresh episodes: "
+                          f"{confirmation_text(confirmation)}")
+        validation = best.get("validation")
+        if validation and validation.get("low") is not None:
+            console.print(f"  selection's figure (the best of the candidates on the same "
+                          f"{validation['n']} episodes, so optimistic): validated mean "
+                          f"fitness {validation['value']:.3f} [{validation['low']:.3f}, "
+                          f"{validation['high']:.3f}]")
+        elif not confirmation:
+            console.print(f"  fitness {best['fitness']:.3f} in training")
+        verdict = (summary.selection or {}).get("baseline")
+        if verdict and verdict.get("learned"):
+            difference = verdict["difference"]
+            console.print(f"  learned: better than the strongest baseline, "
+                          f"'{escape(str(verdict['baseline']))}', by "
+                          f"{_number(difference['value'])} [{_number(difference['low'])}, "
+                          f"{_number(difference['high'])}] mean fitness on the same episodes")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

@@ -676,6 +676,9 @@ class PitchSim(BatchEnv):
             return np.array([self._sflags[2]])
         return np.array(self._reached)
 
+    #: What :meth:`episode_fitness` can give: 0 (a failure at once) to 2 (success at once).
+    fitness_range = (0.0, 2.0)
+
     def episode_fitness(self, returns: FloatArray, lengths: NDArray[np.int64],
                         success: BoolArray) -> FloatArray:
         """Trial fitness for the GA, (B,) each; faster success scores higher.

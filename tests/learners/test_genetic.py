@@ -39,11 +39,29 @@ def test_a_run_directory_of_an_earlier_version_resumes_bit_for_bit(name: str,
     run.train()
     resumed = run.checkpoint(3)
     expected = json.loads((EARLIER_RUNS / f"{name}-generation-3.json").read_text())
-    for key, value in expected.items():
-        if key == "selection":
-            assert {k: resumed[key][k] for k in value} == value
-        else:
-            assert resumed[key] == value, key
+    # what that version recorded; this one records more (confirmation, validated success)
+    assert_holds(resumed, expected)
+
+
+def assert_holds(actual: object, expected: object, where: str = "checkpoint") -> None:
+    """``actual`` holds ``expected``: equal, except that dicts may hold more keys and that
+    validation intervals are now clipped to the possible fitness (their mean and count are
+    the same)."""
+    if where.endswith(".validation") and isinstance(expected, list):
+        assert isinstance(actual, list)
+        expected, actual = [expected[0], expected[3]], [actual[0], actual[3]]
+    if where.endswith((".validation.low", ".validation.high")):
+        return
+    if isinstance(expected, dict):
+        assert isinstance(actual, dict), where
+        for key, value in expected.items():
+            assert_holds(actual[key], value, f"{where}.{key}")
+    elif isinstance(expected, list):
+        assert isinstance(actual, list) and len(actual) == len(expected), where
+        for i, (a, e) in enumerate(zip(actual, expected, strict=True)):
+            assert_holds(a, e, f"{where}[{i}]")
+    else:
+        assert actual == expected, where
 
 
 def test_a_warm_start_sets_the_first_generation_and_the_q_table() -> None:
