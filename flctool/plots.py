@@ -415,11 +415,8 @@ def trace_controller(behaviour: Behaviour, seed: int) -> dict[str, FloatArray] |
     from flctool.envs import make_env
     from flctool.rollout import trace_episode
 
-    env = make_env(behaviour, 1)
-    try:
+    with make_env(behaviour, 1) as env:
         rows = trace_episode(compile_behaviour(behaviour), env, seed)
-    finally:
-        env.close()
     columns = trace_columns(rows)
     return columns if all(c in columns for c in _TRACE_COLUMNS) else None
 

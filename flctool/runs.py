@@ -477,9 +477,11 @@ class Run:
         """Train from the last checkpoint (or from scratch) to ``learning.generations``.
 
         ``learner`` (made by :func:`~flctool.learners.make_learner` for this run's behaviour)
-        or ``env`` replace the ones built from the behaviour. The environment is closed when
-        training ends, however it ends (a robot over a link is sent ``stop``).
+        or ``env`` replace the ones built from the behaviour. An environment built here is
+        closed when training ends, however it ends (a robot over a link is sent ``stop``); a
+        given one, or a given learner's, is left to its opener.
         """
+        built = learner is None and env is None
         if learner is None:
             learner = make_learner(self.behaviour, env)
         try:
@@ -495,7 +497,8 @@ class Run:
                 train(learner, [RunRecorder(self), *callbacks])
                 return self.summary()
         finally:
-            learner.env.close()
+            if built:
+                learner.env.close()
 
     def summary(self) -> RunSummary:
         info = self.info()

@@ -61,7 +61,9 @@ def parse_assignments(assignments: Iterable[str]) -> dict[str, Any]:
 
 @dataclass
 class Training:
-    """A run ready to train: its directory and the learner built for it."""
+    """A run ready to train: its directory and the learner built for it, whose environment
+    this object opened and closes (after :meth:`train`, or on :meth:`close`; as a context
+    manager, when the block ends)."""
 
     run: Run
     learner: Learner
@@ -76,11 +78,20 @@ class Training:
     def train(self, callbacks: Iterable[Callback] = ()) -> RunSummary:
         """Train to the run's generation budget (see :meth:`Run.train`); the environment is
         closed when training ends, however it ends."""
-        return self.run.train(callbacks, learner=self.learner)
+        try:
+            return self.run.train(callbacks, learner=self.learner)
+        finally:
+            self.close()
 
     def close(self) -> None:
-        """Close the environment without training (a robot is sent ``stop``)."""
+        """Close the environment (a robot is sent ``stop``); closing twice is harmless."""
         self.learner.env.close()
+
+    def __enter__(self) -> Training:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
 
 
 def start_run(behaviour: Behaviour | str | Path, overrides: Mapping[str, Any] | None = None,
@@ -102,7 +113,7 @@ def start_run(behaviour: Behaviour | str | Path, overrides: Mapping[str, Any] | 
     try:
         run = create_run(behaviour, Path(out) if out is not None else None)
     except BaseException:
-        learner.env.close()  # Run.train closes it from here on (a robot gets stop)
+        learner.env.close()  # Training closes it from here on (a robot gets stop)
         raise
     return Training(run, learner, resumed=False)
 

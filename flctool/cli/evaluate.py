@@ -111,8 +111,9 @@ def evaluate_command(
             controller.output(controller.ranges[:, 0][None, :])
         total = len(listed) if listed is not None else (episodes or DEFAULT_EPISODES)
         success = defines_success(behaviour)
-        env = make_env(behaviour, batch_size(total))  # its errors come before the progress bar
-        with Progress("episodes", total, terminal=not json_output) as progress:
+        # The environment first: its errors come before the progress bar.
+        with (make_env(behaviour, batch_size(total)) as env,
+              Progress("episodes", total, terminal=not json_output) as progress):
 
             def chunk_done(done: int, successes: int) -> None:
                 if success:
@@ -125,11 +126,8 @@ def evaluate_command(
                                             on_chunk=chunk_done)
         first_seed = int(evaluation.result.seeds[0])
         if trace is not None:
-            single = make_env(behaviour, 1)
-            try:
+            with make_env(behaviour, 1) as single:
                 rows = trace_episode(controller, single, first_seed)
-            finally:
-                single.close()
             write_output(trace, _csv(rows), "trace", force=force)
     if json_output:
         typer.echo(json.dumps(evaluation.to_dict(str(source)), indent=2))

@@ -60,5 +60,6 @@ def check_adapter(behaviour: Behaviour) -> None:
     """Build the behaviour's adapter once and close it: raises what building raises."""
     from flctool.envs import make_env
 
-    make_env(behaviour, 1).close()
+    with make_env(behaviour, 1):
+        pass
 
