@@ -295,6 +295,9 @@ EQUATIONS: dict[str, str] = {
     "elites": "GA exploration: elitism, the best copied unchanged",
     "trials": ("experiments: one trial per individual per generation; fitness is the mean of "
                "`trials` trials; fuzzy_q: population × trials episodes per generation"),
+    "restart_after": ("an addition against premature convergence: fresh individuals after "
+                      "this many generations without a better selected controller (0: never, "
+                      "as in the paper)"),
     "common_starts": ("experiments: the start states of a generation's trials (an addition: the "
                       "same for every individual when true)"),
     "q": "eq. 4-9: the fuzzy Q-learning of rule strengths",

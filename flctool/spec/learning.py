@@ -154,6 +154,9 @@ class GeneticConfig(LearningConfig):
     elites: int = Field(1, ge=0, description="best individuals copied unchanged")
     common_starts: bool = Field(False, description=(
         "every individual of a generation gets the same start states"))
+    restart_after: int = Field(0, ge=0, description=(
+        "generations without a better selected controller after which every individual but "
+        "the elites is drawn afresh (premature convergence); 0: never, as in the paper"))
 
     @field_validator("elites")
     @classmethod
@@ -189,6 +192,11 @@ class HybridConfig(GeneticConfig):
     learner: Literal["hybrid"] = Field("hybrid", description=(
         "the paper's method: the GA guided by fuzzy-Q rule strengths (the default)"))
     q: QConfig = QConfig()
+    # Measured (docs/learning.md): restarts lift the hybrid's worst seeds, whose q-guided
+    # operators can lock a population onto a poor table; they lower Pitt's.
+    restart_after: int = Field(5, ge=0, description=(
+        "generations without a better selected controller after which every individual but "
+        "the elites is drawn afresh (premature convergence); 0: never, as in the paper"))
 
 
 def learner_keys(model: type[BaseModel]) -> tuple[str, ...]:

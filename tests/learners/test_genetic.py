@@ -91,3 +91,33 @@ def test_a_warm_start_that_does_not_fit_is_refused() -> None:
     table[:, -1] = 1.0
     fuzzy.start_from(strengths=table)
     assert (fuzzy.population == fuzzy.controller.n_commands - 1).all()
+
+
+def test_a_stalled_run_restarts_all_but_its_elites_and_resumes_bit_for_bit() -> None:
+    behaviour = line_behaviour(learner="hybrid", generations=12, restart_after=2)
+    learner = make_learner(behaviour, LineEnv())
+    train(learner)
+    assert isinstance(learner, GeneticLearner) and learner.restarts >= 1
+    state = json.loads(json.dumps(learner.state_dict()))
+    assert state["restarts"]["restarts"] == learner.restarts
+    # cut after generation 4, resumed from the checkpoint: the same run
+    first = make_learner(behaviour, LineEnv())
+    from flctool.learners import Callback, GenerationMetrics
+
+    class StopAt(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            return metrics.generation < 4
+
+    train(first, [StopAt()])
+    second = make_learner(behaviour, LineEnv())
+    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
+    train(second)
+    assert second.state_dict()["population"] == state["population"]
+    assert second.state_dict()["restarts"] == state["restarts"]
+
+
+def test_without_restarts_the_paper_s_ga_is_unchanged() -> None:
+    never = make_learner(line_behaviour(learner="pitt", generations=12, restart_after=0),
+                         LineEnv())
+    train(never)
+    assert isinstance(never, GeneticLearner) and never.restarts == 0
