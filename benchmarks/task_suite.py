@@ -102,14 +102,15 @@ def run_one(task: Task, learner: str | None, seed: int) -> dict[str, Any]:
         summary = training.train()
         cpu = time.process_time() - started
         figures = held_out(summary.path / BEST_FILE, task.episodes)
-    confirmation = (summary.best or {}).get("confirmation") or {}
+    recorded = summary.to_dict()
+    confirmation = recorded["best"].get("confirmation") or {}
     fitness = confirmation.get("mean_fitness") or {}
     low, high = fitness.get("low"), fitness.get("high")
     covered = (None if low is None or high is None
                else bool(low <= figures["mean_fitness"] <= high))
     return {"task": task.name, "learner": summary.learner, "seed": seed,
-            "status": summary.status, "usage": summary.usage,
-            "episodes": int(summary.usage.get("episodes", 0)), "cpu_seconds": cpu,
+            "status": summary.status, "usage": recorded["usage"],
+            "episodes": int(recorded["usage"].get("episodes", 0)), "cpu_seconds": cpu,
             "confirmation": confirmation, "calibrated": covered, **figures}
 
 

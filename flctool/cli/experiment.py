@@ -8,7 +8,14 @@ from typing import Annotated
 
 import typer
 
-from flctool.cli.app import app, command_line_labels, console, escape, example, user_errors
+from flctool.cli.app import (
+    app,
+    command_line_overrides,
+    console,
+    escape,
+    example,
+    user_errors,
+)
 from flctool.cli.progress import Progress
 
 
@@ -56,16 +63,14 @@ def experiment(
         write_report,
     )
     from flctool.experiment.runner import JobOutcome
-    from flctool.training import parse_assignments
 
     with user_errors():
         names = parse_learners(learners)
-        overrides = parse_assignments(set_ or [])
+        overrides = command_line_overrides(set_ or [])
         runner = make_executor(executor, workers, address)
-        behaviour = read_experiment_behaviour(file, names, overrides,
-                                              command_line_labels(set_ or []))
+        behaviour = read_experiment_behaviour(file, names, overrides)
         plan = ExperimentPlan(behaviour.name, names, seeds, heldout_episodes=heldout,
-                              overrides=overrides)
+                              overrides={o.key: o.value for o in overrides})
         folder = out if out is not None else Path("experiments") / behaviour.name
         study = prepare_experiment(behaviour, plan, folder)
         with Progress("runs", len(names) * seeds, terminal=not as_json) as progress:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -11,7 +12,7 @@ import typer
 
 from flctool.cli.app import (
     app,
-    command_line_labels,
+    command_line_overrides,
     console,
     err_console,
     escape,
@@ -25,6 +26,7 @@ from flctool.plugins import names
 
 if TYPE_CHECKING:
     from flctool.runs import RunSummary
+    from flctool.spec.overrides import Override
     from flctool.training import Training
 
 
@@ -65,15 +67,12 @@ def learn(
 
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
-    from flctool.training import parse_assignments, resume_run, start_run
+    from flctool.training import resume_run, start_run
 
     with user_errors():
-        overrides = parse_assignments(set_ or [])
-        options: dict[str, str] = {}
-        for key, option, value in (("learner", "--learner", learner), ("seed", "--seed", seed),
-                                   ("population", "--population", population)):
-            if value is not None:
-                overrides[key], options[key] = value, option
+        overrides = command_line_overrides(set_ or [], {
+            "learner": ("--learner", learner), "seed": ("--seed", seed),
+            "population": ("--population", population)})
         if resume is not None:
             if baseline:
                 raise RunDirError("--baseline is given when a run starts; a resumed run "
@@ -82,17 +81,15 @@ def learn(
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
-            training = resume_run(resume, file, overrides, generations,
-                                  where=command_line_labels(set_ or [], options))
+            overrides, budget = _budget(overrides, generations)
+            training = resume_run(resume, file, overrides, budget)
         else:
             if file is None:
                 raise RunDirError("give a behaviour file to learn, or --resume a run directory",
                                   hint="flctool learn behaviours/ballchase.yaml")
-            if generations is not None:
-                overrides["generations"], options["generations"] = generations, "--generations"
-            training = start_run(file, overrides, out,
-                                 where=command_line_labels(set_ or [], options),
-                                 baselines=baseline or [])
+            overrides += command_line_overrides([], {"generations": ("--generations",
+                                                                     generations)})
+            training = start_run(file, overrides, out, baselines=baseline or [])
         run, behaviour = training.run, training.run.behaviour
         err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
@@ -131,6 +128,19 @@ def _number(value: object) -> str:
     return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
 
 
+def _budget(overrides: list[Override], generations: int | None,
+            ) -> tuple[list[Override], Override | None]:
+    """A resumed run's new budget, from --generations or --set generations=N (which must
+    agree), and the other overrides."""
+    budgets = [o for o in overrides if o.path == ("learning", "generations")]
+    budgets += command_line_overrides([], {"generations": ("--generations", generations)})
+    if len({repr(o.value) for o in budgets}) > 1:
+        given = " and ".join(o.where.removeprefix("command line ") for o in budgets)
+        raise RunDirError(f"{given} ask for different budgets",
+                          hint="give the new total once")
+    return [o for o in overrides if o not in budgets], budgets[0] if budgets else None
+
+
 def resume_command(path: Path) -> str:
     """The command line that continues the run in ``path``, ready to paste."""
     return f"flctool learn --resume {shlex.quote(str(path))}"
@@ -163,29 +173,28 @@ def _report(summary: RunSummary) -> None:
         console.print(f"last generation: mean fitness {last.mean:.3f} (std {last.std:.3f}), "
                       f"best {last.best:.3f}; {last.wall_time:.2f} s of training")
     usage = summary.usage
-    if usage:
-        console.print(f"used {usage['training_episodes']} training episodes "
-                      f"({usage['training_steps']} steps), {usage['selection_episodes']} "
-                      f"selection ({usage['selection_steps']} steps), "
-                      f"{usage.get('confirmation_episodes', 0)} confirmation "
-                      f"({usage.get('confirmation_steps', 0)} steps) and "
-                      f"{usage.get('baseline_episodes', 0)} baseline episodes "
-                      f"({usage.get('baseline_steps', 0)} steps)")
-    if best:
-        console.print(f"best controller: generation {best['generation']}, individual "
-                      f"{best['individual']} -> {escape(str(summary.path / 'best.yaml'))}")
-        confirmation = best.get("confirmation")
+    if usage is not None:
+        console.print(f"used {usage.training_episodes} training episodes "
+                      f"({usage.training_steps} steps), {usage.selection_episodes} selection "
+                      f"({usage.selection_steps} steps), {usage.confirmation_episodes} "
+                      f"confirmation ({usage.confirmation_steps} steps) and "
+                      f"{usage.baseline_episodes} baseline episodes "
+                      f"({usage.baseline_steps} steps)")
+    if best is not None:
+        console.print(f"best controller: generation {best.generation}, individual "
+                      f"{best.individual} -> {escape(str(summary.path / 'best.yaml'))}")
+        confirmation = best.confirmation
         if confirmation:
             console.print(f"  confirmed on {confirmation['episodes']} fresh episodes: "
                           f"{confirmation_text(confirmation)}")
-        validation = best.get("validation")
-        if validation and validation.get("low") is not None:
+        validation = best.validation
+        if validation is not None and not math.isnan(validation.low):
             console.print(f"  selection's figure (the best of the candidates on the same "
-                          f"{validation['n']} episodes, so optimistic): validated mean "
-                          f"fitness {validation['value']:.3f} [{validation['low']:.3f}, "
-                          f"{validation['high']:.3f}]")
+                          f"{validation.n} episodes, so optimistic): validated mean "
+                          f"fitness {validation.value:.3f} [{validation.low:.3f}, "
+                          f"{validation.high:.3f}]")
         elif not confirmation:
-            console.print(f"  fitness {best['fitness']:.3f} in training")
+            console.print(f"  fitness {best.fitness:.3f} in training")
         verdict = (summary.selection or {}).get("baseline")
         if verdict and verdict.get("learned"):
             difference = verdict["difference"]

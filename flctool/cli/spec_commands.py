@@ -78,15 +78,27 @@ def validate_file(path: Path) -> FileReport:
 
 
 @app.command(epilog=example("flctool show behaviours/ballchase-handmade.yaml",
-                            "flctool show runs/first"))
-def show(file: ControllerArgument) -> None:
+                            "flctool show runs/first",
+                            "flctool show runs/first --compare behaviours/pendulum.yaml"))
+def show(
+    file: ControllerArgument,
+    compare: Annotated[Path | None, typer.Option(
+        "--compare", metavar="FILE", help=(
+            "List how far each set moved from this behaviour's (e.g. the file a run learned "
+            "the sets of), with the partitions' coverage and neighbour overlap."))] = None,
+) -> None:
     """Show a behaviour: its inputs and sets, M and K, and the rule table."""
     from rich.table import Table
 
     from flctool.spec import load_behaviour
+    from flctool.spec.shapes import is_trapezoid
 
     with user_errors():
         behaviour = load_behaviour(controller_file(file))
+        reference = None if compare is None else load_behaviour(controller_file(compare))
+        if reference is not None:
+            console.print(_set_movements(reference, behaviour, compare or Path()))
+            return
     console.print(f"[bold]{escape(behaviour.name)}[/]  {escape(behaviour.description)}")
     sets = Table(title="inputs", title_justify="left")
     for column in ("input", "range", "set", "pa", "pb", "pc", "pd"):
@@ -95,8 +107,11 @@ def show(file: ControllerArgument) -> None:
         unit = f" {variable.unit}" if variable.unit else ""
         span = f"[{variable.range[0]:g}, {variable.range[1]:g}]{unit}"
         for i, (set_name, quad) in enumerate(variable.sets.items()):
+            # a set of another shape: its name, then its parameters (flctool.spec.shapes)
+            cells = ([f"{v:g}" for v in quad] if is_trapezoid(quad) else
+                     [f"{quad.kind} {' '.join(f'{v:g}' for v in quad.params)}", "", "", ""])
             sets.add_row(name if i == 0 else "", span if i == 0 else "", set_name,
-                         *(f"{v:g}" for v in quad), end_section=i == len(variable.sets) - 1)
+                         *cells, end_section=i == len(variable.sets) - 1)
     console.print(sets)
     commands = Table(title=f"output '{behaviour.output.name}'", title_justify="left")
     commands.add_column("command")
@@ -113,6 +128,45 @@ def show(file: ControllerArgument) -> None:
         console.print(_rule_grid(behaviour))
     elif behaviour.rules:
         console.print(_rule_list(behaviour))
+
+
+def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) -> Table:
+    """Each set's movement from ``reference``'s: a :class:`FlcError` if the two do not have
+    the same inputs and sets (then they are not one behaviour before and after learning)."""
+    from rich.table import Table
+
+    from flctool.sets.measures import movements, partition_measures, trapezoid_sets
+    from flctool.spec.shapes import is_trapezoid
+
+    layout = {n: (v.range, tuple(v.sets)) for n, v in behaviour.inputs.items()}
+    if layout != {n: (v.range, tuple(v.sets)) for n, v in reference.inputs.items()}:
+        raise FlcError(
+            f"{compare} has other inputs, ranges or set names than the behaviour shown, so "
+            "its sets cannot be compared", hint="compare a learned behaviour with the file "
+            "it was learned from")
+    table = Table(title=f"sets moved from {escape(str(compare))}", title_justify="left")
+    for column in ("input", "set", "before", "after", "moved", "of range"):
+        table.add_column(column, justify="right" if column in ("moved", "of range") else "left")
+    moved = movements(reference, behaviour)
+    for name, variable in behaviour.inputs.items():
+        rows = [m for m in moved if m.input == name]
+        unit = f" {variable.unit}" if variable.unit else ""
+        for i, m in enumerate(rows):
+            table.add_row(name if i == 0 else "", m.set, _quad(m.before), _quad(m.after),
+                          f"{m.largest:.4g}{unit}", f"{100 * m.fraction:.1f} %",
+                          end_section=i == len(rows) - 1)
+    measures = [(name, partition_measures(v.range, trapezoid_sets(v.sets)))
+                for name, v in behaviour.inputs.items()
+                if all(is_trapezoid(s) for s in v.sets.values())]
+    table.caption = "; ".join(
+        f"{name}: coverage {m['coverage']:.3g}, neighbour overlap "
+        + (f"{m['least_overlap']:.3g}..{m['greatest_overlap']:.3g}"
+           if m["least_overlap"] is not None else "-") for name, m in measures)
+    return table
+
+
+def _quad(quad: tuple[float, ...]) -> str:
+    return "[" + ", ".join(f"{v:.4g}" for v in quad) + "]"
 
 
 def _rule_list(behaviour: Behaviour) -> Table:

@@ -38,7 +38,7 @@ from flctool.rollout import (
 from flctool.spec.learning import TargetConfig
 
 if TYPE_CHECKING:
-    from flctool.learners.base import GenerationResult, IntArray, Learner
+    from flctool.learners.base import FloatArray, GenerationResult, IntArray, Learner
 
 #: Index of the confirmation seeds' child in the run's SeedSequence (after ga, env, explore
 #: and validation).
@@ -74,6 +74,15 @@ class Confirmed:
     success: Estimate  # success rate, Wilson interval
     mean_return: Estimate
     episode_fitness: tuple[float, ...] = ()  # per episode, in seed order (for comparisons)
+    sets: FloatArray | None = None  # its set genome (G,) when the run learns the sets
+
+    def is_of(self, consequents: Any, sets: Any = None) -> bool:
+        """Whether this confirms the controller ``consequents (M,)`` with ``sets (G,)``."""
+        if not np.array_equal(self.consequents, consequents):
+            return False
+        if self.sets is None or sets is None:
+            return self.sets is None and sets is None
+        return bool(np.array_equal(self.sets, sets))
 
     def value_in(self, unit: str) -> float:
         """The confirmed figure in ``unit``: ``fitness``, ``success`` or ``return``."""
@@ -91,7 +100,8 @@ class Confirmed:
     def to_dict(self) -> dict[str, Any]:
         return {**self.record(), "consequents": self.consequents.tolist(),
                 "exact": [_exact(e) for e in (self.fitness, self.success, self.mean_return)],
-                "episode_fitness": list(self.episode_fitness)}
+                "episode_fitness": list(self.episode_fitness),
+                **({} if self.sets is None else {"sets": self.sets.tolist()})}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Confirmed:
@@ -99,7 +109,9 @@ class Confirmed:
                                          for v, lo, hi, n in data["exact"])
         return cls(np.array(data["consequents"], dtype=np.intp), int(data["generation"]),
                    int(data["individual"]), int(data["after"]), fitness, success,
-                   mean_return, tuple(float(v) for v in data.get("episode_fitness", ())))
+                   mean_return, tuple(float(v) for v in data.get("episode_fitness", ())),
+                   None if data.get("sets") is None else np.array(data["sets"],
+                                                                  dtype=np.float64))
 
 
 def _exact(estimate: Estimate) -> list[float | int]:
@@ -130,8 +142,9 @@ class Confirmation(RunCallback):
 
     def on_finish(self, learner: Learner) -> None:
         generation, individual, consequents, _, _ = learner.selected()
-        if self.final is None or not np.array_equal(self.final.consequents, consequents):
-            self.confirm(learner, consequents, generation, individual)
+        sets = learner.selected_sets()
+        if self.final is None or not self.final.is_of(consequents, sets):
+            self.confirm(learner, consequents, generation, individual, sets)
 
     def on_trials(self, learner: Learner, result: GenerationResult) -> None:
         del learner, result  # confirmations run when the run ends, or when a target asks
@@ -143,14 +156,16 @@ class Confirmation(RunCallback):
         if best is None or best.validation_in(target.unit) < target.value:
             return False
         final = self.final
-        if final is None or not np.array_equal(final.consequents, best.consequents):
-            final = self.confirm(learner, best.consequents, best.generation, best.individual)
+        if final is None or not final.is_of(best.consequents, best.sets):
+            final = self.confirm(learner, best.consequents, best.generation, best.individual,
+                                 best.sets)
         return final is not None and final.value_in(target.unit) >= target.value
 
     def confirm(self, learner: Learner, consequents: IntArray, generation: int,
-                individual: int) -> Confirmed | None:
-        """Run ``consequents (M,)`` on the confirmation episodes the budget leaves (None if
-        it leaves none, or confirmation is off) and record the result."""
+                individual: int, sets: FloatArray | None = None) -> Confirmed | None:
+        """Run ``consequents (M,)`` (with the set genome ``sets``, if the run learns the sets)
+        on the confirmation episodes the budget leaves (None if it leaves none, or
+        confirmation is off) and record the result."""
         count = self.episodes
         limit = self.episode_limit
         while limit is not None and count > 0 and (
@@ -158,8 +173,8 @@ class Confirmation(RunCallback):
             count -= 1
         if count <= 0:
             return None
-        env, genes = learner.env, consequents.tolist()
-        trials = [run_trial(env, learner.rules, int(seed), genes) for seed in self.seeds[:count]]
+        env, genes, rules = learner.env, consequents.tolist(), learner.rules_for(sets)
+        trials = [run_trial(env, rules, int(seed), genes) for seed in self.seeds[:count]]
         lengths = np.array([t.length for t in trials], dtype=np.int64)
         returns = np.array([t.ret for t in trials], dtype=np.float64)
         success = np.array([t.success for t in trials], dtype=np.bool_)
@@ -170,7 +185,8 @@ class Confirmation(RunCallback):
                               learner.generation,
                               clip_estimate(mean_interval(fitness), env.fitness_range),
                               wilson_interval(int(success.sum()), count),
-                              mean_interval(returns), tuple(fitness.tolist()))
+                              mean_interval(returns), tuple(fitness.tolist()),
+                              None if sets is None else np.array(sets, dtype=np.float64))
         self.confirmed.append(confirmed)
         return confirmed
 

@@ -17,7 +17,9 @@ their operators and in whether rule strengths learn during the trials:
 The genome is handled here and only here: :meth:`GeneticLearner.initial_population` makes
 the first generation (or takes the one :meth:`~flctool.learners.base.Learner.start_from`
 gave), :meth:`GeneticLearner.advance` breeds, and rules the file gives are put back after
-every operator (:meth:`~flctool.learners.base.Learner.keep_fixed`).
+every operator (:meth:`~flctool.learners.base.Learner.keep_fixed`). With ``learning.sets``
+each controller also carries a set genome (``set_genes``), bred from the same parents by the
+set operators of :mod:`flctool.learners.set_genes`, and acts with its own sets.
 
 **Restarts** answer premature convergence: when the run's selected controller (the best
 validated one; without selection, the best training fitness) has not improved for
@@ -26,7 +28,7 @@ breeding (from the ``ga`` stream; the q table is kept). A population stuck on a 
 the hybrid's operators pull every child towards the q table's favourites, which on some seeds
 are a controller that loses the ball or times out -- then gets a fresh start within the same
 budget (measured in docs/learning.md). Runs started by versions without restarts continue
-without them, so they resume bit for bit.
+without them, so they resume bit for bit. A restarted individual gets fresh set genes too.
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ from flctool.learners.ga import (
     uniform_crossover,
     uniform_mutation,
 )
+from flctool.learners.set_genes import SetOperators, initial_set_genes
 from flctool.spec.learning import GeneticConfig, HybridConfig, PittConfig, QConfig
 from flctool.spec.models import Behaviour
 
@@ -118,6 +121,12 @@ class GeneticLearner(Learner):
             self.temperature = q.temperature
         self.population = self.initial_population()
         self.fitness = np.zeros(config.population)
+        self.set_operators: SetOperators | None = None
+        if self.codec is not None and config.sets is not None:
+            self.set_operators = SetOperators(self.codec.slices, config.sets.mutation,
+                                              config.sets.sigma)
+            self.set_genes = initial_set_genes(self.rngs["ga"], config.population,
+                                               self.codec.size, config.sets.sigma)
         #: Premature-convergence restarts: enabled, best figure seen, generations since it
         #: improved, restarts made.
         self.restart_after = config.restart_after
@@ -137,23 +146,33 @@ class GeneticLearner(Learner):
     def evaluate(self, generation: int) -> GenerationResult:
         config = self.config
         seeds = self.episode_seeds(config.population, config.trials, config.common_starts)
-        self.fitness, steps = evaluate_population(self.env, self.rules, self.population, seeds,
-                                                  td=self.fuzzy_q)
+        self.fitness, steps = evaluate_population(self.env, self.population_rules(),
+                                                  self.population, seeds, td=self.fuzzy_q)
         return GenerationResult(self.fitness, seeds.size, steps)
 
     def advance(self) -> None:
         stalled = self._stalled()
         crossover, mutation = self.operator_set.operators(self)
-        # Given rules are fixed: whatever crossover and mutation did to them is undone.
-        population = self.ga.breed(self.rngs["ga"], self.population, self.fitness, crossover,
-                                   mutation)
+        population, self.set_genes = self.ga.breed_genomes(
+            self.rngs["ga"], self.population, self.fitness, crossover, mutation,
+            self.set_genes, self.set_operators)
         if stalled:
-            keep = min(self.elite_count(), population.shape[0] - 1)
-            population[keep:] = random_population(
-                self.rngs["ga"], population.shape[0] - keep, self.controller.n_rules,
-                self.controller.n_commands)
-            self.restarts += 1
+            self._restart(population)
+        # Given rules are fixed: whatever crossover and mutation did to them is undone.
         self.population = self.keep_fixed(population)
+
+    def _restart(self, population: IntArray) -> None:
+        """Redraw every individual of ``population`` (P, M) but the elites, in place (and
+        their set genes)."""
+        keep = min(self.elite_count(), population.shape[0] - 1)
+        fresh = population.shape[0] - keep
+        population[keep:] = random_population(self.rngs["ga"], fresh, self.controller.n_rules,
+                                              self.controller.n_commands)
+        config = self.config
+        if self.set_genes is not None and self.codec is not None and config.sets is not None:
+            self.set_genes[keep:] = initial_set_genes(self.rngs["ga"], fresh, self.codec.size,
+                                                      config.sets.sigma)
+        self.restarts += 1
 
     def _stalled(self) -> bool:
         """Whether the run's figure has not improved for ``restart_after`` generations (then

@@ -86,7 +86,7 @@ def test_a_learned_controller_beats_the_baselines(tmp_path: Path) -> None:
     assert summary.status == "finished" and verdict["learned"]
     assert verdict["difference"]["low"] > 0
     assert set(verdict["screened"]) >= {"always turn_left", "random table 1"}
-    usage = summary.usage
+    usage = summary.to_dict()["usage"]
     assert usage["baseline_episodes"] == 10 * len(verdict["screened"]) + 40
     assert usage["episodes"] == sum(v for k, v in usage.items() if k.endswith("_episodes"))
 
