@@ -90,6 +90,8 @@ class Importer(ABC):
             raise ExportError(f"{file}:1: the file holds {len(text):,} characters, more than "
                               f"the {MAX_IMPORT_CHARS:,} an import reads",
                               hint="is it really a controller? split it or shorten it")
+        # a UTF-8 byte-order mark (Windows editors write one) is not part of the text
+        text = text.removeprefix("\ufeff")
         with no_collection():  # see flctool.spec.bounded
             return self.parse(text, file)
 
