@@ -68,7 +68,7 @@ if TYPE_CHECKING:
         ProtocolError as ProtocolError, LearnError as LearnError, RunDirError as RunDirError,
         InferenceError as InferenceError, ExportError as ExportError,
         MissingDependencyError as MissingDependencyError, UnknownNameError as UnknownNameError,
-        PluginWarning as PluginWarning,
+        PluginError as PluginError, PluginWarning as PluginWarning,
     )
 # isort: on
 

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from flctool.atomic import write_bytes_atomic
 from flctool.compile.membership import memberships
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
+from flctool.inputs import no_such_file
 from flctool.runs import Run
 from flctool.spec import Behaviour
 from flctool.spec.models import FuzzySet
@@ -482,8 +483,7 @@ def _check_exist(sources: Sequence[Path]) -> None:
                        "trace CSV")
     for source in sources:
         if not source.exists():
-            raise FlcError(f"{source}: no such file or directory",
-                           hint="give an experiment, run directories, or one trace CSV")
+            raise no_such_file(source, "experiment, run directory or trace CSV")
 
 
 def plot_sources(sources: Sequence[Path], folder: Path, rule: int | None = None

@@ -133,6 +133,10 @@ def _environment() -> dict[str, str]:
     env.update(PATH=bin_dir + os.pathsep + env.get("PATH", ""), COLUMNS="88", NO_COLOR="1",
                TERM="dumb", PYTHONHASHSEED="0", MPLBACKEND="Agg")
     env.pop("FORCE_COLOR", None)
+    # docs/ros2.md's ROS 2 graphs: on this machine, in a DDS domain of this test run's own
+    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+               ROS_DOMAIN_ID=str(20 + os.getpid() % 80))
+    env.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
     return env
 
 

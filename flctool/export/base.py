@@ -19,6 +19,7 @@ from typing import ClassVar
 
 from flctool.atomic import regular_target, replace_all, write_text_atomic
 from flctool.errors import ExportError
+from flctool.inputs import read_input
 from flctool.spec import Behaviour
 from flctool.spec.bounded import no_collection
 from flctool.version import __version__
@@ -128,13 +129,7 @@ class Importer(ABC):
 
     def _read(self, path: str | Path) -> tuple[str, str]:
         path = Path(path)
-        try:
-            with path.open(encoding="utf-8") as handle:
-                text = handle.read(MAX_IMPORT_CHARS + 1)
-        except FileNotFoundError:
-            raise ExportError(f"{path}: no such file", hint="check the path") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ExportError(f"{path}: cannot read the file: {exc}") from None
+        text = read_input(path, f"{self.format.upper()} file", MAX_IMPORT_CHARS)
         return text, str(path)
 
 

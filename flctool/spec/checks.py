@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from flctool.errors import PathPart, Problem
+from flctool.plugins import blamed
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.set_learning import set_learning_problems
@@ -85,8 +86,9 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
                             behaviour.output.commands, enumerate(behaviour.rules))
     environment = behaviour.environment
     if isinstance(environment, AdapterConfig):
-        problems += environment.fit_problems(behaviour.input_names,
-                                             tuple(behaviour.output.commands))
+        with blamed("environment", environment.adapter):
+            problems += environment.fit_problems(behaviour.input_names,
+                                                 tuple(behaviour.output.commands))
     if not sets_problems:  # learning the sets starts from valid ones
         problems += set_learning_problems(behaviour)
     return problems

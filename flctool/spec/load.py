@@ -14,7 +14,8 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
-from flctool.plugins import names
+from flctool.inputs import read_input
+from flctool.plugins import blamed, names
 from flctool.registry import did_you_mean
 from flctool.spec.bounded import no_collection
 from flctool.spec.checks import (
@@ -33,7 +34,7 @@ from flctool.spec.located import attach_source
 from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
 from flctool.spec.rules import expand_dont_care
 from flctool.spec.sections import CHOSEN, section_model
-from flctool.spec.yaml_source import SourceMap, read_yaml
+from flctool.spec.yaml_source import MAX_FILE_CHARS, SourceMap, read_yaml
 
 
 def load_behaviour(path: str | Path) -> Behaviour:
@@ -43,15 +44,9 @@ def load_behaviour(path: str | Path) -> Behaviour:
 
 def read_behaviour_text(path: str | Path) -> str:
     """The text of a behaviour file; a missing or unreadable one is a :class:`SpecError`."""
-    path = Path(path)
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpecError([Problem((), "no such file", "check the path", file=str(path))],
-                        str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SpecError([Problem((), f"cannot read the file: {exc}", file=str(path))],
-                        str(path)) from None
+    # read no further than the limit read_yaml refuses a file past (a 10 GB file costs no
+    # more than a 50 MB one)
+    return read_input(path, "behaviour file", MAX_FILE_CHARS)
 
 
 def parse_behaviour(text: str, file: str = "<string>") -> Behaviour:
@@ -160,7 +155,8 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
         except ValidationError:
             return problems
         if isinstance(config, AdapterConfig):
-            problems += config.fit_problems(tuple(inputs), tuple(commands))
+            with blamed("environment", config.adapter):
+                problems += config.fit_problems(tuple(inputs), tuple(commands))
     return problems
 
 

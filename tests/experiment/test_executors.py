@@ -26,6 +26,7 @@ def _report(tmp_path: Path, name: str, executor: Any) -> tuple[str, str]:
             (experiment.path / SUMMARY_FILE).read_text())
 
 
+@pytest.mark.slow
 def test_one_and_two_local_workers_give_identical_reports(tmp_path: Path) -> None:
     one = _report(tmp_path, "one", LocalExecutor(1))
     two = _report(tmp_path, "two", LocalExecutor(2))

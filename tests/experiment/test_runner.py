@@ -144,6 +144,7 @@ def test_a_run_killed_while_being_created_starts_over(tmp_path: Path) -> None:
     assert open_run(directory).info()["status"] == "finished"
 
 
+@pytest.mark.slow
 def test_a_killed_command_continues_where_it_stopped(tmp_path: Path) -> None:
     """SIGKILL the command mid-way (no chance to clean up), then run it again."""
     import os
