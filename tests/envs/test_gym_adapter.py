@@ -142,7 +142,7 @@ def test_an_environment_that_does_not_fit_is_closed() -> None:
     ("{adapter: gymnasium, id: MountainCar-v0, actions: {push_left: 0, push_right: 2}}",
      r"inputs: the behaviour has 4 inputs but 'MountainCar-v0' observes only 2"),
     ("{adapter: gymnasium, id: CartPole-v1, options: {colour: red}}",
-     r"environment\.options: 'CartPole-v1' does not accept these options"),
+     r"environment\.options\.colour: 'CartPole-v1' takes no option 'colour'"),
 ])
 def test_a_space_that_does_not_fit_names_the_field(environment: str, message: str) -> None:
     behaviour = parse_behaviour(_cartpole_env(f"environment: {environment}\n"))
