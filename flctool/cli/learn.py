@@ -33,7 +33,8 @@ if TYPE_CHECKING:
 @app.command(epilog=example(
     "flctool learn behaviours/ballchase.yaml -o runs/first",
     "flctool learn behaviours/ballchase.yaml --learner pitt --seed 3 --set mutation=0.2",
-    "flctool learn --resume runs/first --generations 60"))
+    "flctool learn --resume runs/first --generations 60",
+    "flctool learn behaviours/ballchase-ros2.yaml --init runs/first"))
 def learn(
     file: Annotated[Path | None, typer.Argument(
         help="The behaviour file (YAML); optional with --resume.")] = None,
@@ -58,6 +59,10 @@ def learn(
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print a JSON summary instead of text (progress stays on stderr).")]
     = False,
+    init: Annotated[Path | None, typer.Option(
+        "--init", help="Start around this controller (a run directory or a behaviour file): "
+        "the first generation seeded around it, q values carried over where rules match.")]
+    = None,
 ) -> None:
     """Learn the rule consequents of a behaviour (Pitt GA, fuzzy Q-learning or the hybrid).
 
@@ -70,6 +75,9 @@ def learn(
             "learner": ("--learner", learner), "seed": ("--seed", seed),
             "population": ("--population", population)})
         if resume is not None:
+            if init is not None:
+                raise RunDirError("--init starts a new run; a resumed run continues from its "
+                                  "checkpoint", hint="leave out --init")
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
@@ -82,6 +90,8 @@ def learn(
             overrides += command_line_overrides([], {"generations": ("--generations",
                                                                      generations)})
             training = start_run(file, overrides, out)
+            if init is not None:
+                _warm_start(training, init)
         run, behaviour = training.run, training.run.behaviour
         err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
@@ -97,6 +107,17 @@ def learn(
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
+
+
+def _warm_start(training: Training, init: Path) -> None:
+    from flctool.warm_start import warm_start_from_path
+
+    try:
+        started = warm_start_from_path(training.learner, training.run.behaviour, init)
+    except BaseException:
+        training.close()  # the environment (a robot is sent stop)
+        raise
+    err_console.print(escape(started.describe()), highlight=False)
 
 
 def _budget(overrides: list[Override], generations: int | None,
