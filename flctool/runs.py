@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
-from flctool.dirlock import DirectoryLock, LockHeld, is_locked
+from flctool.dirlock import DirectoryLock, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
@@ -314,14 +314,14 @@ class Run:
         _refuse_links(self.path, path)
         lock = DirectoryLock(path)
         try:
-            lock.acquire()
-        except LockHeld as held:
-            raise RunDirError(
-                f"{self.path} is being trained by another flctool process"
-                f"{f' (pid {held.holder})' if held.holder else ''}",
-                hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
+            acquired = lock.acquire()
         except OSError as exc:
             raise _write_error(path, exc) from None
+        if not acquired:
+            raise RunDirError(
+                f"{self.path} is being trained by another flctool process"
+                f"{f' (pid {lock.holder})' if lock.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then --resume")
         try:
             yield
         finally:
