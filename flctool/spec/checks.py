@@ -17,6 +17,7 @@ from flctool.errors import PathPart, Problem
 from flctool.plugins import blamed
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
+from flctool.spec.magnitudes import magnitude_problems
 from flctool.spec.set_learning import set_learning_problems
 from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
@@ -87,6 +88,7 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
     environment = behaviour.environment
     if isinstance(environment, AdapterConfig):
         with blamed("environment", environment.adapter):
+            problems += magnitude_problems(environment)
             problems += environment.fit_problems(behaviour.input_names,
                                                  tuple(behaviour.output.commands))
     if not sets_problems:  # learning the sets starts from valid ones
