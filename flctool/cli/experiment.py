@@ -90,7 +90,9 @@ def experiment(
         console.print(f"  {escape(claim['claim'])}: [bold]{escape(claim['verdict'])}[/]")
     for name in names:
         entry = summary["learners"][name]["heldout_success"]
-        console.print(f"  {name}: held-out success median {entry['median']:.3f} "
-                      f"[{entry['q25']:.3f}, {entry['q75']:.3f}]")
+        # the spread across seeds, not a confidence interval: said in words, not brackets
+        console.print(f"  {name}: held-out success median {entry['median']:.3f}, "
+                      f"interquartile range {entry['q25']:.3f} to {entry['q75']:.3f} "
+                      f"across {seeds} seeds")
     console.print(f"report: {escape(str(folder / 'report.md'))}; figures: flctool plot "
                   f"{escape(str(folder))}")

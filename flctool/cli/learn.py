@@ -33,7 +33,8 @@ if TYPE_CHECKING:
 @app.command(epilog=example(
     "flctool learn behaviours/ballchase.yaml -o runs/first",
     "flctool learn behaviours/ballchase.yaml --learner pitt --seed 3 --set mutation=0.2",
-    "flctool learn --resume runs/first --generations 60"))
+    "flctool learn --resume runs/first --generations 60",
+    "flctool learn behaviours/ballchase-ros2.yaml --init runs/first"))
 def learn(
     file: Annotated[Path | None, typer.Argument(
         help="The behaviour file (YAML); optional with --resume.")] = None,
@@ -62,6 +63,10 @@ def learn(
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print a JSON summary instead of text (progress stays on stderr).")]
     = False,
+    init: Annotated[Path | None, typer.Option(
+        "--init", help="Start around this controller (a run directory or a behaviour file): "
+        "the first generation seeded around it, q values carried over where rules match.")]
+    = None,
 ) -> None:
     """Learn the rule consequents of a behaviour (Pitt GA, fuzzy Q-learning or the hybrid).
 
@@ -78,6 +83,9 @@ def learn(
                 raise RunDirError("--baseline is given when a run starts; a resumed run "
                                   "compares with the baselines it started with",
                                   hint="leave out --baseline")
+            if init is not None:
+                raise RunDirError("--init starts a new run; a resumed run continues from its "
+                                  "checkpoint", hint="leave out --init")
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
@@ -90,6 +98,8 @@ def learn(
             overrides += command_line_overrides([], {"generations": ("--generations",
                                                                      generations)})
             training = start_run(file, overrides, out, baselines=baseline or [])
+            if init is not None:
+                _warm_start(training, init)
         run, behaviour = training.run, training.run.behaviour
         err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
@@ -126,6 +136,17 @@ NOT_LEARNED_EXIT = 3
 
 def _number(value: object) -> str:
     return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
+
+
+def _warm_start(training: Training, init: Path) -> None:
+    from flctool.warm_start import warm_start_from_path
+
+    try:
+        started = warm_start_from_path(training.learner, training.run.behaviour, init)
+    except BaseException:
+        training.close()  # the environment (a robot is sent stop)
+        raise
+    err_console.print(escape(started.describe()), highlight=False)
 
 
 def _budget(overrides: list[Override], generations: int | None,

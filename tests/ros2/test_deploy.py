@@ -152,9 +152,11 @@ def test_the_node_stops_within_the_watchdog_bound_and_recovers() -> None:
         sensors.pan = None
         assert wait_until(lambda: sensors.first_stop_after(moment) is not None, 5.0)
         delays["lost publisher"] = sensors.first_stop_after(moment) - moment  # type: ignore[operator]
-        assert delays["silent"] <= bound + 0.1, delays
+        print("stop delays, s:", {k: round(v, 4) for k, v in delays.items()})  # with -s
+        # (slack for a loaded machine's scheduling; measured: docs/ros2.md)
+        assert delays["silent"] <= bound + 0.3, delays
         for name in ("nan", "out of range", "lost publisher"):
-            assert delays[name] <= config.period + 0.1, delays  # at once, or the next tick
+            assert delays[name] <= config.period + 0.3, delays  # at once, or the next tick
         text = "\n".join(lines)
         assert "stop: input pan is stale" in text and "stop: input pan is nan" in text, text
         assert "outside its valid range" in text and "inputs good again: driving" in text
