@@ -171,11 +171,12 @@ def check_input(name: str, variable: InputVariable) -> list[Problem]:
             a, b = gap
             where = f"the point {a:g}" if a == b else f"the values between {a:g} and {b:g}"
             if all(is_trapezoid(v) for v in variable.sets.values()):
-                what = "belong to no set (membership 0 everywhere), so eq. 3 would divide " \
-                    "by zero there"
+                what = (f"{'belongs' if a == b else 'belong'} to no set (membership 0 "
+                        "everywhere), so eq. 3 would divide by zero there")
             else:
-                what = (f"have a membership below {COVERS_FROM:g} in every set (an input with "
-                        "a shape other than the trapezoid must reach that in some set "
+                what = (f"{'has' if a == b else 'have'} a membership below {COVERS_FROM:g} in "
+                        "every set (an input with a shape other than the trapezoid must "
+                        "reach that in some set "
                         "everywhere, so that eq. 3's denominator stays well above 0)")
             problems.append(Problem(
                 ("inputs", name, "sets"), f"{where} {what}",
