@@ -50,13 +50,13 @@ def run_one(behaviour_path: Path, learner: str, seed: int, overrides: dict[str, 
     seeds = evaluation_seeds(0, episodes)  # what `flctool evaluate` runs
     assert seeds.max() < TRAIN_SEED_LOW  # held out: training and selection never use these
     result = evaluate(compile_behaviour(best), make_env(best, episodes), seeds)
-    usage = summary.usage
+    usage = summary.to_dict()["usage"]
     return {"learner": learner, "seed": seed,
             "success": float(result.success_rate.value),
             "mean_return": float(result.mean_return.value),
             "auc": float(sum(m.mean for m in metrics)),
-            "final_mean": metrics[-1].mean, "best_fitness": summary.best["fitness"],
-            "validated": (summary.best.get("validation") or {}).get("value"),
+            "final_mean": metrics[-1].mean, "best_fitness": summary.to_dict()["best"]["fitness"],
+            "validated": (summary.to_dict()["best"].get("validation") or {}).get("value"),
             "train_cpu_seconds": train_seconds,
             "training_episodes": int(sum(m.episodes for m in metrics)),
             "selection_episodes": int(sum(m.selection_episodes for m in metrics)),

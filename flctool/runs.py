@@ -33,9 +33,9 @@ from __future__ import annotations
 
 import csv
 import errno
-import fcntl
 import io
 import json
+import math
 import os
 import re
 import time
@@ -49,19 +49,20 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
+from flctool.dirlock import DirectoryLock, LockHeld, is_locked
 from flctool.envs.base import BatchEnv
-from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
+from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.learners.budget import Usage
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.rollout import Estimate
+from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
     Behaviour,
-    behaviour_from_data,
-    behaviour_to_data,
     behaviour_to_yaml,
     load_behaviour,
 )
-from flctool.spec.learning import keep_keys_read_by
-from flctool.spec.located import source_of
+from flctool.spec.overrides import Override, resolve_behaviour
 from flctool.spec.rules import with_rules
 from flctool.version import __version__
 
@@ -77,66 +78,6 @@ LOCK_FILE = "run.lock"
 #: rules = 20 million consequents, writes about 200 MB).
 MAX_CHECKPOINT_BYTES = 1 << 30
 _CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
-
-
-# -- resolving a behaviour for a run ------------------------------------------------------
-def override_path(key: str) -> tuple[str, ...]:
-    """The field path an override key names: ``q.alpha`` is ``learning.q.alpha``; keys may
-    also start with ``learning.`` or ``environment.``."""
-    path = tuple(key.split("."))
-    return path if path[0] in ("learning", "environment") else ("learning", *path)
-
-
-def override_label(where: str | Mapping[str, str], key: str) -> str:
-    """Where the override ``key`` was given: ``where`` names the place of every override
-    (``overrides (q.alpha)``), or each key's own (``command line (--set q.alpha)``)."""
-    if isinstance(where, str):
-        return f"{where} ({key})"
-    return where.get(key, f"overrides ({key})")
-
-
-def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
-                      where: str | Mapping[str, str] = "overrides") -> Behaviour:
-    """The behaviour with ``overrides`` applied and validated like the file itself.
-
-    Keys are dotted paths under ``learning:`` (``seed``, ``q.temperature``), or start with
-    ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``; one
-    about an overridden field is placed where the override was given -- ``where``, a label
-    for all of them (``"overrides"`` reads ``overrides (q.alpha)``) or one per key (the
-    command line says ``command line (--set q.alpha)``) -- and any other at its line in the
-    behaviour's file. Overriding ``learner`` drops the keys of the behaviour's learner that
-    the new one does not read; keys the overrides give must be the new learner's.
-    """
-    data = behaviour_to_data(behaviour)
-    learner = next((value for key, value in overrides.items()
-                    if override_path(key) == ("learning", "learner")), None)
-    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
-        data["learning"] = keep_keys_read_by(data["learning"], learner)
-    given = apply_overrides(data, overrides, where)
-    return behaviour_from_data(data, source_of(behaviour).with_overrides(given))
-
-
-def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any],
-                    where: str | Mapping[str, str] = "overrides",
-                    ) -> dict[tuple[PathPart, ...], str]:
-    """Set each override in ``data`` (a behaviour as data, changed in place); returns where
-    each overridden field was given, for :meth:`SourceMap.with_overrides
-    <flctool.spec.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
-    given: dict[tuple[PathPart, ...], str] = {}
-    for key, value in overrides.items():
-        path = list(override_path(key))
-        node = data
-        for depth, part in enumerate(path[:-1]):
-            child = node.setdefault(part, {})
-            if not isinstance(child, dict):
-                raise SpecError([Problem(
-                    tuple(path[: depth + 1]), f"'{'.'.join(path[: depth + 1])}' is a value, "
-                    f"not a section, so '{key}' cannot be set", "set the value itself",
-                    file=override_label(where, key))], override_label(where, key))
-            node = child
-        node[path[-1]] = value
-        given[tuple(path)] = override_label(where, key)
-    return given
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -221,11 +162,51 @@ def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
 
 def _provenance(run: Run, generation: int, individual: int, fitness: float,
                 validation: Mapping[str, Any] | None) -> dict[str, Any]:
-    provenance = {"learner": run.learner, "seed": run.seed, "generation": generation,
+    return _provenance_record(run.learner, run.seed, generation, individual, fitness,
+                              validation)
+
+
+def _provenance_record(learner: str, seed: int, generation: int, individual: int,
+                       fitness: float, validation: Mapping[str, Any] | None) -> dict[str, Any]:
+    provenance = {"learner": learner, "seed": seed, "generation": generation,
                   "individual": individual, "fitness": fitness}
     if validation is not None:
         provenance["validation"] = dict(validation)
     return provenance
+
+
+@dataclass(frozen=True)
+class BestController:
+    """Where a run's best controller (``best.yaml``) came from, and what it scored."""
+
+    learner: str
+    seed: int
+    generation: int
+    individual: int
+    #: Its mean fitness over its training trials.
+    fitness: float
+    #: Its mean fitness over the run's validation episodes; None if it was not validated.
+    validation: Estimate | None = None
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> BestController:
+        """From run.json's ``best`` (:meth:`to_dict`)."""
+        validation = record.get("validation")
+
+        def number(key: str) -> float:
+            value = validation[key] if validation is not None else None
+            return math.nan if value is None else float(value)
+
+        return cls(str(record["learner"]), int(record["seed"]), int(record["generation"]),
+                   int(record["individual"]), float(record["fitness"]),
+                   None if validation is None else Estimate(
+                       number("value"), number("low"), number("high"), int(validation["n"])))
+
+    def to_dict(self) -> dict[str, Any]:
+        """As run.json records it (NaN as null)."""
+        return _provenance_record(self.learner, self.seed, self.generation, self.individual,
+                                  self.fitness, self.validation.to_dict()
+                                  if self.validation is not None else None)
 
 
 @dataclass(frozen=True)
@@ -237,19 +218,26 @@ class RunSummary:
     seed: int
     generations: int  # generations completed in the run (all sessions)
     status: str
-    best: dict[str, Any]
+    #: The run's best controller so far; None before its first generation.
+    best: BestController | None
     last: GenerationMetrics | None
     selection: dict[str, Any] | None = None  # run.json's record of model selection
 
     @property
-    def usage(self) -> dict[str, int]:
-        """Episodes and steps the run spent on training and on selection (validation)."""
-        return dict((self.selection or {}).get("usage") or {})
+    def usage(self) -> Usage | None:
+        """Episodes and steps the run spent on training and on selection (validation); None
+        if the run recorded none."""
+        recorded = (self.selection or {}).get("usage")
+        return Usage(**{name: int(recorded[name]) for name in Usage().to_dict()}) \
+            if recorded else None
 
     def to_dict(self) -> dict[str, Any]:
+        usage = self.usage
         return {"run": str(self.path), "learner": self.learner, "seed": self.seed,
-                "generations": self.generations, "status": self.status, "best": self.best,
-                "usage": self.usage, "selection": self.selection,
+                "generations": self.generations, "status": self.status,
+                "best": self.best.to_dict() if self.best is not None else {},
+                "usage": usage.to_dict() if usage is not None else {},
+                "selection": self.selection,
                 "last": self.last.row() if self.last else None,
                 "best_file": str(self.path / BEST_FILE)}
 
@@ -312,7 +300,7 @@ class Run:
             checkpoint = read_checkpoint(data, Expected(
                 behaviour.rule_count, len(behaviour.output.commands), generation=generation,
                 max_population=behaviour.learning.population, strengths=strengths,
-                metrics=True))
+                metrics=True, set_genes=set_gene_count(behaviour)))
         except LearnError as error:
             raise self._damaged(generation, error.args[0]) from None
         return data, checkpoint
@@ -324,38 +312,24 @@ class Run:
         resumed while it is still training would corrupt it)."""
         path = self.path / LOCK_FILE
         _refuse_links(self.path, path)
+        lock = DirectoryLock(path)
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+            lock.acquire()
+        except LockHeld as held:
+            raise RunDirError(
+                f"{self.path} is being trained by another flctool process"
+                f"{f' (pid {held.holder})' if held.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
         except OSError as exc:
             raise _write_error(path, exc) from None
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 32).decode("ascii", "replace").strip()
-                raise RunDirError(
-                    f"{self.path} is being trained by another flctool process"
-                    f"{f' (pid {holder})' if holder.isdigit() else ''}",
-                    hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{os.getpid()}\n".encode())
             yield
         finally:
-            os.close(fd)  # closing releases the lock
+            lock.release()
 
     def is_locked(self) -> bool:
         """Whether a process (this one included) holds the run's lock now."""
-        try:
-            fd = os.open(self.path / LOCK_FILE, os.O_RDONLY | os.O_NOFOLLOW)
-        except OSError:
-            return False
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-        except BlockingIOError:
-            return True
-        finally:
-            os.close(fd)
-        return False
+        return is_locked(self.path / LOCK_FILE)
 
     def _damaged(self, generation: int, problem: str) -> RunDirError:
         path = self.checkpoint_path(generation)
@@ -417,7 +391,9 @@ class Run:
                               hint="pick an individual in that range")
         provenance = _provenance(self, generation, individual, float(fitness[individual]),
                                  None)
-        return with_rules(self.behaviour, population[individual]), provenance
+        genes = None if checkpoint.set_genes is None else checkpoint.set_genes[individual]
+        return with_rules(with_set_genes(self.behaviour, genes), population[individual]), \
+            provenance
 
     def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
@@ -425,7 +401,8 @@ class Run:
         candidate = selection.best if selection is not None else None
         if candidate is None:
             return None
-        behaviour = with_rules(self.behaviour, candidate.consequents)
+        behaviour = with_rules(with_set_genes(self.behaviour, candidate.sets),
+                               candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
                                       candidate.fitness, validation)
@@ -465,9 +442,11 @@ class Run:
         # Only the last checkpoint is read: a summary of a long run costs one file, not all.
         last = (GenerationMetrics.from_row(self.checkpoint(done[-1])["metrics"]) if done
                 else None)
+        best = info.get("best")
         return RunSummary(self.path, self.learner, self.seed, len(done),
-                          str(info.get("status", "unknown")), dict(info.get("best") or {}),
-                          last, info.get("selection"))
+                          str(info.get("status", "unknown")),
+                          BestController.from_record(best) if best else None, last,
+                          info.get("selection"))
 
     def info(self) -> dict[str, Any]:
         """run.json; a run that says 'running' but whose lock nobody holds was killed (or
@@ -517,8 +496,8 @@ class Run:
             raise RunDirError(f"{self.path} already has {done[-1] + 1} generations; "
                               f"--generations {generations} would not add any",
                               hint=f"give more than {done[-1] + 1}")
-        behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
-                                      {"generations": "the new generation budget"})
+        behaviour = resolve_behaviour(self.behaviour, [Override(
+            "generations", generations, "the new generation budget")])
         with self.lock():
             _write(self.path, self.path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
         self.behaviour = behaviour
@@ -604,7 +583,8 @@ class RunRecorder(Callback):
             generation, individual, consequents, fitness, candidate = learner.selected()
             validation = (candidate.validation.to_dict()
                           if candidate is not None and candidate.validation else None)
-            self._write_best(with_rules(run.behaviour, consequents),
+            learned = with_set_genes(run.behaviour, learner.selected_sets())
+            self._write_best(with_rules(learned, consequents),
                              _provenance(run, generation, individual, fitness, validation))
             run.write_info("running", self.best, learner.selection_record())
         return True
@@ -617,23 +597,30 @@ class RunRecorder(Callback):
     def on_end(self) -> None:
         learner = self.learner
         finished = learner is not None and learner.finished
-        # The checkpoints are the record: a stop between a checkpoint and best.yaml (Ctrl-C,
-        # an error) still leaves best.yaml and run.json naming the last checkpoint's best.
-        if self.run.checkpoint_generations():
-            try:
-                behaviour, provenance = self.run.behaviour_for()
-            except FlcError:
-                pass  # a damaged checkpoint: report what the run knew, not a second error
-            else:
-                if provenance != self.best:
-                    self._write_best(behaviour, provenance)
-        selection = None  # kept from run.json, unless this session recorded generations
-        if learner is not None and self._recorded:
-            selection = learner.selection_record()
-        if self._unsynced is not None:
-            _fsync(self._unsynced)  # the last checkpoint (see the policy above)
-        self.run.write_info("finished" if finished else "stopped",
-                            self.best or self.run.info().get("best"), selection)
+        written = False  # whether best.yaml and the last checkpoint are on disk
+        try:
+            # The checkpoints are the record: a stop between a checkpoint and best.yaml
+            # (Ctrl-C, an error) still leaves best.yaml and run.json naming the last
+            # checkpoint's best.
+            if self.run.checkpoint_generations():
+                try:
+                    behaviour, provenance = self.run.behaviour_for()
+                except FlcError:
+                    pass  # a damaged checkpoint: report what the run knew, not a second error
+                else:
+                    if provenance != self.best:
+                        self._write_best(behaviour, provenance)
+            if self._unsynced is not None:
+                _fsync(self._unsynced)  # the last checkpoint (see the policy above)
+            written = True
+        finally:
+            # however the above ends (a full disk fails best.yaml first): never 'running'
+            selection = None  # kept from run.json, unless this session recorded generations
+            if learner is not None and self._recorded:
+                selection = learner.selection_record()
+            # a run whose best.yaml could not be written is not finished: resume writes it
+            self.run.write_info("finished" if finished and written else "stopped",
+                                self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------

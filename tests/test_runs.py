@@ -73,7 +73,8 @@ def test_a_run_writes_every_record(tmp_path: Path) -> None:
     q = np.array([float(r["q"]) for r in strengths[-75:]]).reshape(15, 5)
     np.testing.assert_array_equal(q, np.array(checkpoint["q"]))
     info = json.loads((run.path / "run.json").read_text())
-    assert info["status"] == "finished" and info["best"] == summary.best
+    assert summary.best is not None
+    assert info["status"] == "finished" and info["best"] == summary.best.to_dict()
 
 
 def test_best_yaml_is_the_deployable_best_validated_candidate(tmp_path: Path) -> None:

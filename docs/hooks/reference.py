@@ -320,6 +320,16 @@ EQUATIONS: dict[str, str] = {
     "stop.steps": "an addition: stop after this many environment steps",
     "stop.seconds": "an addition: stop after this much training time",
     "stop.target": "an addition: stop once the validated controller reaches this fitness",
+    "sets": ("the paper's future work: evolve the antecedents (the fuzzy sets of Sec. II) "
+             "with the consequents"),
+    "sets.inputs": "which inputs' sets (Sec. II) are learned",
+    "sets.mode": ("how a set genome becomes sets: a strong partition's gaps, or lateral shifts "
+                  "of each set"),
+    "sets.bound": "how far a set (Sec. II's quadruple) may move",
+    "sets.bound_in": "whether bound is a fraction of the spacing or in the input's units",
+    "sets.floor": "lateral: the least coverage kept, so eq. 3 never divides by near zero",
+    "sets.mutation": "GA exploration: mutation probability of a set gene",
+    "sets.sigma": "GA exploration: the step of a set gene's mutation",
 }
 
 
@@ -344,8 +354,10 @@ def learning_keys(schema: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     for key in keys:
         prop = next(node["properties"][key] for node in learners if key in node["properties"])
         found.append((key, prop))
-        if "$ref" in prop:
-            for sub, sub_prop in defs[_def_name(prop["$ref"])]["properties"].items():
+        # a section, or an optional one (anyOf: the section or null)
+        refs = [prop] if "$ref" in prop else [o for o in prop.get("anyOf", []) if "$ref" in o]
+        for ref in refs[:1]:
+            for sub, sub_prop in defs[_def_name(ref["$ref"])]["properties"].items():
                 found.append((f"{key}.{sub}", sub_prop))
     return found
 

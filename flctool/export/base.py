@@ -19,7 +19,9 @@ from typing import ClassVar
 
 from flctool.atomic import regular_target, replace_all, write_text_atomic
 from flctool.errors import ExportError
+from flctool.inputs import read_input
 from flctool.spec import Behaviour
+from flctool.spec.bounded import no_collection
 from flctool.version import __version__
 
 
@@ -69,8 +71,9 @@ class Exporter(ABC):
 
 #: The largest file an importer reads, in characters: far above any controller written by
 #: hand or by a tool (a 4-input, 10-set grid of 10,000 rules is about 1 MB of FCL), and small
-#: enough that every importer, linear in the text, reads it in seconds.
-MAX_IMPORT_CHARS = 8_000_000
+#: enough that the densest format (FIS, 14 characters a rule: 140,000 rules) imports in
+#: seconds (benchmarks/bench_limits.py).
+MAX_IMPORT_CHARS = 2_000_000
 
 
 class Importer(ABC):
@@ -88,7 +91,8 @@ class Importer(ABC):
             raise ExportError(f"{file}:1: the file holds {len(text):,} characters, more than "
                               f"the {MAX_IMPORT_CHARS:,} an import reads",
                               hint="is it really a controller? split it or shorten it")
-        return self.parse(text, file)
+        with no_collection():  # see flctool.spec.bounded
+            return self.parse(text, file)
 
     @abstractmethod
     def parse(self, text: str, file: str) -> Behaviour:
@@ -96,13 +100,7 @@ class Importer(ABC):
 
     def from_file(self, path: str | Path) -> Behaviour:
         path = Path(path)
-        try:
-            with path.open(encoding="utf-8") as handle:
-                text = handle.read(MAX_IMPORT_CHARS + 1)
-        except FileNotFoundError:
-            raise ExportError(f"{path}: no such file", hint="check the path") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ExportError(f"{path}: cannot read the file: {exc}") from None
+        text = read_input(path, f"{self.format.upper()} file", MAX_IMPORT_CHARS)
         return self.from_string(text, str(path))
 
 

@@ -1,5 +1,7 @@
 """FIS, the text format of MATLAB's Fuzzy Logic Toolbox: a Sugeno system, constant outputs.
 
+Sets of the other shapes are MATLAB's ``gaussmf``, ``gauss2mf``, ``gbellmf``, ``sigmf``,
+``dsigmf``, ``psigmf``, ``smf``, ``zmf`` and ``pimf`` (:mod:`flctool.export.shapes`).
 Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``) with no vertical edge, as MATLAB and
 Octave require: a shoulder's plateau and foot lie outside the range, an edge inside it has its
 foot one ulp away (:func:`~flctool.export.base.sloped_quad`); commands are ``constant`` MFs,
@@ -13,6 +15,7 @@ from __future__ import annotations
 import itertools
 import re
 
+from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
     ImportedCommand,
@@ -26,10 +29,12 @@ from flctool.export.imported import (
     fuzzylite_quad,
     identifier,
     parse_number,
+    shaped_set,
     zero_order_constant,
 )
 from flctool.export.mamdani import centroid, measure
 from flctool.spec import Behaviour, require_deployable
+from flctool.spec.shapes import ShapedSet
 
 
 def _vector(values: list[float]) -> str:
@@ -51,6 +56,10 @@ class FisExporter(Exporter):
             lines += ["", f"[Input{index}]", f"Name='{name}'",
                       f"Range={_vector(list(variable.range))}", f"NumMFs={len(variable.sets)}"]
             for k, (set_name, quad) in enumerate(variable.sets.items(), start=1):
+                if isinstance(quad, ShapedSet):
+                    kind, params = shapes.written(shapes.MATLAB, quad.kind, quad.params)
+                    lines.append(f"MF{k}='{set_name}':'{kind}',{_vector(params)}")
+                    continue
                 # MATLAB and Octave refuse trapmf with a == b and trimf with a == b or
                 # b == c: no vertical edges (exact under clipping, see sloped_quad)
                 pa, pb, pc, pd = sloped_quad(quad, variable.range)
@@ -219,9 +228,14 @@ class _FisReader:
             self.mf_key(key, len(variable.sets), line)
             name, kind, params = self.mf(value, line)
             arity = {"trapmf": 4, "trimf": 3, "rampmf": 2}
+            found = shapes.read(shapes.MATLAB, kind, params)
+            if found is not None:
+                variable.sets.append(shaped_set(name, found[0], found[1], self.file, line))
+                return
             if kind not in arity:
-                raise self.fail(line, f"membership function '{name}' is a {kind}: flctool's "
-                                "sets are trapezoids", "use trapmf or trimf")
+                known = ", ".join([*arity, *(n for n, _ in shapes.MATLAB.values())])
+                raise self.fail(line, f"membership function '{name}' is a {kind}, which "
+                                "flctool's sets do not include", f"use one of {known}")
             if len(params) != arity[kind]:
                 raise self.fail(line, f"a {kind} takes {arity[kind]} parameters",
                                 f"give it {arity[kind]} numbers")

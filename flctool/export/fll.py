@@ -1,6 +1,8 @@
 """FLL, the FuzzyLite Language: a Takagi-Sugeno engine with constant output terms.
 
-The engine computes eq. 1-3 as flctool does: Trapezoid / Triangle input terms (eq. 1's sets),
+The engine computes eq. 1-3 as flctool does: Trapezoid / Triangle input terms (eq. 1's sets;
+the other shapes as fuzzylite's Gaussian, GaussianProduct, Bell, Sigmoid, SigmoidDifference,
+SigmoidProduct, SShape, ZShape and PiShape terms, :mod:`flctool.export.shapes`),
 conjunction Minimum (eq. 2), and the WeightedAverage of the constant terms over every fired
 rule (eq. 3). Inputs have ``lock-range: true`` so that fuzzylite clips them to their range as
 flctool does. The output has ``aggregation: none``: with an aggregation, pyfuzzylite 8's
@@ -13,23 +15,24 @@ from __future__ import annotations
 import re
 
 from flctool.errors import ExportError
+from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, header_lines, number
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
     ImportedInput,
     ImportedRule,
-    ImportedSet,
     Method,
     build_behaviour,
-    check_term_arity,
     excerpt,
-    fuzzylite_quad,
+    fuzzylite_set,
     parse_number,
     zero_order_constant,
 )
 from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
+from flctool.spec.models import FuzzySet
+from flctool.spec.shapes import ShapedSet
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.
 RESERVED = frozenset({"if", "is", "then", "and", "or", "with", "not", "any", "extremely",
@@ -55,12 +58,8 @@ class FllExporter(Exporter):
             lines += [f"InputVariable: {name}", f"{INDENT}enabled: true",
                       f"{INDENT}range: {number(lo)} {number(hi)}",
                       f"{INDENT}lock-range: true"]
-            for set_name, (pa, pb, pc, pd) in variable.sets.items():
-                if pb == pc:
-                    shape = f"Triangle {number(pa)} {number(pb)} {number(pd)}"
-                else:
-                    shape = f"Trapezoid {number(pa)} {number(pb)} {number(pc)} {number(pd)}"
-                lines.append(f"{INDENT}term: {set_name} {shape}")
+            for set_name, value in variable.sets.items():
+                lines.append(f"{INDENT}term: {set_name} {fuzzylite_term(value)}")
         output = behaviour.output
         values = list(output.commands.values())
         lines += [f"OutputVariable: {output.name}", f"{INDENT}enabled: true",
@@ -77,6 +76,17 @@ class FllExporter(Exporter):
             condition = " and ".join(f"{n} is {rule.if_[n]}" for n in behaviour.input_names)
             lines.append(f"{INDENT}rule: if {condition} then {output.name} is {rule.then}")
         return "\n".join(lines) + "\n"
+
+
+def fuzzylite_term(value: FuzzySet) -> str:
+    """A set as fuzzylite writes its term (FLL, and FCL in fuzzylite's dialect)."""
+    if isinstance(value, ShapedSet):
+        name, params = shapes.written(shapes.FUZZYLITE, value.kind, value.params)
+        return f"{name} {' '.join(number(v) for v in params)}"
+    pa, pb, pc, pd = value
+    if pb == pc:
+        return f"Triangle {number(pa)} {number(pb)} {number(pd)}"
+    return f"Trapezoid {number(pa)} {number(pb)} {number(pc)} {number(pd)}"
 
 
 def _check_names(behaviour: Behaviour) -> None:
@@ -183,7 +193,8 @@ class _FllReader:
             self.current.range = self.pair(value, line)
         elif key == "term":
             name, kind, params = self.term(value, line)
-            self.current.sets.append(ImportedSet(name, self.quad(kind, params, line), line))
+            values = [self.point(p, line, kind) for p in params]
+            self.current.sets.append(fuzzylite_set(name, kind, values, self.file, line))
         else:
             raise self.fail(line, f"'{key}' in an InputVariable")
 
@@ -253,13 +264,6 @@ class _FllReader:
         if len(parts) < 2:
             raise self.fail(line, f"term '{value}' is not 'name Kind parameters'")
         return parts[0], parts[1], parts[2:]
-
-    def quad(self, kind: str, params: list[str], line: int) -> tuple[float, float, float, float]:
-        n = check_term_arity(kind, len(params), self.file, line)
-        if len(params) > n and parse_number(params[n], self.file, line, "height") != 1.0:
-            raise self.fail(line, f"a term of height {params[n]}: flctool's sets reach 1")
-        values = [self.point(p, line, kind) for p in params[:n]]
-        return fuzzylite_quad(kind, values, self.file, line)
 
     def point(self, text: str, line: int, kind: str) -> float:
         """A term's point: a number, or -inf / inf for a shoulder's foot."""

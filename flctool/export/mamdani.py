@@ -18,6 +18,7 @@ import numpy as np
 from flctool.compile import compile_behaviour
 from flctool.compile.membership import trapezoid
 from flctool.spec import Behaviour
+from flctool.spec.shapes import set_row
 
 Quad = tuple[float, float, float, float]
 #: How many states the deviation is measured on (besides every range's ends and corners).
@@ -84,7 +85,8 @@ def measure(behaviour: Behaviour, sets: Mapping[str, Quad], output_range: tuple[
     columns = []
     for variable in behaviour.inputs.values():
         lo, hi = variable.range
-        corners = np.array([lo, hi, *(x for q in variable.sets.values() for x in q)])
+        corners = np.array([lo, hi, *(x for q in variable.sets.values()
+                                      for x in set_row(q)[1] if lo <= x <= hi)])
         column = rng.uniform(lo, hi, STATES)
         column[: len(corners)] = corners
         columns.append(column)

@@ -52,6 +52,8 @@ class Expected:
     #: True: it must hold the q table and traces; None: it may (then they are checked).
     strengths: bool | None = None
     metrics: bool = False  # a run directory's checkpoint holds its generation's metrics
+    #: The set genes per controller (``learning.sets``): each must then hold that many.
+    set_genes: int = 0
 
 
 @dataclass(frozen=True)
@@ -82,6 +84,7 @@ class Checkpoint:
     q: FloatArray | None = None  # (M, K), finite
     traces: FloatArray | None = None  # (M, K), finite
     metrics: GenerationMetrics | None = None
+    set_genes: FloatArray | None = None  # (P, G) in [-1, 1], when the run learns the sets
 
 
 def damaged(problem: str, hint: str = DAMAGED_HINT) -> LearnError:
@@ -122,7 +125,31 @@ def read_checkpoint(data: Any, expected: Expected) -> Checkpoint:
     q, traces = (_strengths(data, key, expected) for key in ("q", "traces"))
     return Checkpoint(learner, generation, float(elapsed), population, fitness,
                       _rng(data["rng"]), _selection(data.get("selection"), expected),
-                      q, traces, metrics)
+                      q, traces, metrics, _set_genes(data, population.shape[0], expected))
+
+
+def _set_genes(data: dict[str, Any], individuals: int,
+               expected: Expected) -> FloatArray | None:
+    """The set genomes (P, G) of a run that learns the sets: genes in [-1, 1]."""
+    if not expected.set_genes:
+        if "set_genes" in data:
+            raise damaged("holds set genes, but the behaviour learns no sets",
+                          hint="resume with the behaviour the run was started with")
+        return None
+    if "set_genes" not in data:
+        raise damaged("has no set genes, but the behaviour learns its sets",
+                      hint="resume with the behaviour the run was started with")
+    genes = _finite(data["set_genes"], "set_genes")
+    _check_set_genome(genes, (individuals, expected.set_genes))
+    return genes
+
+
+def _check_set_genome(genes: FloatArray, shape: tuple[int, ...]) -> None:
+    if genes.shape != shape:
+        raise damaged(f"'s set genes have shape {genes.shape}, not {shape}",
+                      hint="resume with the behaviour the run was started with")
+    if genes.size and not (genes.min() >= -1.0 and genes.max() <= 1.0):
+        raise damaged("is damaged: its set genes lie outside [-1, 1]")
 
 
 def _is_int(value: Any) -> bool:
@@ -250,6 +277,14 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
                 genes.min() < 0 or genes.max() >= expected.n_commands)):
             raise damaged("'s selection record holds a controller that is not one of this "
                           "behaviour")
+        if (candidate.sets is None) != (expected.set_genes == 0):
+            raise damaged("'s selection record holds a controller that is not one of this "
+                          "behaviour (set genes where none are learned, or none where they are)")
+        if candidate.sets is not None:
+            if not np.isfinite(candidate.sets).all():
+                raise damaged("is damaged: its selection record's set genes hold NaN or "
+                              "infinity")
+            _check_set_genome(candidate.sets, (expected.set_genes,))
     if stop_reason is not None and not isinstance(stop_reason, str):
         raise damaged("'s stop reason is not a name")
     return SelectionState(hall, best, usage, stop_reason, finalized, validated)

@@ -17,7 +17,9 @@ their operators and in whether rule strengths learn during the trials:
 The genome is handled here and only here: :meth:`GeneticLearner.initial_population` makes
 the first generation (or takes the one :meth:`~flctool.learners.base.Learner.start_from`
 gave), :meth:`GeneticLearner.advance` breeds, and rules the file gives are put back after
-every operator (:meth:`~flctool.learners.base.Learner.keep_fixed`).
+every operator (:meth:`~flctool.learners.base.Learner.keep_fixed`). With ``learning.sets``
+each controller also carries a set genome (``set_genes``), bred from the same parents by the
+set operators of :mod:`flctool.learners.set_genes`, and acts with its own sets.
 """
 
 from __future__ import annotations
@@ -46,6 +48,7 @@ from flctool.learners.ga import (
     uniform_crossover,
     uniform_mutation,
 )
+from flctool.learners.set_genes import SetOperators, initial_set_genes
 from flctool.spec.learning import GeneticConfig, HybridConfig, PittConfig, QConfig
 from flctool.spec.models import Behaviour
 
@@ -108,6 +111,12 @@ class GeneticLearner(Learner):
             self.temperature = q.temperature
         self.population = self.initial_population()
         self.fitness = np.zeros(config.population)
+        self.set_operators: SetOperators | None = None
+        if self.codec is not None and config.sets is not None:
+            self.set_operators = SetOperators(self.codec.slices, config.sets.mutation,
+                                              config.sets.sigma)
+            self.set_genes = initial_set_genes(self.rngs["ga"], config.population,
+                                               self.codec.size, config.sets.sigma)
 
     def initial_population(self) -> IntArray:
         """The first generation (P, M): uniform random consequents, given rules as given."""
@@ -121,15 +130,17 @@ class GeneticLearner(Learner):
     def evaluate(self, generation: int) -> GenerationResult:
         config = self.config
         seeds = self.episode_seeds(config.population, config.trials, config.common_starts)
-        self.fitness, steps = evaluate_population(self.env, self.rules, self.population, seeds,
-                                                  td=self.fuzzy_q)
+        self.fitness, steps = evaluate_population(self.env, self.population_rules(),
+                                                  self.population, seeds, td=self.fuzzy_q)
         return GenerationResult(self.fitness, seeds.size, steps)
 
     def advance(self) -> None:
         crossover, mutation = self.operator_set.operators(self)
+        population, self.set_genes = self.ga.breed_genomes(
+            self.rngs["ga"], self.population, self.fitness, crossover, mutation,
+            self.set_genes, self.set_operators)
         # Given rules are fixed: whatever crossover and mutation did to them is undone.
-        self.population = self.keep_fixed(self.ga.breed(
-            self.rngs["ga"], self.population, self.fitness, crossover, mutation))
+        self.population = self.keep_fixed(population)
 
 
 class PittLearner(GeneticLearner):

@@ -35,6 +35,7 @@ training ones.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -54,6 +55,8 @@ if TYPE_CHECKING:
 
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
+#: A rule base, or what gives each candidate's (its own sets when a run learns them).
+RulesOf = SparseRules | Callable[["Candidate"], SparseRules]
 
 VALIDATION_SEED_LOW = 2**62
 VALIDATION_SEED_HIGH = 2**63 - 1
@@ -91,6 +94,8 @@ class Candidate:
     trials: int = 0
     validation: Estimate | None = None  # mean fitness over the validation episodes
     validated_at: int = -1  # generation after which it was validated
+    #: Its set genome (G,) when the run learns the sets too (``learning.sets``), else None.
+    sets: FloatArray | None = None
 
     @property
     def fitness(self) -> float:
@@ -98,7 +103,7 @@ class Candidate:
         return self.fitness_sum / self.trials if self.trials else math.nan
 
     def key(self) -> bytes:
-        return _key(self.consequents)
+        return _key(self.consequents, self.sets)
 
     def validation_value(self) -> float:
         """The validated mean fitness; -inf before validation."""
@@ -109,7 +114,8 @@ class Candidate:
                 "individual": self.individual, "fitness_sum": self.fitness_sum,
                 "trials": self.trials, "validated_at": self.validated_at,
                 "validation": None if self.validation is None else _estimate_dict(
-                    self.validation)}
+                    self.validation),
+                **({} if self.sets is None else {"sets": self.sets.tolist()})}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Candidate:
@@ -117,7 +123,9 @@ class Candidate:
         return cls(np.array(data["consequents"], dtype=np.intp), int(data["generation"]),
                    int(data["individual"]), float(data["fitness_sum"]), int(data["trials"]),
                    None if validation is None else _estimate(validation),
-                   int(data["validated_at"]))
+                   int(data["validated_at"]),
+                   None if data.get("sets") is None else np.array(data["sets"],
+                                                                  dtype=np.float64))
 
     def record(self) -> dict[str, Any]:
         """What run.json shows of a candidate: where it came from, training and validation."""
@@ -127,8 +135,9 @@ class Candidate:
                 else self.validation.to_dict()}
 
 
-def _key(consequents: IntArray) -> bytes:
-    return np.asarray(consequents, dtype=np.int64).tobytes()
+def _key(consequents: IntArray, sets: FloatArray | None = None) -> bytes:
+    key = np.asarray(consequents, dtype=np.int64).tobytes()
+    return key if sets is None else key + np.asarray(sets, dtype=np.float64).tobytes()
 
 
 def _estimate_dict(estimate: Estimate) -> list[float | int]:
@@ -173,7 +182,8 @@ class ModelSelection(RunCallback):
         self.finalized = False
         self.validated: list[dict[str, Any]] = []  # every validation, in order
         self.seeds = validation_seeds(run_seed, config.episodes)
-        self._known: dict[int, list[_KnownEpisode]] = {}  # by validation seed
+        # by validation seed and set genome (other sets: other episodes)
+        self._known: dict[tuple[int, bytes], list[_KnownEpisode]] = {}
 
     @property
     def enabled(self) -> bool:
@@ -183,13 +193,13 @@ class ModelSelection(RunCallback):
     def on_trials(self, learner: Learner, result: GenerationResult) -> None:
         """Offer the generation to the hall of fame, and validate its leader."""
         del result
-        self.offer(learner.population, learner.fitness, learner.generation)
-        self.validate_leader(learner.rules, learner.env, learner.generation)
+        self.offer(learner.population, learner.fitness, learner.generation, learner.set_genes)
+        self.validate_leader(learner.rules_of, learner.env, learner.generation)
 
     def on_finish(self, learner: Learner) -> None:
         """Validate the remaining candidates, unless a target ended the run."""
         if learner.stop_reason != "target":
-            self.finalize(learner.rules, learner.env, learner.generation,
+            self.finalize(learner.rules_of, learner.env, learner.generation,
                           learner.elite_candidates())
 
     def most_episodes_after_generation(self) -> int:
@@ -198,19 +208,22 @@ class ModelSelection(RunCallback):
         return (1 + self.config.candidates) * self.config.episodes if self.enabled else 0
 
     # -- the hall of fame ------------------------------------------------------------------
-    def offer(self, population: IntArray, fitness: FloatArray, generation: int) -> None:
+    def offer(self, population: IntArray, fitness: FloatArray, generation: int,
+              sets: FloatArray | None = None) -> None:
         """Add a generation's controllers ``population (P, M)`` with their trial fitness
-        ``(P,)`` (an individual met before adds to its mean), then keep the top candidates."""
+        ``(P,)`` (an individual met before adds to its mean), then keep the top candidates;
+        ``sets (P, G)`` are their set genomes when the run learns the sets."""
         if not self.enabled:
             return
         self.finalized = False
         for individual, (consequents, value) in enumerate(zip(population, fitness,
                                                               strict=True)):
-            key = _key(consequents)
+            genes = None if sets is None else np.array(sets[individual], dtype=np.float64)
+            key = _key(consequents, genes)
             candidate = self.hall.get(key)
             if candidate is None:
                 candidate = Candidate(np.array(consequents, dtype=np.intp), generation,
-                                      individual)
+                                      individual, sets=genes)
                 self.hall[key] = candidate
             candidate.generation, candidate.individual = generation, individual
             candidate.fitness_sum += float(value)
@@ -228,16 +241,20 @@ class ModelSelection(RunCallback):
         return sorted(candidates, key=lambda c: -c.fitness)
 
     # -- validation ------------------------------------------------------------------------
-    def validate(self, candidate: Candidate, rules: SparseRules, env: BatchEnv,
+    def validate(self, candidate: Candidate, rules: RulesOf, env: BatchEnv,
                  generation: int) -> None:
         """Run ``candidate`` on the validation episodes and record the result.
 
         Episodes run one after another on the learner's batch-of-one ``env`` through the
         training loop's own inference (the same bits as the deployed controller, and no
-        compiled kernels to load for a small job)."""
+        compiled kernels to load for a small job). ``rules`` is the rule base, or what gives
+        a candidate's (its own sets, when the run learns them)."""
         consequents = candidate.consequents.tolist()
+        if not isinstance(rules, SparseRules):
+            rules = rules(candidate)
         if env.replayable:
-            trials = [self._episode(env, rules, seed, consequents)
+            sets = b"" if candidate.sets is None else candidate.sets.tobytes()
+            trials = [self._episode(env, rules, (seed, sets), consequents)
                       for seed in self.seeds.tolist()]
         else:
             trials = [run_trial(env, rules, int(seed), consequents) for seed in self.seeds]
@@ -252,12 +269,14 @@ class ModelSelection(RunCallback):
         if self.best is None or candidate.validation.value > self.best.validation_value():
             self.best = candidate
 
-    def _episode(self, env: BatchEnv, rules: SparseRules, seed: int,
+    def _episode(self, env: BatchEnv, rules: SparseRules, episode_key: tuple[int, bytes],
                  consequents: list[int]) -> Trial:
-        """Validation episode ``seed`` of the controller ``consequents (M,)``: an earlier
-        candidate's if this one commands alike every rule that fired where that one acted
-        (see the module docstring), else run and remembered."""
-        known = self._known.setdefault(seed, [])
+        """Validation episode ``seed`` of the controller ``consequents (M,)`` (with the set
+        genome of ``episode_key``, which is (seed, genome bytes)): an earlier candidate's if
+        this one commands alike every rule that fired where that one acted (see the module
+        docstring), else run and remembered."""
+        seed = episode_key[0]
+        known = self._known.setdefault(episode_key, [])
         for episode in known:
             if all(consequents[m] == k for m, k in zip(episode.rules, episode.commands,
                                                         strict=True)):
@@ -268,13 +287,13 @@ class ModelSelection(RunCallback):
         known.append(_KnownEpisode(order, tuple(consequents[m] for m in order), trial))
         return trial
 
-    def validate_leader(self, rules: SparseRules, env: BatchEnv, generation: int) -> None:
+    def validate_leader(self, rules: RulesOf, env: BatchEnv, generation: int) -> None:
         """Validate the hall's leader if it has not been (every generation)."""
         ranked = self.ranked()
         if ranked and ranked[0].validation is None and self.fits(1):
             self.validate(ranked[0], rules, env, generation)
 
-    def finalize(self, rules: SparseRules, env: BatchEnv, generation: int,
+    def finalize(self, rules: RulesOf, env: BatchEnv, generation: int,
                  elites: list[Candidate]) -> None:
         """Validate the remaining candidates (the hall's top and ``elites``) the budget
         allows, best ranked first: the run is ending."""
@@ -290,8 +309,9 @@ class ModelSelection(RunCallback):
             self.validate(candidate, rules, env, generation)
         self.finalized = True
 
-    def candidate_for(self, consequents: IntArray) -> Candidate | None:
-        return self.hall.get(_key(consequents))
+    def candidate_for(self, consequents: IntArray,
+                      sets: FloatArray | None = None) -> Candidate | None:
+        return self.hall.get(_key(consequents, sets))
 
     def fits(self, validations: int) -> bool:
         """Whether ``validations`` more validations stay within the episode limit."""

@@ -10,7 +10,9 @@ from typing import Any
 
 import yaml
 
+from flctool.spec.bounded import no_collection
 from flctool.spec.models import Behaviour
+from flctool.spec.shapes import SHAPES
 
 
 def behaviour_to_data(behaviour: Behaviour, *, defaults: bool = True) -> dict[str, Any]:
@@ -51,7 +53,8 @@ _Dumper.add_representer(_FlowMap, lambda d, v: d.represent_mapping(
 
 def _styled(value: Any, key: str = "") -> Any:
     if isinstance(value, dict):
-        if key == "rule":
+        if key == "rule" or (len(value) == 1 and next(iter(value)) in SHAPES):
+            # a rule, or a set of a shape: {gauss: [0.5, 0.1]}
             return _FlowMap({k: _styled(v) for k, v in value.items()})
         return {k: _styled(v, k) for k, v in value.items()}
     if isinstance(value, list):
@@ -69,7 +72,8 @@ def behaviour_to_yaml(behaviour: Behaviour, header: str = "", *, defaults: bool 
 def data_to_yaml(data: dict[str, Any], header: str = "") -> str:
     """A behaviour given as data (:func:`behaviour_to_data`'s form) written as
     :func:`behaviour_to_yaml` writes it."""
-    body = yaml.dump(_styled(data), Dumper=_Dumper, sort_keys=False, allow_unicode=True,
-                     width=100)
+    with no_collection():  # see flctool.spec.bounded: twice as fast for a large table
+        body = yaml.dump(_styled(data), Dumper=_Dumper, sort_keys=False, allow_unicode=True,
+                         width=100)
     comment = "".join(f"# {line}".rstrip() + "\n" for line in header.splitlines())
     return comment + body

@@ -13,6 +13,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
 
 from flctool.spec.base import Section
+from flctool.spec.set_learning import SetLearningConfig
 
 #: The learner of a ``learning:`` section that names none: the paper's method.
 DEFAULT_LEARNER = "hybrid"
@@ -100,6 +101,9 @@ class LearningConfig(Section):
     trials: int = Field(1, ge=1, description="trials per individual per generation")
     selection: SelectionConfig = SelectionConfig()
     stop: StopConfig = StopConfig()
+    sets: SetLearningConfig | None = Field(None, description=(
+        "learn the fuzzy sets of some inputs with the consequents (docs/learning.md); "
+        "without it only the consequents are learned"))
 
 
 class GeneticConfig(LearningConfig):

@@ -144,6 +144,7 @@ def test_a_run_killed_while_being_created_starts_over(tmp_path: Path) -> None:
     assert open_run(directory).info()["status"] == "finished"
 
 
+@pytest.mark.slow
 def test_a_killed_command_continues_where_it_stopped(tmp_path: Path) -> None:
     """SIGKILL the command mid-way (no chance to clean up), then run it again."""
     import os
@@ -180,3 +181,34 @@ def test_a_killed_command_continues_where_it_stopped(tmp_path: Path) -> None:
     whole.run(LocalExecutor(1))
     write_report(whole)
     assert (out / "report.md").read_text() == (whole.path / "report.md").read_text()
+
+
+def test_a_second_process_on_the_same_experiment_is_refused(tmp_path: Path) -> None:
+    """Like a run, an experiment is run by one process at a time: the second would run the
+    same unfinished jobs."""
+    from flctool.dirlock import DirectoryLock
+    from flctool.experiment.runner import LOCK_FILE
+
+    experiment = tiny_experiment(tmp_path / "exp")
+    holder = DirectoryLock(experiment.path / LOCK_FILE)
+    holder.acquire()  # another process, as flock sees it: another open file
+    try:
+        with pytest.raises(RunDirError, match=r"being run by another flctool process "
+                           r"\(pid \d+\)") as info:
+            experiment.run(LocalExecutor(1))
+        assert "run the same command again" in info.value.hint
+        assert not (experiment.path / "runs").exists()  # nothing was started
+    finally:
+        holder.release()
+
+
+def test_an_experiment_lock_planted_as_a_link_is_refused(tmp_path: Path) -> None:
+    from flctool.experiment.runner import LOCK_FILE
+
+    experiment = tiny_experiment(tmp_path / "exp")
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious\n")
+    (experiment.path / LOCK_FILE).symlink_to(victim)
+    with pytest.raises(RunDirError, match="cannot lock"):
+        experiment.run(LocalExecutor(1))
+    assert victim.read_text() == "precious\n"

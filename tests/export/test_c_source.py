@@ -72,6 +72,7 @@ def run(program: Path, which: int, states: np.ndarray) -> np.ndarray:
     return np.array([float(v) for v in result.stdout.split()])
 
 
+@pytest.mark.slow
 @needs_cc
 def test_c_matches_python_on_10000_states(tmp_path: Path) -> None:
     shipped = [load_behaviour(p) for p in SHIPPED]

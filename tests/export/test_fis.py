@@ -70,8 +70,10 @@ def test_import_reads_the_subset() -> None:
     ("Type='sugeno'", "Type='mamdani'", r"tiny.fis:3: Type='mamdani'.*Mamdani output sets"),
     ("MF2='up':'constant',[1]", "MF2='up':'linear',[1 0]",
      r"tiny.fis:21: output term 'up' is first-order Takagi-Sugeno"),
-    ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'gaussmf',[0.1 1]",
-     r"tiny.fis:14: membership function 'high' is a gaussmf"),
+    ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'discretemf',[0.1 1]",
+     r"tiny.fis:14: membership function 'high' is a discretemf"),
+    ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'gaussmf',[0 1]",
+     r"tiny.fis:14: .*sigma is 0.0; it must be above 0"),
     ("1, 2 (1) : 1", "1, 2 (0.5) : 1", r"tiny.fis:24: a rule weight of 0.5"),
     ("1, 2 (1) : 1", "-1, 2 (1) : 1", r"tiny.fis:24: NOT"),
     ("NumOutputs=1", "NumOutputs=2", r"tiny.fis:5: NumOutputs=2"),
@@ -194,6 +196,7 @@ def _fis_quads(behaviour: Behaviour) -> list[list[tuple[float, ...]]]:
 
 @pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
                          ids=lambda s: getattr(s, "name", str(s)))
+@pytest.mark.slow
 def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
     """fuzzylite 6 reads the export and agrees within 1e-12 apart from its 1e-6 tolerance,
     20 % past the range's ends too: shoulders' feet lie a range width outside it."""
@@ -213,6 +216,7 @@ def test_no_mf_has_a_vertical_edge() -> None:
                     len(values) == 4 and values[0] < values[1] <= values[2] < values[3])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("source", [*SHIPPED, 12], ids=str)
 def test_octave_reads_and_agrees(source: object, tmp_path: Path) -> None:
     """Optional: Octave's fuzzy-logic-toolkit (readfis / evalfis) reads the export and agrees

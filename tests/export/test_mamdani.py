@@ -94,6 +94,7 @@ def test_settings_the_measurement_does_not_compute_are_refused(setting: str) -> 
         FisImporter(mamdani_singletons=True).from_string(text, "mam.fis")
 
 
+@pytest.mark.slow
 def test_the_mamdani_reference_is_fuzzylites(tmp_path: Path) -> None:
     """The output the error is measured against is what fuzzylite 6 computes for the file."""
     behaviour = FisImporter(mamdani_singletons=True).from_string(MAMDANI, "mam.fis")

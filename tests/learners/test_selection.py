@@ -192,7 +192,8 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
     assert a == b
     info = json.loads((whole.path / "run.json").read_text())
     assert info["selection"] == json.loads((part.path / "run.json").read_text())["selection"]
-    assert resumed.usage == whole_summary.usage and resumed.usage["selection_episodes"] > 0
+    assert resumed.usage == whole_summary.usage
+    assert resumed.usage is not None and resumed.usage.selection_episodes > 0
 
 
 @pytest.mark.parametrize("learner", names("learner"))
@@ -235,10 +236,12 @@ def test_run_json_records_every_validated_candidate_and_the_usage(tmp_path: Path
         interval = candidate["validation"]
         assert interval["n"] == 20 and interval["low"] <= interval["value"] <= interval["high"]
     usage = selection["usage"]
-    assert usage == summary.usage == summary.to_dict()["usage"]
+    assert summary.usage is not None
+    assert usage == summary.usage.to_dict() == summary.to_dict()["usage"]
     assert usage["training_episodes"] == 4 * 6
     assert usage["selection_episodes"] == 20 * len(selection["validated"])
-    assert summary.best["validation"] == selection["best"]["validation"]
+    assert summary.best is not None and summary.best.validation is not None
+    assert summary.best.validation.to_dict() == selection["best"]["validation"]
 
 
 def test_a_damaged_selection_record_is_refused() -> None:
