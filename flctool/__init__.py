@@ -64,6 +64,7 @@ if TYPE_CHECKING:
     # what goes wrong
     from flctool.errors import (
         FlcError as FlcError, Problem as Problem, SpecError as SpecError,
+        InputFileError as InputFileError,
         NotDeployableError as NotDeployableError, EnvError as EnvError, LinkError as LinkError,
         ProtocolError as ProtocolError, LearnError as LearnError, RunDirError as RunDirError,
         InferenceError as InferenceError, ExportError as ExportError,

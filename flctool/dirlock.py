@@ -12,33 +12,32 @@ import os
 from pathlib import Path
 
 
-class LockHeld(Exception):
-    """Another process holds the lock; ``holder`` is its pid if it wrote one."""
-
-    def __init__(self, holder: int | None) -> None:
-        super().__init__(holder)
-        self.holder = holder
-
-
 class DirectoryLock:
     """The lock of ``path`` (a file, created if missing): :meth:`acquire` then
-    :meth:`release`. Raises :class:`LockHeld`, or the OSError of opening the file."""
+    :meth:`release`."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
+        self.holder: int | None = None
+        """After a refused :meth:`acquire`: the pid of the process holding the lock, if it
+        wrote one."""
         self._fd: int | None = None
 
-    def acquire(self) -> None:
+    def acquire(self) -> bool:
+        """Take the lock; False if another process holds it (see :attr:`holder`). Raises the
+        OSError of opening the file (a link, a read-only folder)."""
         fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.read(fd, 32).decode("ascii", "replace").strip()
             os.close(fd)
-            raise LockHeld(int(holder) if holder.isdigit() else None) from None
+            self.holder = int(holder) if holder.isdigit() else None
+            return False
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         self._fd = fd
+        return True
 
     def release(self) -> None:
         if self._fd is not None:

@@ -49,7 +49,7 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
-from flctool.dirlock import DirectoryLock, LockHeld, is_locked
+from flctool.dirlock import DirectoryLock, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
@@ -314,14 +314,14 @@ class Run:
         _refuse_links(self.path, path)
         lock = DirectoryLock(path)
         try:
-            lock.acquire()
-        except LockHeld as held:
-            raise RunDirError(
-                f"{self.path} is being trained by another flctool process"
-                f"{f' (pid {held.holder})' if held.holder else ''}",
-                hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
+            acquired = lock.acquire()
         except OSError as exc:
             raise _write_error(path, exc) from None
+        if not acquired:
+            raise RunDirError(
+                f"{self.path} is being trained by another flctool process"
+                f"{f' (pid {lock.holder})' if lock.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then --resume")
         try:
             yield
         finally:
@@ -666,7 +666,49 @@ def open_run(path: str | Path) -> Run:
     if not path.is_dir():
         raise RunDirError(f"{path}: no such run directory",
                           hint="give the directory flctool learn wrote (see its --out)")
+    for name in (BEHAVIOUR_FILE, RUN_FILE, BEST_FILE, CHECKPOINT_DIR):
+        if (path / name).is_symlink():  # reads, like writes, stay inside the directory
+            raise RunDirError(f"{path / name} is a symbolic link; flctool reads and writes "
+                              "only the run directory's own files",
+                              hint="replace the link with the file itself, or resume a copy "
+                              "of the run")
     if not (path / BEHAVIOUR_FILE).is_file():
         raise RunDirError(f"{path} is not a run directory: it has no {BEHAVIOUR_FILE}",
                           hint="give the directory flctool learn wrote (see its --out)")
-    return Run(path, load_behaviour(path / BEHAVIOUR_FILE))
+    run = Run(path, load_behaviour(path / BEHAVIOUR_FILE))
+    _check_record(run)
+    return run
+
+
+def _check_record(run: Run) -> None:
+    """Refuse a run.json that does not describe the run: another format, or a learner or
+    seed other than behaviour.yaml's (an edited record would otherwise be ignored, or
+    trusted)."""
+    path = run.path / RUN_FILE
+    try:
+        record: Any = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return  # a run killed inside create_run: behaviour.yaml is the record
+    except (OSError, ValueError, RecursionError) as exc:
+        raise RunDirError(f"{path} cannot be read ({exc})",
+                          hint=f"restore it, or delete it: flctool rebuilds it from "
+                          f"{BEHAVIOUR_FILE} and the checkpoints") from None
+    if not isinstance(record, dict):
+        raise RunDirError(f"{path} holds no run record (a {type(record).__name__})",
+                          hint=f"delete it: flctool rebuilds it from {BEHAVIOUR_FILE} and the "
+                          "checkpoints")
+    version = record.get("format")
+    if version != RUN_FORMAT:
+        newer = isinstance(version, int) and not isinstance(version, bool) and \
+            version > RUN_FORMAT
+        raise RunDirError(f"{path} has format {version!r}; this flctool reads run "
+                          f"directories of format {RUN_FORMAT}",
+                          hint="upgrade flctool: pip install --upgrade flctool" if newer
+                          else f"restore the file, or delete it: flctool rebuilds it from "
+                          f"{BEHAVIOUR_FILE} and the checkpoints")
+    for key, recorded in (("learner", run.learner), ("seed", run.seed)):
+        if key in record and record[key] != recorded:
+            raise RunDirError(f"{path} records {key} {record[key]!r}, but the run's "
+                              f"{BEHAVIOUR_FILE} has {recorded!r}: the record was edited",
+                              hint=f"restore it, or delete it: flctool rebuilds it from "
+                              f"{BEHAVIOUR_FILE} and the checkpoints")

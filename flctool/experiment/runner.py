@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
-from flctool.dirlock import DirectoryLock, LockHeld
+from flctool.dirlock import DirectoryLock
 from flctool.errors import RunDirError
 from flctool.evaluation import evaluate_behaviour
 from flctool.experiment.behaviour import (
@@ -231,17 +231,17 @@ class Experiment:
         processes running one experiment would both run its unfinished jobs."""
         lock = DirectoryLock(self.path / LOCK_FILE)
         try:
-            lock.acquire()
-        except LockHeld as held:
-            raise RunDirError(
-                f"{self.path} is being run by another flctool process"
-                f"{f' (pid {held.holder})' if held.holder else ''}",
-                hint="wait for it to finish, or stop it (Ctrl-C), then run the same command "
-                "again to continue") from None
+            acquired = lock.acquire()
         except OSError as exc:
             raise RunDirError(f"cannot lock {self.path / LOCK_FILE}: {exc.strerror or exc}",
                               hint="the lock file must be a plain file (not a link) in a "
                               "writable folder") from None
+        if not acquired:
+            raise RunDirError(
+                f"{self.path} is being run by another flctool process"
+                f"{f' (pid {lock.holder})' if lock.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then run the same command "
+                "again to continue")
         try:
             return self._run(executor, on_done)
         finally:

@@ -84,24 +84,53 @@ class Importer(ABC):
     """
 
     format: ClassVar[str]
+    #: What the last import changed or split, to tell the user ("" when nothing).
+    report: str = ""
 
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
-        """The controller in ``text`` as a behaviour (``file`` names it in messages)."""
+        """The controller in ``text`` as a behaviour (``file`` names it in messages); a file
+        with several outputs is refused here (see :meth:`from_string_all`)."""
+        behaviours = self.from_string_all(text, file)
+        if len(behaviours) > 1:
+            names = ", ".join(f"'{b.output.name}'" for b in behaviours)
+            raise ExportError(f"{file}:1: the controller has {len(behaviours)} outputs "
+                              f"({names}); a behaviour has one",
+                              hint="import it as one behaviour per output: flctool import "
+                              "FILE -o NAME.yaml writes NAME_<output>.yaml for each")
+        return behaviours[0]
+
+    def from_string_all(self, text: str, file: str = "<string>") -> list[Behaviour]:
+        """The controller in ``text`` as one behaviour per output, in file order (outputs
+        are independent: each is computed from its own rules)."""
         if len(text) > MAX_IMPORT_CHARS:
             raise ExportError(f"{file}:1: the file holds {len(text):,} characters, more than "
                               f"the {MAX_IMPORT_CHARS:,} an import reads",
                               hint="is it really a controller? split it or shorten it")
+        # a UTF-8 byte-order mark (Windows editors write one) is not part of the text
+        text = text.removeprefix("\ufeff")
         with no_collection():  # see flctool.spec.bounded
-            return self.parse(text, file)
+            return self.parse_all(text, file)
 
     @abstractmethod
     def parse(self, text: str, file: str) -> Behaviour:
         """The controller in ``text`` (at most MAX_IMPORT_CHARS long) as a behaviour."""
 
+    def parse_all(self, text: str, file: str) -> list[Behaviour]:
+        """:meth:`parse` for a format whose files may hold several outputs: one behaviour
+        per output. A format that reads one output only keeps this default."""
+        return [self.parse(text, file)]
+
     def from_file(self, path: str | Path) -> Behaviour:
+        return self.from_string(*self._read(path))
+
+    def from_file_all(self, path: str | Path) -> list[Behaviour]:
+        """:meth:`from_string_all` of a file."""
+        return self.from_string_all(*self._read(path))
+
+    def _read(self, path: str | Path) -> tuple[str, str]:
         path = Path(path)
         text = read_input(path, f"{self.format.upper()} file", MAX_IMPORT_CHARS)
-        return self.from_string(text, str(path))
+        return text, str(path)
 
 
 def write_files(texts: Mapping[Path, str], *, force: bool) -> list[Path]:

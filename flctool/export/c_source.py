@@ -143,6 +143,11 @@ class CExporter(Exporter):
                   "   near ones, the smaller singleton), as flctool's 'nearest' action picks "
                   "it; -1 for a NaN output. */",
                   f"int {prefix}command(const {real} state[{macro}N_INPUTS]);", "",
+                  "/* Both from one inference: writes the output (as <prefix>output gives "
+                  "it) to *output",
+                  "   and returns the command (as <prefix>command does). */",
+                  f"int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output);",
+                  "",
                   "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */"]
         return "\n".join(lines) + "\n"
 
@@ -377,9 +382,10 @@ static {real} {prefix}membership({real} s, const {real} q[4])
     return weighted;
 }}
 
-int {prefix}command(const {real} state[{macro}N_INPUTS])
+/* The command nearest an output (see the header). */
+static int {prefix}nearest({real} out)
 {{
-    {real} out = {prefix}output(state), gap = {zero}, d;
+    {real} gap = {zero}, d;
     int best = -1, k;
     if (out != out) return -1;
     for (k = 0; k < (int)(sizeof {prefix}singletons / sizeof {prefix}singletons[0]); ++k) {{
@@ -393,4 +399,15 @@ int {prefix}command(const {real} state[{macro}N_INPUTS])
         }}
     }}
     return best;
+}}
+
+int {prefix}command(const {real} state[{macro}N_INPUTS])
+{{
+    return {prefix}nearest({prefix}output(state));
+}}
+
+int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output)
+{{
+    *output = {prefix}output(state);
+    return {prefix}nearest(*output);
 }}""".splitlines()

@@ -19,7 +19,7 @@ from typing import Any
 from flctool.errors import ExportError, PathPart
 from flctool.export import shapes
 from flctool.spec import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
-from flctool.spec.shapes import shape_problem
+from flctool.spec.shapes import ShapedSet, shape_problem, shaped
 from flctool.spec.yaml_source import SourceMap
 
 Quad = tuple[float, float, float, float]
@@ -64,6 +64,10 @@ class ImportedSet:
     quad: Quad
     line: int
     shape: tuple[str, tuple[float, ...]] | None = None
+
+    def shape_value(self) -> Quad | ShapedSet:
+        """The set as the model holds it (a trapezoid's quadruple as read)."""
+        return shaped(*self.shape) if self.shape else self.quad
 
 
 def shaped_set(name: str, kind: str, params: tuple[float, ...], file: str, line: int

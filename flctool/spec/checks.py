@@ -17,6 +17,7 @@ from flctool.errors import PathPart, Problem
 from flctool.plugins import blamed
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
+from flctool.spec.magnitudes import magnitude_problems
 from flctool.spec.set_learning import set_learning_problems
 from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
@@ -87,6 +88,7 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
     environment = behaviour.environment
     if isinstance(environment, AdapterConfig):
         with blamed("environment", environment.adapter):
+            problems += magnitude_problems(environment)
             problems += environment.fit_problems(behaviour.input_names,
                                                  tuple(behaviour.output.commands))
     if not sets_problems:  # learning the sets starts from valid ones
@@ -169,11 +171,12 @@ def check_input(name: str, variable: InputVariable) -> list[Problem]:
             a, b = gap
             where = f"the point {a:g}" if a == b else f"the values between {a:g} and {b:g}"
             if all(is_trapezoid(v) for v in variable.sets.values()):
-                what = "belong to no set (membership 0 everywhere), so eq. 3 would divide " \
-                    "by zero there"
+                what = (f"{'belongs' if a == b else 'belong'} to no set (membership 0 "
+                        "everywhere), so eq. 3 would divide by zero there")
             else:
-                what = (f"have a membership below {COVERS_FROM:g} in every set (an input with "
-                        "a shape other than the trapezoid must reach that in some set "
+                what = (f"{'has' if a == b else 'have'} a membership below {COVERS_FROM:g} in "
+                        "every set (an input with a shape other than the trapezoid must "
+                        "reach that in some set "
                         "everywhere, so that eq. 3's denominator stays well above 0)")
             problems.append(Problem(
                 ("inputs", name, "sets"), f"{where} {what}",

@@ -31,6 +31,7 @@ from flctool.spec.dump import behaviour_to_data
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import foreign_key_message
 from flctool.spec.located import attach_source
+from flctool.spec.magnitudes import magnitude_problems
 from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
 from flctool.spec.rules import expand_dont_care
 from flctool.spec.sections import CHOSEN, section_model
@@ -147,6 +148,8 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
         value if isinstance(value, int) and not isinstance(value, bool) else None
         for value in (learning.get("population"), learning.get("trials"),
                       learning.get("generations"), max_steps)))
+    if isinstance(environment, dict):  # the numbers as written, whatever else is wrong
+        problems += magnitude_problems(environment)
     if isinstance(environment, dict) and isinstance(inputs, dict) and \
             isinstance(commands, dict):
         model = section_model("environment", environment)

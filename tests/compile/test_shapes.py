@@ -165,7 +165,7 @@ def test_gaussians_too_far_apart_leave_a_gap() -> None:
     far = _input("      a: {gauss: [0, 0.5]}\n      b: {gauss: [10, 0.5]}\n")
     (line, path, message), = _problems(far)
     assert (line, path) == (6, "inputs.x.sets")
-    assert "have a membership below 1e-06 in every set" in message
+    assert "a membership below 1e-06 in every set" in message
 
 
 def test_a_gaussian_covers_the_range_alone() -> None:

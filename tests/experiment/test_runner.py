@@ -191,7 +191,7 @@ def test_a_second_process_on_the_same_experiment_is_refused(tmp_path: Path) -> N
 
     experiment = tiny_experiment(tmp_path / "exp")
     holder = DirectoryLock(experiment.path / LOCK_FILE)
-    holder.acquire()  # another process, as flock sees it: another open file
+    assert holder.acquire()  # another process, as flock sees it: another open file
     try:
         with pytest.raises(RunDirError, match=r"being run by another flctool process "
                            r"\(pid \d+\)") as info:

@@ -257,3 +257,43 @@ def test_refusals_of_other_toolchains_files_say_what_to_do(old: str, new: str,
                                                            message: str) -> None:
     with pytest.raises(ExportError, match=message):
         FisImporter().from_string(SYSTEM.replace(old, new), "tiny.fis")
+
+
+TWO_OUTPUTS = (SYSTEM.replace("NumOutputs=1", "NumOutputs=2")
+               .replace("[Rules]", "[Output2]\nName='v'\nRange=[0 2]\nNumMFs=2\n"
+                        "MF1='slow':'constant',[0.5]\nMF2='fast':'constant',[2]\n\n[Rules]")
+               .replace("1, 2 (1) : 1\n2, 1 (1) : 1", "1, 2 2 (1) : 1\n2, 1 0 (1) : 1\n"
+                        "2, 0 1 (1) : 1"))
+
+
+def test_several_outputs_import_as_one_behaviour_each(tmp_path: Path) -> None:
+    """Each output keeps the rules that give it an MF (index 0 gives none), and fuzzylite 6
+    computes each output of the file as the behaviour of that output does."""
+    importer = FisImporter()
+    with pytest.raises(ExportError, match=r"tiny.fis:1: the controller has 2 outputs"):
+        importer.from_string(TWO_OUTPUTS, "tiny.fis")
+    u, v = importer.from_string_all(TWO_OUTPUTS, "tiny.fis")
+    assert (u.name, v.name) == ("u", "v")
+    assert [(r.if_["x"], r.then) for r in u.rules] == [("low", "up"), ("high", "down")]
+    assert [(r.if_["x"], r.then) for r in v.rules] == [("low", "fast"), ("high", "slow")]
+    assert "2 outputs, imported as one behaviour each" in importer.report
+    with pytest.raises(ExportError, match=r"tiny.fis:33: a rule weight of 0.5"):
+        importer.from_string_all(TWO_OUTPUTS.replace("2, 0 1 (1)", "2, 0 1 (0.5)"), "tiny.fis")
+    states = np.linspace(0.0, 1.0, 101)[:, None]
+    got = fuzzylite_outputs_all(TWO_OUTPUTS, states, tmp_path)
+    for k, behaviour in enumerate((u, v)):
+        assert np.max(np.abs(got[:, k] - compile_behaviour(behaviour).output(states))) <= 1e-12
+
+
+def fuzzylite_outputs_all(text: str, states: np.ndarray, folder: Path) -> np.ndarray:
+    import subprocess
+
+    from .engines import fuzzylite_binary
+
+    (folder / "e.fis").write_text(text, encoding="utf-8")
+    (folder / "s.fld").write_text("\n".join(repr(float(x)) for x in states[:, 0]) + "\n")
+    result = subprocess.run([fuzzylite_binary(), "-i", str(folder / "e.fis"), "-if", "fis",
+                             "-of", "fld", "-d", str(folder / "s.fld"), "-dheader", "false",
+                             "-dinputs", "false", "-decimals", "17"],
+                            capture_output=True, text=True, timeout=60, check=True)
+    return np.array([[float(v) for v in line.split()] for line in result.stdout.splitlines()])

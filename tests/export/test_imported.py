@@ -143,3 +143,17 @@ def test_mutated_exports_import_or_fail_with_a_location(case: tuple[str, str]) -
         IMPORTERS.get(format)().from_string(text, file)
     except FlcError as error:
         assert _located(error, file), str(error)
+
+
+@pytest.mark.parametrize("format", ["fll", "fis", "fcl"])
+def test_a_byte_order_mark_is_read_as_nothing(format: str, tmp_path: Path) -> None:
+    from flctool import load_behaviour
+    from flctool.export import EXPORTERS, IMPORTERS
+
+    from .roundtrip import SHIPPED
+
+    behaviour = load_behaviour(SHIPPED[0])
+    path = tmp_path / f"bom.{format}"
+    path.write_text("\ufeff" + EXPORTERS.get(format)().to_string(behaviour), encoding="utf-8")
+    imported = IMPORTERS.get(format)().from_file(path)
+    assert [v.sets for v in imported.inputs.values()] == [v.sets for v in behaviour.inputs.values()]
