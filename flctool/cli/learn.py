@@ -105,6 +105,9 @@ def learn(
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
                           f"from generation {training.done} in the run directory "
                           f"{escape(str(run.path))}", highlight=False)
+        from flctool.learners.budget import describe_budget
+
+        err_console.print(escape(describe_budget(training.learner)), highlight=False)
         try:
             summary = _train(training, show_progress=not as_json)
         except KeyboardInterrupt:

@@ -111,3 +111,36 @@ class Budget(RunCallback):
         for counter in fields(Usage):
             setattr(self.usage, counter.name, getattr(state.usage, counter.name))
         self.stop_reason = state.stop_reason
+
+
+def describe_budget(learner: Learner) -> str:
+    """What the run will spend and why, in one line for ``flctool learn`` to say: its
+    training episodes (generations x population x trials, from the file or the defaults, the
+    paper's protocol), for how many rules and commands, and what selection, confirmation
+    and the comparison with baselines add."""
+    from flctool.spec.located import source_of
+
+    config = learner.config
+    source_map = source_of(learner.behaviour)
+    given = [key for key in ("generations", "population", "trials")
+             if source_map.mark(("learning", key)) is not None
+             or ("learning", key) in source_map.overrides]
+    source = ("the paper's protocol: the file sets none of generations, population, trials"
+              if not given else f"{', '.join(given)} as given, the rest the paper's protocol")
+    free = learner.controller.n_rules - len(learner.fixed_rules)
+    training = config.generations * config.population * config.trials
+    confirming = learner.confirmation.episodes
+    end = learner.episodes_at_end()
+    selection = config.selection
+    validation = (f"selection validates candidates on {selection.episodes} episodes each"
+                  if selection.candidates else "no selection")
+    stop = config.stop
+    limit = f"; at most {stop.episodes} episodes in all (stop.episodes)" \
+        if stop.episodes is not None else ""
+    generations = f"{config.generations} generation{'s' if config.generations != 1 else ''}"
+    return (f"budget: {generations} x {config.population} individuals x "
+            f"{config.trials} trial{'s' if config.trials != 1 else ''} = {training} training "
+            f"episodes ({source}) for {free} rules to learn x "
+            f"{learner.controller.n_commands} commands; {validation}; the returned controller "
+            f"is confirmed on {confirming} fresh episodes and compared with baselines "
+            f"({end - confirming} episodes){limit}")

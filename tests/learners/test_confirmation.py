@@ -167,3 +167,12 @@ def test_confirmation_and_baselines_stay_within_an_episode_budget(limit: int) ->
     usage = learner.usage
     assert usage.episodes <= limit and learner.stop_reason == "episodes"
     assert usage.confirmation_episodes > 0 and usage.baseline_episodes > 0
+
+
+def test_learn_says_the_budget_and_why(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["learn", str(BEHAVIOURS / "ballchase.yaml"), "-g", "1",
+                                 "--out", str(tmp_path / "run")])
+    assert result.exit_code in (0, 3), result.output
+    assert ("budget: 1 generation x 10 individuals x 1 trial = 10 training episodes "
+            "(generations as given, the rest the paper's protocol) for 15 rules to learn x 5 "
+            "commands") in " ".join(result.stderr.split())
