@@ -69,7 +69,7 @@ def run_one(task: str, seed: int, with_sets: bool, episodes: int,
         result = evaluate(compile_behaviour(best), env, evaluation_seeds(0, episodes))
     finally:
         env.close()
-    usage = summary.usage
+    usage = summary.to_dict()["usage"]
     value = (float(result.mean_return.value) if score == "return"
              else float(result.success_rate.value))
     return {"task": task, "seed": seed, "sets": with_sets, "score": value,

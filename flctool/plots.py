@@ -26,10 +26,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
-from flctool.compile.membership import trapezoid
+from flctool.compile.membership import memberships
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
+from flctool.inputs import no_such_file
 from flctool.runs import Run
 from flctool.spec import Behaviour
+from flctool.spec.models import FuzzySet
+from flctool.spec.shapes import set_row
 
 FloatArray = NDArray[np.float64]
 FORMATS = ("png", "svg")
@@ -221,6 +224,15 @@ def _axis_label(behaviour: Behaviour, name: str) -> str:
     return f"{name} ({unit})" if unit else name
 
 
+def _set_curve(value: FuzzySet, low: float, high: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where to draw a set: a trapezoid is linear between its corners, so it is drawn through
+    them; another shape through 400 points of the range."""
+    code, row = set_row(value)
+    xs = (np.clip(np.array(row, dtype=np.float64), low, high) if code == 0
+          else np.linspace(low, high, 400))
+    return xs, memberships(xs, np.array([row], dtype=np.float64), [code])[:, 0]
+
+
 def plot_memberships(behaviour: Behaviour, path: Path,
                      before: Behaviour | None = None) -> list[Path]:
     """Each input's fuzzy sets (paper Fig. 1): membership over the input's range; with
@@ -235,15 +247,12 @@ def plot_memberships(behaviour: Behaviour, path: Path,
         low, high = variable.range
         old = before.inputs.get(name) if before is not None else None
         for set_name, quad in variable.sets.items():
-            # the membership is linear between the corners: drawn through them
-            xs = np.clip(np.array(quad, dtype=np.float64), low, high)
-            line, = axes.plot(xs, trapezoid(xs, np.array([quad], dtype=np.float64))[:, 0],
-                              label=set_name)
+            xs, ys = _set_curve(quad, low, high)
+            line, = axes.plot(xs, ys, label=set_name)
             was = old.sets.get(set_name) if old is not None else None
-            if was is not None and tuple(was) != tuple(quad):
-                xs = np.clip(np.array(was, dtype=np.float64), low, high)
-                axes.plot(xs, trapezoid(xs, np.array([was], dtype=np.float64))[:, 0],
-                          linestyle="--", linewidth=0.9, color=line.get_color(), alpha=0.6)
+            if was is not None and was != quad:
+                axes.plot(*_set_curve(was, low, high), linestyle="--", linewidth=0.9,
+                          color=line.get_color(), alpha=0.6)
         axes.set_xlim(low, high)
         axes.set_ylim(-0.05, 1.1)
         axes.set_xlabel(_axis_label(behaviour, name))
@@ -474,8 +483,7 @@ def _check_exist(sources: Sequence[Path]) -> None:
                        "trace CSV")
     for source in sources:
         if not source.exists():
-            raise FlcError(f"{source}: no such file or directory",
-                           hint="give an experiment, run directories, or one trace CSV")
+            raise no_such_file(source, "experiment, run directory or trace CSV")
 
 
 def plot_sources(sources: Sequence[Path], folder: Path, rule: int | None = None

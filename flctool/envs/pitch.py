@@ -389,17 +389,14 @@ class PitchSim(BatchEnv):
             raise EnvError("no episode yet", hint="call reset(seeds) first")
         return self._engine.success()
 
+    #: What :meth:`episode_fitness` can give: 0 (a failure at once) to 2 (success at once).
+    fitness_range = (0.0, 2.0)
+
     def episode_fitness(self, returns: FloatArray, lengths: NDArray[np.int64],
                         success: BoolArray) -> FloatArray:
-        """Trial fitness for the GA, (B,) each; faster success scores higher.
-
-        success after L steps: ``2 - L / max_steps`` in [1, 2]; any other ending after L
-        steps: ``0.5 * L / max_steps`` in [0, 0.5] (a time-out gives 0.5) -- lasting longer
-        before a failure is better than failing at once, and any success beats every failure.
-        """
+        """Trial fitness for the GA, (B,) each: :func:`timed_fitness`."""
         del returns
-        fraction = np.asarray(lengths, dtype=np.float64) / self.max_steps
-        return np.where(np.asarray(success, dtype=bool), 2.0 - fraction, 0.5 * fraction)
+        return timed_fitness(lengths, success, self.max_steps)
 
     def trace_state(self) -> dict[str, FloatArray]:
         """Robot pose (mm, deg in [-180, 180)) and ball position, each (B,)."""
@@ -537,3 +534,17 @@ def _blend(mean: Sequence[Any], std: Sequence[Any], j: Any, w: Any,
     nearest passes w = 0, which gives row j exactly."""
     keep = 1.0 - w
     return ([keep * c[j] + w * c[j + 1] for c in mean], [keep * c[j] + w * c[j + 1] for c in std])
+
+
+def timed_fitness(lengths: NDArray[np.int64], success: BoolArray, max_steps: int) -> FloatArray:
+    """Trial fitness where faster success scores higher, (B,) each (also the ros2 adapter's
+    ``fitness: timed``).
+
+    success after L steps: ``2 - L / max_steps`` in [1, 2]; any other ending after L
+    steps: ``0.5 * L / max_steps`` in [0, 0.5] (a time-out gives 0.5) -- lasting longer
+    before a failure is better than failing at once, and any success beats every failure.
+    """
+    fraction = np.asarray(lengths, dtype=np.float64) / max_steps
+    result: FloatArray = np.where(np.asarray(success, dtype=bool), 2.0 - fraction,
+                                  0.5 * fraction)
+    return result

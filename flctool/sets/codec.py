@@ -39,6 +39,7 @@ from typing import SupportsFloat
 from flctool.errors import LearnError
 from flctool.spec.models import Behaviour, InputVariable
 from flctool.spec.set_learning import InputSetting, Quad, SetLearningConfig, coverage
+from flctool.spec.shapes import trapezoids
 
 #: Halvings of a lateral genome's shifts before the file's sets are kept.
 MAX_HALVINGS = 40
@@ -61,7 +62,7 @@ class InputCodec:
         self.set_names = tuple(variable.sets)
         self.quads: tuple[Quad, ...] = tuple(
             (float(pa), float(pb), float(pc), float(pd))
-            for pa, pb, pc, pd in variable.sets.values())
+            for pa, pb, pc, pd in trapezoids(variable.sets.values()))
         self._layout = (_PartitionLayout.of(self) if setting.mode == "partition"
                         else _LateralLayout.of(self))
         self.size = self._layout.size

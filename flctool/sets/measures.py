@@ -20,8 +20,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from flctool.spec.models import Behaviour
+from flctool.spec.models import Behaviour, FuzzySet
 from flctool.spec.set_learning import Quad, coverage, membership
+from flctool.spec.shapes import is_trapezoid, trapezoids
 
 
 def crossing_height(left: Sequence[float], right: Sequence[float]) -> float:
@@ -70,12 +71,17 @@ def movements(reference: Behaviour, learned: Behaviour) -> list[SetMovement]:
         lo, hi = variable.range
         for set_name, before in variable.sets.items():
             after = other.sets.get(set_name)
-            if after is None:
-                continue
+            if after is None or not (is_trapezoid(before) and is_trapezoid(after)):
+                continue  # (a set of another shape is never learned: it does not move)
             largest = max(abs(a - b) for a, b in zip(after, before, strict=True))
             found.append(SetMovement(name, set_name, tuple(before), tuple(after),  # type: ignore[arg-type]
                                      largest, largest / (hi - lo)))
     return found
+
+
+def trapezoid_sets(sets: Mapping[str, FuzzySet]) -> dict[str, Quad]:
+    """``sets`` as quadruples: every set must be a trapezoid (learned sets are)."""
+    return dict(zip(sets, trapezoids(sets.values()), strict=True))
 
 
 def partition_measures(bounds: Sequence[float],
@@ -101,7 +107,7 @@ def interpretability(reference: Behaviour, learned: Behaviour,
     for name in chosen:
         variable = learned.inputs[name]
         record[name] = {
-            **partition_measures(variable.range, variable.sets),
+            **partition_measures(variable.range, trapezoid_sets(variable.sets)),
             "movement": {m.set: {"moved": m.largest, "moved_fraction_of_range": m.fraction}
                          for m in moved if m.input == name},
         }

@@ -31,6 +31,7 @@ from pydantic import Field
 from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.base import Name, Section
+from flctool.spec.shapes import is_trapezoid, trapezoids
 
 if TYPE_CHECKING:
     from flctool.spec.models import Behaviour, InputVariable
@@ -128,6 +129,15 @@ def set_learning_problems(behaviour: Behaviour) -> list[Problem]:
                                     f"use one of the inputs: {', '.join(known)}"))
     for name, setting in config.settings(known).items():
         variable = behaviour.inputs[name]
+        shaped = [(s, v.kind) for s, v in variable.sets.items() if not is_trapezoid(v)]
+        if shaped:  # the set genes code trapezoids only (flctool.spec.shapes)
+            set_name, kind = shaped[0]
+            problems.append(Problem(
+                ("inputs", name, "sets", set_name), f"learning.sets learns the sets of input "
+                f"'{name}', but set '{set_name}' is a {kind}: only trapezoid partitions can "
+                "be learned", f"leave '{name}' out of learning.sets.inputs (list the inputs "
+                "to learn), or write its sets as trapezoids"))
+            continue
         for index, set_name in enumerate(setting.fixed):
             if set_name not in variable.sets:
                 problems.append(Problem(
@@ -153,7 +163,7 @@ def strong_partition_problems(name: str, variable: InputVariable) -> list[Proble
     """Why the sets of input ``name`` are not a strong partition the ``partition`` mode can
     start from (empty if they are)."""
     lo, hi = variable.range
-    sets = list(variable.sets.items())
+    sets = list(zip(variable.sets, trapezoids(variable.sets.values()), strict=True))
     hint = ("write a strong partition (the first set [low, low, c, d], each next one starting "
             "[c, d, ...] where the previous ends, the last [..., high, high]), or learn this "
             "input's sets with mode: lateral")
@@ -183,7 +193,7 @@ def strong_partition_problems(name: str, variable: InputVariable) -> list[Proble
 def coverage_floor_problems(name: str, variable: InputVariable,
                             floor: float) -> list[Problem]:
     """The file's sets of input ``name`` below the ``lateral`` mode's coverage floor."""
-    lowest, where = coverage(variable.range, list(variable.sets.values()))
+    lowest, where = coverage(variable.range, trapezoids(variable.sets.values()))
     if lowest >= floor:
         return []
     return [Problem(("inputs", name, "sets"), f"learning.sets keeps a coverage of at least "

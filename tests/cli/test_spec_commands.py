@@ -194,9 +194,9 @@ def test_infer_file_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
     binary = tmp_path / "states.csv"
     binary.write_bytes(b"ball_size,pan\n\xff,1\n")
     cases = [
-        (["-i", str(binary)], "the CSV is not UTF-8 text (byte 0xff)"),
-        (["-i", str(tmp_path / "none.csv")], "cannot read the states CSV"),
-        (["-i", str(tmp_path)], "cannot read the states CSV"),
+        (["-i", str(binary)], "states.csv:2:1: the CSV is not UTF-8 text (byte 0xff;"),
+        (["-i", str(tmp_path / "none.csv")], "none.csv: no such file or directory"),
+        (["-i", str(tmp_path)], "is a folder, not a states CSV"),
         (["-o", str(tmp_path)], "the output CSV " + str(tmp_path) + " is a folder"),
     ]
     for options, message in cases:
