@@ -79,6 +79,7 @@ def evaluate_command(
     with a 95 % confidence interval. Success lines appear only when the environment defines
     success."""
     from flctool.compile import compile_behaviour
+    from flctool.compile import controller as controller_module
     from flctool.envs import make_env
     from flctool.evaluation import (
         DEFAULT_EPISODES,
@@ -106,8 +107,9 @@ def evaluate_command(
             err_console.print(f"[yellow]warning:[/] seeds from {TRAIN_SEED_LOW} up are "
                               "the range training episodes use; these are not held out",
                               highlight=False)
-        with compiling():  # load (or, on a machine's first run, compile) the kernels
-            controller.output(controller.ranges[:, 0][None, :])
+        # Inference starts in numpy; if the work grows enough to pay for the compiled kernels,
+        # loading them (compiling, on a machine's first run) is announced.
+        controller_module.kernel_loading = compiling
         total = len(listed) if listed is not None else (episodes or DEFAULT_EPISODES)
         success = defines_success(behaviour)
         env = make_env(behaviour, batch_size(total))  # its errors come before the progress bar

@@ -178,8 +178,9 @@ def test_nan_raises_on_every_path(handmade_path: Path) -> None:
 def test_with_consequents_shares_the_layout(handmade_path: Path) -> None:
     controller = compile_behaviour(load_behaviour(handmade_path))
     controller.output_one([0.5, 10.0])
+    layout, rules = controller._layout, controller._rules  # what each path builds
     flipped = controller.with_consequents(4 - np.asarray(controller.consequents))
-    assert flipped._layout is controller._layout
+    assert flipped._layout is layout and flipped._rules is rules
     assert flipped.output_one([0.5, 10.0]) == -controller.output_one([0.5, 10.0])
 
 
