@@ -66,7 +66,7 @@ GOAL_MEGABYTES = 150.0
 # What `flctool learn` imports before it trains (the learners and the simulator are
 # registered by name and imported on first use).
 IMPORTS = ("import flctool.cli, flctool.cli.learn, flctool.runs, flctool.envs.ballchase, "
-           "flctool.learners.pitt, flctool.learners.hybrid, flctool.learners.fuzzy_q")
+           "flctool.learners.genetic, flctool.learners.fuzzy_q")
 # Runs the command in this interpreter and reports afterwards which heavy libraries it
 # imported (learning needs none of them; each costs tenths of a second).
 HEAVY = ("numba", "scipy", "skfuzzy", "matplotlib")

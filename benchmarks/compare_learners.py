@@ -70,6 +70,8 @@ def main() -> None:
     parser.add_argument("--behaviour", type=Path, default=ROOT / "behaviours/ballchase.yaml")
     parser.add_argument("--learners", default="pitt,hybrid,fuzzy_q")
     parser.add_argument("--seeds", type=int, default=30)
+    parser.add_argument("--first-seed", type=int, default=0,
+                        help="training seeds are first-seed .. first-seed + seeds - 1")
     parser.add_argument("--episodes", type=int, default=1000)
     parser.add_argument("--set", dest="assignments", action="append", default=[],
                         help="override a learning hyperparameter, e.g. trials=2")
@@ -81,12 +83,12 @@ def main() -> None:
     results: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory() as tmp:
         for learner in learners:
-            for seed in range(args.seeds):
+            for seed in range(args.first_seed, args.first_seed + args.seeds):
                 results.append(run_one(args.behaviour, learner, seed, overrides,
                                        args.episodes, Path(tmp)))
     summary: dict[str, dict[str, Any]] = {}
-    print(f"{args.behaviour.name}: {args.seeds} training seeds, best.yaml on {args.episodes} "
-          f"held-out episodes; overrides {overrides or 'none'}")
+    print(f"{args.behaviour.name}: {args.seeds} training seeds from {args.first_seed}, "
+          f"best.yaml on {args.episodes} held-out episodes; overrides {overrides or 'none'}")
     print(f"{'learner':8} {'median':>7} {'mean':>7} {'worst':>7} {'(seed)':>6} {'AUC':>7} "
           f"{'cpu s':>6} {'training':>8} {'selection':>9} {'episodes':>8}")
     for learner in learners:
@@ -110,7 +112,8 @@ def main() -> None:
         ratio = summary["hybrid"]["mean_auc"] / summary["pitt"]["mean_auc"]
         print(f"hybrid AUC / pitt AUC = {ratio:.3f}")
     args.json.write_text(json.dumps({"behaviour": str(args.behaviour.name),
-                                     "seeds": args.seeds, "episodes": args.episodes,
+                                     "seeds": args.seeds, "first_seed": args.first_seed,
+                                     "episodes": args.episodes,
                                      "overrides": overrides, "summary": summary,
                                      "runs": results}, indent=2) + "\n")
     print(f"wrote {args.json}")

@@ -21,8 +21,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from flctool.lazy import lazy_attributes
-
-__version__ = "0.1.0"
+from flctool.version import __version__
 
 if TYPE_CHECKING:
     from flctool.compile import Controller, compile_behaviour

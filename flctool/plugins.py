@@ -3,14 +3,17 @@
 A :class:`Plugin` is a name, the model of the behaviour-file section it reads (learners and
 adapters) and a lazy ``"module:Class"`` implementation. The registries
 (:data:`flctool.learners.LEARNERS`, :data:`flctool.envs.ENVIRONMENTS`,
-:data:`flctool.export.EXPORTERS`) and the behaviour-file models (``learning:`` chosen by
-``learner``, ``environment:`` by ``adapter``) are all built from these lists, so adding a
-learner is one module plus one entry.
+:data:`flctool.export.EXPORTERS`) and the behaviour-file sections (``learning:`` read by the
+model of the plugin its ``learner`` names, ``environment:`` by its ``adapter``'s,
+:mod:`flctool.spec.sections`) are all found from these lists, so adding a learner is one
+module plus one entry.
 
 Installed packages add entries through the entry-point groups ``flctool.learners``,
-``flctool.environments`` and ``flctool.exporters``; each entry point names a :class:`Plugin`
-object (docs/plugins.md). Only packages the user installed are loaded this way: nothing a
-behaviour file says makes flctool import a module.
+``flctool.environments`` and ``flctool.exporters``; each entry point is named like its plugin
+and names a :class:`Plugin` object (docs/plugins.md). Like Gymnasium's ``make()``,
+:func:`plugin` imports only the entry a name asks for; :func:`plugins` (every plugin, for
+listings and error hints) imports them all. Only packages the user installed are loaded this
+way: nothing a behaviour file says makes flctool import a module that is not installed.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import importlib
 import warnings
 from dataclasses import dataclass
 from functools import cache
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
 from pydantic import BaseModel
@@ -71,10 +74,10 @@ _ENVIRONMENT = "flctool.spec.environment"
 
 BUILTIN: dict[str, tuple[Plugin, ...]] = {
     "learner": (
-        Plugin("pitt", "flctool.learners.pitt:PittLearner", f"{_LEARNING}:PittConfig"),
+        Plugin("pitt", "flctool.learners.genetic:PittLearner", f"{_LEARNING}:PittConfig"),
         Plugin("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner",
                f"{_LEARNING}:FuzzyQConfig"),
-        Plugin("hybrid", "flctool.learners.hybrid:HybridLearner", f"{_LEARNING}:HybridConfig"),
+        Plugin("hybrid", "flctool.learners.genetic:HybridLearner", f"{_LEARNING}:HybridConfig"),
     ),
     "environment": (
         Plugin("ballchase-sim", "flctool.envs.ballchase:BallchaseSim",
@@ -100,33 +103,48 @@ BUILTIN: dict[str, tuple[Plugin, ...]] = {
 @cache
 def plugins(kind: str) -> tuple[Plugin, ...]:
     """The built-in plugins of ``kind`` ("learner", "environment" or "exporter"), then the
-    installed ones, in entry-point name order. A broken installed plugin is skipped with a
-    :class:`PluginWarning` saying which package to fix or uninstall."""
+    installed ones, in entry-point name order; every installed one is imported. A broken
+    installed plugin is skipped with a :class:`PluginWarning` saying which package to fix or
+    uninstall."""
     found = list(BUILTIN[kind])
-    taken = {plugin.name for plugin in found}
-    points = sorted(entry_points(group=GROUPS[kind]), key=lambda p: p.name)
-    if points and kind != "exporter":
-        # An installed learner's or adapter's config extends a model of flctool.spec, whose
-        # behaviour model is built from these lists: built first, so that loading the plugin
-        # does not come back here halfway through (and see a half-imported plugin).
-        importlib.import_module("flctool.spec.models")
-    for point in points:
-        where = f"entry point '{point.name}' = '{point.value}' in group {GROUPS[kind]}"
-        try:
-            plugin = point.load()
-        except Exception as error:  # a third party's import error must not stop flctool
-            warnings.warn(f"skipped the {kind} plugin of {where}: it does not import "
-                          f"({type(error).__name__}: {error}); fix or uninstall its package",
-                          PluginWarning, stacklevel=2)
-            continue
-        problem = _problem(kind, plugin, taken)
-        if problem:
-            warnings.warn(f"skipped the {kind} plugin of {where}: {problem}", PluginWarning,
-                          stacklevel=2)
-            continue
-        found.append(plugin)
-        taken.add(plugin.name)
+    for point in sorted(entry_points(group=GROUPS[kind]), key=lambda p: (p.name, p.value)):
+        installed = _installed(kind, point)
+        if installed is not None and installed.name not in {p.name for p in found}:
+            found.append(installed)  # two packages naming one plugin: plugin() takes this one
     return tuple(found)
+
+
+@cache
+def plugin(kind: str, name: str) -> Plugin | None:
+    """The plugin of ``kind`` called ``name``, or None if there is none: a built-in, or the
+    installed entry point of that name, imported alone (and skipped with a
+    :class:`PluginWarning` if it is broken)."""
+    for builtin in BUILTIN[kind]:
+        if builtin.name == name:
+            return builtin
+    point = next(iter(sorted(entry_points(group=GROUPS[kind], name=name),
+                             key=lambda p: p.value)), None)
+    return None if point is None else _installed(kind, point)
+
+
+@cache
+def _installed(kind: str, point: EntryPoint) -> Plugin | None:
+    """The plugin an entry point names, checked; None (with a warning) if it is broken."""
+    where = f"entry point '{point.name}' = '{point.value}' in group {GROUPS[kind]}"
+    try:
+        loaded = point.load()
+    except Exception as error:  # a third party's import error must not stop flctool
+        warnings.warn(f"skipped the {kind} plugin of {where}: it does not import "
+                      f"({type(error).__name__}: {error}); fix or uninstall its package",
+                      PluginWarning, stacklevel=3)
+        return None
+    problem = _problem(kind, loaded, {p.name for p in BUILTIN[kind]}, point.name)
+    if problem:
+        warnings.warn(f"skipped the {kind} plugin of {where}: {problem}", PluginWarning,
+                      stacklevel=3)
+        return None
+    found: Plugin = loaded
+    return found
 
 
 def names(kind: str) -> tuple[str, ...]:
@@ -134,11 +152,17 @@ def names(kind: str) -> tuple[str, ...]:
     return tuple(plugin.name for plugin in plugins(kind))
 
 
-def _problem(kind: str, plugin: object, taken: set[str]) -> str | None:
+def _problem(kind: str, plugin: object, taken: set[str],
+             entry_name: str | None = None) -> str | None:
+    """Why ``plugin`` cannot be used as a plugin of ``kind`` (None if it can); ``taken``
+    holds the names already used, ``entry_name`` the name of the entry point naming it."""
     if not isinstance(plugin, Plugin):
         return f"it names a {type(plugin).__name__}, not a flctool.plugins.Plugin"
     if plugin.name in taken:
         return f"the name '{plugin.name}' is taken"
+    if entry_name is not None and plugin.name != entry_name:
+        return (f"its plugin is called '{plugin.name}': name the entry point '{plugin.name}' "
+                "too, flctool finds a plugin by its entry point's name")
     if ":" not in plugin.target:
         return f"target '{plugin.target}' is not 'module:attribute'"
     if kind == "exporter":
@@ -171,9 +195,30 @@ def export_suffixes() -> dict[str, str]:
     return found
 
 
+class PluginRegistry(Registry[Any]):
+    """The plugins of one kind by name: each one's module, and an installed plugin's entry
+    point, is imported when its name is first used; listing the names imports every entry."""
+
+    def __init__(self, kind: str, label: str) -> None:
+        super().__init__(label)
+        self.plugin_kind = kind
+        for builtin in BUILTIN[kind]:
+            self.register(builtin.name, builtin.target)
+
+    def get(self, name: str) -> Any:
+        if name not in self._entries:
+            found = plugin(self.plugin_kind, name)  # an installed one: its entry point alone
+            if found is not None:
+                self.register(name, found.target)
+        return super().get(name)
+
+    def names(self) -> tuple[str, ...]:
+        return names(self.plugin_kind)
+
+    def __contains__(self, name: object) -> bool:
+        return isinstance(name, str) and plugin(self.plugin_kind, name) is not None
+
+
 def registry(kind: str, label: str) -> Registry[Any]:
-    """A registry of every plugin of ``kind`` by name, each loaded when first used."""
-    found: Registry[Any] = Registry(label)
-    for plugin in plugins(kind):
-        found.register(plugin.name, plugin.target)
-    return found
+    """A registry of every plugin of ``kind`` by name, each imported when first used."""
+    return PluginRegistry(kind, label)

@@ -42,7 +42,7 @@ class Registry(Generic[T]):
         try:
             entry = self._entries[name]
         except KeyError:
-            known = ", ".join(sorted(self._entries))
+            known = ", ".join(sorted(self.names()))
             raise UnknownNameError(
                 f"unknown {self.kind} '{name}'.{did_you_mean(name, self.names())}",
                 hint=f"use one of: {known}",
@@ -61,4 +61,4 @@ class Registry(Generic[T]):
         return name in self._entries
 
     def __iter__(self) -> Iterator[str]:
-        return iter(self._entries)
+        return iter(self.names())

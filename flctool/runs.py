@@ -48,7 +48,6 @@ from typing import Any
 
 import numpy as np
 
-from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
@@ -64,6 +63,7 @@ from flctool.spec import (
 from flctool.spec.learning import keep_keys_read_by
 from flctool.spec.located import source_of
 from flctool.spec.rules import with_rules
+from flctool.version import __version__
 
 RUN_FORMAT = 1
 BEHAVIOUR_FILE = "behaviour.yaml"
@@ -603,7 +603,7 @@ class RunRecorder(Callback):
                           if candidate is not None and candidate.validation else None)
             self._write_best(with_rules(run.behaviour, consequents),
                              _provenance(run, generation, individual, fitness, validation))
-            run.write_info("running", self.best, learner.selection.record())
+            run.write_info("running", self.best, learner.selection_record())
         return True
 
     def _write_best(self, behaviour: Behaviour, provenance: dict[str, Any]) -> None:
@@ -626,7 +626,7 @@ class RunRecorder(Callback):
                     self._write_best(behaviour, provenance)
         selection = None  # kept from run.json, unless this session recorded generations
         if learner is not None and self._recorded:
-            selection = learner.selection.record()
+            selection = learner.selection_record()
         if self._unsynced is not None:
             _fsync(self._unsynced)  # the last checkpoint (see the policy above)
         self.run.write_info("finished" if finished else "stopped",

@@ -4,6 +4,7 @@ and environment are used from a behaviour file without touching flctool."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import typing
@@ -18,6 +19,7 @@ from flctool.plugins import BUILTIN, Plugin, _problem, plugins
 from flctool.spec.learning import LearningConfig
 
 PACKAGE = Path(__file__).parent / "plugin_package"
+ROOT = Path(__file__).resolve().parents[1]
 
 DEMO = """\
 flctool: 1
@@ -86,11 +88,56 @@ def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem
     assert found is not None and problem in found
 
 
+def _with_package(site: Path = PACKAGE) -> dict[str, str]:
+    """The environment of a process in which the plugin package in ``site`` is installed:
+    its package and dist-info folders on the path are what ``pip install`` leaves."""
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(site), *filter(None, [os.environ.get("PYTHONPATH")])])}
+
+
 def _flctool(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        [str(PACKAGE), *filter(None, [os.environ.get("PYTHONPATH")])])}
-    return subprocess.run([sys.executable, "-m", "flctool", *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run([sys.executable, "-m", "flctool", *args], cwd=tmp_path,
+                          env=_with_package(), capture_output=True, text=True, timeout=120)
+
+
+@pytest.fixture
+def installed_copy(tmp_path: Path) -> dict[str, str]:
+    """An environment with a copy of the plugin package installed in a folder of its own."""
+    site = tmp_path / "site-packages"
+    shutil.copytree(PACKAGE, site, ignore=shutil.ignore_patterns("__pycache__"))
+    return _with_package(site)
+
+
+def test_with_a_plugin_installed_the_schema_check_passes(installed_copy: dict[str, str]) -> None:
+    # The committed schema describes the built-ins, wherever it is checked.
+    checked = subprocess.run([sys.executable, "-m", "flctool", "schema", "--check"], cwd=ROOT,
+                             env=installed_copy, capture_output=True, text=True, timeout=120)
+    assert checked.returncode == 0, checked.stderr
+    listed = subprocess.run([sys.executable, "-m", "flctool", "learn", "--help"], cwd=ROOT,
+                            env=installed_copy, capture_output=True, text=True, timeout=120)
+    assert "random_search" in listed.stdout  # and it is installed
+
+
+def test_a_file_naming_only_built_ins_does_not_import_an_installed_plugin(
+        installed_copy: dict[str, str]) -> None:
+    code = ("import sys; from flctool import load_behaviour; from flctool.envs import make_env; "
+            "make_env(load_behaviour('behaviours/ballchase.yaml')); "
+            "print('flctool_demo' in sys.modules)")
+    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=installed_copy,
+                            capture_output=True, text=True, timeout=120)
+    assert result.stdout.split() == ["False"], result.stderr
+
+
+@pytest.mark.slow
+def test_with_a_plugin_installed_the_readme_runs(installed_copy: dict[str, str]) -> None:
+    # The part of the README's test command that a plugin once broke: its code blocks,
+    # the schema check among them.
+    result = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                             "tests/test_docs.py", "-k", "README"],
+                            cwd=ROOT, env=installed_copy, capture_output=True, text=True,
+                            timeout=600)
+    assert result.returncode == 0, result.stdout[-3000:]
+    assert "1 passed" in result.stdout
 
 
 def test_an_installed_learner_and_environment_run_from_a_behaviour_file(tmp_path: Path) -> None:
@@ -138,6 +185,12 @@ def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:
     assert result.returncode == 1
     assert "unknown adapter 'line'" in result.stderr
     assert "unknown learner 'random_search'" in result.stderr
+
+
+def test_an_entry_point_must_be_named_like_its_plugin() -> None:
+    # flctool finds an installed plugin by the name of its entry point, importing no other
+    found = _problem("learner", Plugin("mine", "x:Y", LearningConfig), set(), "yours")
+    assert found is not None and "name the entry point 'mine'" in found
 
 
 def test_an_adapter_plugin_must_extend_adapter_config() -> None:

@@ -43,8 +43,8 @@ from typer._click.utils import make_default_short_help
 from typer.core import TyperGroup
 from typer.main import get_command_from_info, get_command_name
 
-from flctool import __version__
 from flctool.errors import FlcError, SpecError
+from flctool.version import __version__
 
 if TYPE_CHECKING:
     from flctool.spec import Behaviour

@@ -95,10 +95,10 @@ def import_controller(
         "singletons at their centroids, and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
-    from flctool import __version__
     from flctool.export import IMPORTERS
     from flctool.export.base import comment_safe, write_files
     from flctool.export.imported import imported_yaml
+    from flctool.version import __version__
 
     with user_errors():
         name = output_format(file, format, IMPORT_SUFFIXES, "fll")

@@ -1,10 +1,10 @@
 """A compiled controller: the behaviour's numbers as frozen numpy arrays, and inference.
 
 Rule order (eq. 1): rule ``m`` is one combination of sets, enumerated with the **last input
-varying fastest** -- the order of ``itertools.product`` and of ``numpy.ndindex``. For inputs
-with L = (3, 5) sets, rule 0 is (set 0, set 0), rule 1 is (set 0, set 1), ..., rule 5 is
-(set 1, set 0). This order is stable: it is how chromosomes, q tables and exports index rules.
-It is coded once, in plain Python, in :mod:`flctool.compile.rules`.
+varying fastest**. For inputs with L = (3, 5) sets, rule 0 is (set 0, set 0), rule 1 is
+(set 0, set 1), ..., rule 5 is (set 1, set 0). This order is stable: it is how chromosomes,
+q tables and exports index rules. It is coded once, in :mod:`flctool.spec.rule_order`;
+:attr:`Controller.rule_grid` holds it as an array.
 """
 
 from __future__ import annotations

@@ -1,31 +1,19 @@
-"""The rule base of a behaviour in plain Python: rule order (eq. 1) and consequents.
+"""The rule base of a behaviour in plain Python: its consequents in rule order (eq. 1).
 
-The one coding of rule order, used by :func:`flctool.compile.compile_behaviour` (which makes
-arrays of it) and by the plain-Python path of ``flctool infer`` (which must not load numpy).
-Rule ``m`` is one combination of sets, enumerated with the **last input varying fastest**,
-the order of ``itertools.product`` (see :mod:`flctool.compile.controller`).
+Used by :func:`flctool.compile.compile_behaviour` (which makes arrays of it) and by the
+plain-Python path of ``flctool infer`` (which must not load numpy). Rule order itself is coded
+once, in :mod:`flctool.spec.rule_order`; its two functions are named here too, for the
+compiled side.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-from collections.abc import Sequence
 
 from flctool.spec.models import Behaviour
+from flctool.spec.rule_order import rule_grid, rule_index
 
-
-def rule_grid(shape: Sequence[int]) -> list[tuple[int, ...]]:
-    """Each rule's set index of each input, in rule order: ``M = prod(shape)`` tuples."""
-    return list(itertools.product(*(range(sets) for sets in shape)))
-
-
-def rule_index(sets: Sequence[int], shape: Sequence[int]) -> int:
-    """The rule number of one combination of set indices (the inverse of :func:`rule_grid`)."""
-    index = 0
-    for j, width in zip(sets, shape, strict=True):
-        index = index * width + j
-    return index
+__all__ = ["rule_consequents", "rule_grid", "rule_index"]
 
 
 def rule_consequents(behaviour: Behaviour) -> list[int] | None:

@@ -20,9 +20,6 @@ from flctool.lazy import lazy_attributes
 from flctool.plugins import registry
 from flctool.registry import Registry
 from flctool.spec.located import located
-
-# Before the registry below: an installed adapter's module imports the behaviour models, which
-# load the plugins in turn, so the models must be complete before the plugins are loaded here.
 from flctool.spec.models import Behaviour
 
 if TYPE_CHECKING:
@@ -39,8 +36,8 @@ class EnvFactory(Protocol):
     def from_behaviour(self, behaviour: Behaviour, batch_size: int = 1) -> BatchEnv: ...
 
 
-#: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.environments``
-#: entries).
+#: Found from :mod:`flctool.plugins` (the built-ins and installed ``flctool.environments``
+#: entries), each imported when first used.
 ENVIRONMENTS: Registry[EnvFactory] = registry("environment", "environment adapter")
 
 

@@ -29,7 +29,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from flctool import __version__
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
 from flctool.errors import RunDirError
 from flctool.evaluation import evaluate_behaviour
@@ -49,6 +48,7 @@ from flctool.runs import (
     resolve_behaviour,
 )
 from flctool.spec import Behaviour, load_behaviour
+from flctool.version import __version__
 
 EXPERIMENT_FORMAT = 1
 PLAN_FILE = "experiment.json"

@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
 
-from flctool import __version__
 from flctool.atomic import regular_target, replace_all, write_text_atomic
 from flctool.errors import ExportError
 from flctool.spec import Behaviour
+from flctool.version import __version__
 
 
 @dataclass(frozen=True)

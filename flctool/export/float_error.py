@@ -58,13 +58,13 @@ def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         out = centre_of_area(((_activation(memberships, sets),
                                singletons[controller.consequents[m]])
-                              for m, sets in enumerate(np.ndindex(*controller.shape))),
+                              for m, sets in enumerate(controller.rule_grid.tolist())),
                              np.zeros(len(states), dtype=F32))  # rule order, eq. 1
     clipped: np.ndarray = np.clip(out, singletons.min(), singletons.max())
     return clipped.astype(np.float64)
 
 
-def _activation(memberships: list[np.ndarray], sets: tuple[int, ...]) -> np.ndarray:
+def _activation(memberships: list[np.ndarray], sets: list[int]) -> np.ndarray:
     """One rule's activation over the states: the minimum of its sets' memberships (eq. 2)."""
     alpha = memberships[0][:, sets[0]]
     for i in range(1, len(sets)):

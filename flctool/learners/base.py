@@ -28,14 +28,16 @@ from numpy.typing import NDArray
 from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
-from flctool.learners.callbacks import Callback, CallbackList
+from flctool.learners.budget import Budget, Usage
+from flctool.learners.callbacks import Callback, CallbackList, RunCallback
 from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.metrics import GenerationMetrics
-from flctool.learners.selection import Candidate, Selection
+from flctool.learners.selection import Candidate, ModelSelection
 from flctool.learners.trial import SparseRules
 from flctool.rollout import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
 from flctool.spec.learning import LearningConfig
 from flctool.spec.models import Behaviour
+from flctool.spec.rule_order import rule_index
 
 
 class RuleStrengths(Protocol):
@@ -76,7 +78,7 @@ class Learner(ABC):
     config: LearningConfig
     #: The rule strengths and their traces (eq. 4-9), for learners that keep them.
     fuzzy_q: RuleStrengths | None = None
-    #: How the hall of fame ranks candidates (see :class:`Selection`).
+    #: How the hall of fame ranks candidates (see :class:`ModelSelection`).
     rank_by: ClassVar[str] = "fitness"
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
@@ -100,8 +102,22 @@ class Learner(ABC):
         self.population: IntArray = np.zeros((1, self.controller.n_rules), dtype=np.intp)
         self.fitness: FloatArray = np.zeros(1)
         self.fixed_rules, self.fixed_commands = fixed_consequents(behaviour)
-        self.selection = Selection(self.config.selection, self.config.stop, self.config.seed,
-                                   self.rank_by)
+        #: Episodes and steps the run has spent, training and selection apart.
+        self.usage = Usage()
+        self.selection = ModelSelection(self.config.selection, self.config.seed, self.usage,
+                                        self.config.stop.episodes, self.rank_by)
+        self.budget = Budget(self.config.stop, self.selection, self.usage)
+
+    @property
+    def run_callbacks(self) -> list[RunCallback]:
+        """The parts of the run that act between generations, in order: model selection,
+        then the budget (which looks at what selection chose)."""
+        return [self.selection, self.budget]
+
+    @property
+    def stop_reason(self) -> str | None:
+        """Why the run ended before its generations ("target", "episodes", ...), or None."""
+        return next((c.stop_reason for c in self.run_callbacks if c.stop_reason), None)
 
     # -- what each learner supplies ----------------------------------------------------
     @abstractmethod
@@ -131,6 +147,38 @@ class Learner(ABC):
         if self.fuzzy_q is not None:
             self.fuzzy_q.load_state_dict(state)
 
+    def start_from(self, population: IntArray | None = None,
+                   strengths: FloatArray | None = None) -> None:
+        """Start a fresh run from a given first generation ``population (P, M)`` and/or q
+        table ``strengths (M, K)`` instead of random ones (a warm start, e.g. around a
+        controller); traces start at zero, rules the file gives stay as given. Only before
+        the first generation: the first checkpoint then holds what it became.
+        """
+        n_rules, n_commands = self.controller.n_rules, self.controller.n_commands
+        if self.generation != -1:
+            raise LearnError("a run starts from a given population or q table only before "
+                             "its first generation", hint="start a new run")
+        if population is not None:
+            genes = np.asarray(population)
+            if genes.shape != (self.config.population, n_rules) or genes.dtype.kind not in "iu":
+                raise LearnError(f"a first generation must be {self.config.population} x "
+                                 f"{n_rules} command indices, not {genes.shape} of "
+                                 f"{genes.dtype}", hint="one row per individual")
+            if genes.size and (genes.min() < 0 or genes.max() >= n_commands):
+                raise LearnError(f"a first generation holds command indices outside "
+                                 f"0..{n_commands - 1}")
+            self.population = self.keep_fixed(genes.astype(np.intp))
+        if strengths is not None:
+            if self.fuzzy_q is None:
+                raise LearnError(f"the {self.name} learner keeps no rule strengths to start "
+                                 "from", hint="give a first generation only")
+            table = np.asarray(strengths, dtype=np.float64)
+            if table.shape != (n_rules, n_commands) or not np.isfinite(table).all():
+                raise LearnError(f"a q table must be {n_rules} x {n_commands} finite numbers, "
+                                 f"not {table.shape}")
+            self.fuzzy_q.load_state_dict({"q": table.tolist(),
+                                          "traces": np.zeros_like(table).tolist()})
+
     # -- shared helpers ------------------------------------------------------------------
     def keep_fixed(self, population: IntArray) -> IntArray:
         """``population (P, M)`` with the rules the file gives set to their commands (in
@@ -141,8 +189,11 @@ class Learner(ABC):
     @property
     def finished(self) -> bool:
         """Whether the run has ended: all its generations done, or a budget or target met."""
-        return (self.selection.stop_reason is not None
-                or self.generation + 1 >= self.config.generations)
+        return self.stop_reason is not None or self.generation + 1 >= self.config.generations
+
+    def episodes_per_generation(self) -> int:
+        """The training episodes one generation runs."""
+        return self.config.population * self.config.trials
 
     def selected(self) -> tuple[int, int, IntArray, float, Candidate | None]:
         """The controller the run returns: (generation, individual, consequents (M,),
@@ -198,9 +249,22 @@ class Learner(ABC):
             "population": self.population.tolist(),
             "fitness": self.fitness.tolist(),
             "rng": {name: rng.bit_generator.state for name, rng in self.rngs.items()},
-            "selection": self.selection.state_dict(),
+            "selection": self.run_callbacks_state(),
             **self.extra_state(),
         }
+
+    def run_callbacks_state(self) -> dict[str, Any]:
+        """The run callbacks' states, as one record (a checkpoint's ``selection``)."""
+        state: dict[str, Any] = {}
+        for callback in self.run_callbacks:
+            state.update(callback.state_dict())
+        return state
+
+    def selection_record(self) -> dict[str, Any]:
+        """What run.json shows of selection and spending: the validated candidates, the
+        best, the episodes and steps of training and of selection, why the run stopped."""
+        return {**self.selection.record(), "usage": self.usage.to_dict(),
+                "stop_reason": self.stop_reason}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` saved; :class:`LearnError` (and the learner left
@@ -212,7 +276,9 @@ class Learner(ABC):
             max_population=self.config.population, strengths=self.uses_strengths))
         for name, generator in self.rngs.items():
             generator.bit_generator.state = checkpoint.rng[name]
-        self.selection.restore(checkpoint.selection)
+        if checkpoint.selection is not None:  # None: a checkpoint of a run without one
+            self.selection.restore(checkpoint.selection)
+            self.budget.restore(checkpoint.selection)
         self.generation, self.elapsed = checkpoint.generation, checkpoint.elapsed
         self.population, self.fitness = checkpoint.population, checkpoint.fitness
         self.load_extra_state(state)
@@ -227,59 +293,59 @@ def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:
     rules, chosen = [], []
     for rule in behaviour.rules:
         index = [sets[i].index(rule.if_[name]) for i, name in enumerate(names)]
-        rules.append(int(np.ravel_multi_index(index, shape)))
+        rules.append(rule_index(index, shape))
         chosen.append(commands.index(rule.then))
     return np.array(rules, dtype=np.intp), np.array(chosen, dtype=np.intp)
 
 
 def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[GenerationMetrics]:
     """Run generations from the learner's current one until the run ends: at
-    ``learning.generations``, or when a ``learning.stop`` budget or target is met.
+    ``learning.generations``, or when a run callback (a ``learning.stop`` budget or target)
+    ends it.
 
     A fresh learner starts at generation 0; one restored from a checkpoint continues after
-    it. After every generation the hall of fame's leader is validated; after the last one
-    every remaining candidate is (see :mod:`flctool.learners.selection`), so the
-    generation's metrics -- and the checkpoint a run directory writes of it -- already hold
-    the run's final choice. Returns this session's metrics, one per generation.
+    it. Each generation is advance (breed), evaluate (the trials), then the run callbacks
+    (:attr:`Learner.run_callbacks`: model selection validates, the budget decides whether to
+    stop; when the run ends, selection validates its remaining candidates), then the report:
+    the generation's metrics to ``callbacks``. So the metrics -- and the checkpoint a run
+    directory writes of them -- already hold the run's final choice. Returns this session's
+    metrics, one per generation.
     """
     callback = CallbackList(callbacks)
     history: list[GenerationMetrics] = []
-    config = learner.config
-    selection = learner.selection
-    per_generation = config.population * config.trials
+    usage = learner.usage
     # on_end runs however training ends -- finished, stopped early, an error or Ctrl-C -- so
     # that a run directory never claims to be running after its process has gone.
     try:
         callback.on_start(learner)
         started = time.perf_counter()
         before = learner.elapsed
+
+        def clock() -> None:
+            learner.elapsed = before + time.perf_counter() - started
+
         generation = learner.generation + 1
         while not learner.finished:
-            validation_before = (selection.usage.selection_episodes,
-                                 selection.usage.selection_steps)
+            selection_before = usage.selection_episodes, usage.selection_steps
             if generation > 0:
                 learner.advance()
             result = learner.evaluate(generation)
             learner.generation = generation
-            selection.usage.training_episodes += result.episodes
-            selection.usage.training_steps += result.steps
-            selection.offer(learner.population, learner.fitness, generation)
-            selection.validate_leader(learner.rules, learner.env, generation)
-            learner.elapsed = before + time.perf_counter() - started
-            if selection.reached_target():
-                selection.stop_reason = "target"
-            elif generation + 1 < config.generations:
-                selection.stop_reason = selection.budget_exhausted(per_generation,
-                                                                   learner.elapsed)
-            if learner.finished and selection.stop_reason != "target":
-                selection.finalize(learner.rules, learner.env, generation,
-                                   learner.elite_candidates())
-                learner.elapsed = before + time.perf_counter() - started
+            usage.training_episodes += result.episodes
+            usage.training_steps += result.steps
+            for part in learner.run_callbacks:
+                part.on_trials(learner, result)
+                clock()
+            if learner.finished:
+                for part in learner.run_callbacks:
+                    part.on_finish(learner)
+                clock()
+            best = learner.selection.best
             metrics = GenerationMetrics.from_fitness(
                 generation, result.fitness, result.episodes, result.steps, learner.elapsed,
-                selection.usage.selection_episodes - validation_before[0],
-                selection.usage.selection_steps - validation_before[1],
-                selection.best.validation_value() if selection.best else float("nan"))
+                usage.selection_episodes - selection_before[0],
+                usage.selection_steps - selection_before[1],
+                best.validation_value() if best else float("nan"))
             history.append(metrics)
             generation += 1
             if not callback.on_generation(metrics):

@@ -20,8 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.errors import LearnError
+from flctool.learners.budget import Usage
 from flctool.learners.metrics import GenerationMetrics
-from flctool.learners.selection import Candidate, Usage
+from flctool.learners.selection import Candidate
 
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
@@ -55,7 +56,9 @@ class Expected:
 
 @dataclass(frozen=True)
 class SelectionState:
-    """The model-selection record (see :class:`~flctool.learners.selection.Selection`)."""
+    """The run callbacks' record: model selection's (:class:`~flctool.learners.selection.
+    ModelSelection`) and the budget's (:class:`~flctool.learners.budget.Budget`), kept in one
+    ``selection`` object as the runs of earlier versions wrote it."""
 
     hall: list[Candidate]
     best: Candidate | None

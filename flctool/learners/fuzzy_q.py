@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.envs.base import BatchEnv
+from flctool.errors import LearnError
 from flctool.learners.base import GenerationResult, Learner
 from flctool.learners.trial import add_in_order, run_trial
 from flctool.spec.learning import FuzzyQConfig, QConfig
@@ -234,6 +235,16 @@ class FuzzyQLearner(Learner):
                                    self.controller.n_commands)
         self.fixed = dict(zip(self.fixed_rules.tolist(), self.fixed_commands.tolist(),
                               strict=True))
+        self.population = self.greedy()
+
+    def start_from(self, population: NDArray[np.intp] | None = None,
+                   strengths: FloatArray | None = None) -> None:
+        """A warm start from a q table (see :meth:`Learner.start_from`); fuzzy_q's one
+        controller is the table's greedy one, so it takes no population."""
+        if population is not None:
+            raise LearnError("the fuzzy_q learner starts from a q table, not a population",
+                             hint="give strengths: its greedy controller is the first")
+        super().start_from(None, strengths)
         self.population = self.greedy()
 
     def greedy(self) -> NDArray[np.intp]:

@@ -28,26 +28,28 @@ reused: on ballchase, a sixth (fuzzy_q) to a third (pitt, hybrid) of validation 
 They still count as spent (budgets and ``usage`` are what running them would give), so
 results are the same with a robot, a resumed run or no reuse at all.
 
-Budgets (``stop``) count training and validation episodes alike and are checked between
-generations, so that a run stopped by ``episodes`` or ``steps`` is as reproducible as one that
-runs all its generations; only ``seconds`` depends on the machine.
+Budgets (``stop``, :mod:`flctool.learners.budget`) count validation episodes as they count
+training ones.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.envs.base import BatchEnv
+from flctool.learners.budget import Usage
+from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import SparseRules, Trial, run_trial
 from flctool.rollout import Estimate, mean_interval
-from flctool.spec.learning import SelectionConfig, StopConfig
+from flctool.spec.learning import SelectionConfig
 
 if TYPE_CHECKING:
+    from flctool.learners.base import GenerationResult, Learner
     from flctool.learners.checkpoint import SelectionState
 
 IntArray = NDArray[np.intp]
@@ -149,57 +151,51 @@ class _KnownEpisode:
     trial: Trial
 
 
-@dataclass
-class Usage:
-    """Episodes and environment steps spent, for training and for validation."""
-
-    training_episodes: int = 0
-    training_steps: int = 0
-    selection_episodes: int = 0
-    selection_steps: int = 0
-
-    @property
-    def episodes(self) -> int:
-        return self.training_episodes + self.selection_episodes
-
-    @property
-    def steps(self) -> int:
-        return self.training_steps + self.selection_steps
-
-    def to_dict(self) -> dict[str, int]:
-        return {"training_episodes": self.training_episodes,
-                "training_steps": self.training_steps,
-                "selection_episodes": self.selection_episodes,
-                "selection_steps": self.selection_steps}
-
-
-@dataclass
-class Selection:
-    """The run's hall of fame, its validation, and its budget (see the module docstring).
+class ModelSelection(RunCallback):
+    """The run's hall of fame and its validation (see the module docstring): the run
+    callback that decides which controller a run returns.
 
     ``rank_by`` is ``"fitness"`` (GAs: mean training fitness) or ``"recency"`` (fuzzy_q: the
     latest greedy controllers first, because its training fitness is measured while
-    exploring and says little about the greedy controller).
+    exploring and says little about the greedy controller). Validation episodes are added to
+    ``usage``, and never taken beyond ``episode_limit`` (``stop.episodes``).
     """
 
-    config: SelectionConfig
-    stop: StopConfig
-    run_seed: int
-    rank_by: str = "fitness"
-    hall: dict[bytes, Candidate] = field(default_factory=dict)
-    best: Candidate | None = None
-    usage: Usage = field(default_factory=Usage)
-    stop_reason: str | None = None  # why the run ended early: "target", "episodes", ...
-    finalized: bool = False
-    validated: list[dict[str, Any]] = field(default_factory=list)  # every validation, in order
-
-    def __post_init__(self) -> None:
-        self.seeds = validation_seeds(self.run_seed, self.config.episodes)
+    def __init__(self, config: SelectionConfig, run_seed: int, usage: Usage,
+                 episode_limit: int | None = None, rank_by: str = "fitness") -> None:
+        self.config = config
+        self.run_seed = run_seed
+        self.usage = usage
+        self.episode_limit = episode_limit
+        self.rank_by = rank_by
+        self.hall: dict[bytes, Candidate] = {}
+        self.best: Candidate | None = None
+        self.finalized = False
+        self.validated: list[dict[str, Any]] = []  # every validation, in order
+        self.seeds = validation_seeds(run_seed, config.episodes)
         self._known: dict[int, list[_KnownEpisode]] = {}  # by validation seed
 
     @property
     def enabled(self) -> bool:
         return self.config.candidates > 0
+
+    # -- as a run callback -------------------------------------------------------------------
+    def on_trials(self, learner: Learner, result: GenerationResult) -> None:
+        """Offer the generation to the hall of fame, and validate its leader."""
+        del result
+        self.offer(learner.population, learner.fitness, learner.generation)
+        self.validate_leader(learner.rules, learner.env, learner.generation)
+
+    def on_finish(self, learner: Learner) -> None:
+        """Validate the remaining candidates, unless a target ended the run."""
+        if learner.stop_reason != "target":
+            self.finalize(learner.rules, learner.env, learner.generation,
+                          learner.elite_candidates())
+
+    def most_episodes_after_generation(self) -> int:
+        """The most validation episodes one more generation may cost: its leader's and,
+        if it is the last, every candidate's."""
+        return (1 + self.config.candidates) * self.config.episodes if self.enabled else 0
 
     # -- the hall of fame ------------------------------------------------------------------
     def offer(self, population: IntArray, fitness: FloatArray, generation: int) -> None:
@@ -297,62 +293,33 @@ class Selection:
     def candidate_for(self, consequents: IntArray) -> Candidate | None:
         return self.hall.get(_key(consequents))
 
-    # -- budgets ---------------------------------------------------------------------------
     def fits(self, validations: int) -> bool:
-        """Whether ``validations`` more validations stay within ``stop.episodes``."""
-        limit = self.stop.episodes
+        """Whether ``validations`` more validations stay within the episode limit."""
+        limit = self.episode_limit
         return limit is None or (self.usage.episodes + validations * self.config.episodes
                                  <= limit)
-
-    def reached_target(self) -> bool:
-        target = self.stop.target
-        return target is not None and self.best is not None and (
-            self.best.validation_value() >= target)
-
-    def budget_exhausted(self, generation_episodes: int, elapsed: float) -> str | None:
-        """Which budget would the next generation (``generation_episodes`` training episodes,
-        its leader's validation, and the final validation of every candidate) break, if any.
-        """
-        stop = self.stop
-        validations = (1 + self.config.candidates) if self.enabled else 0
-        upcoming = generation_episodes + validations * self.config.episodes
-        usage = self.usage
-        if stop.episodes is not None and usage.episodes + upcoming > stop.episodes:
-            return "episodes"
-        if stop.steps is not None and usage.episodes > 0:
-            per_episode = usage.steps / usage.episodes
-            if usage.steps + upcoming * per_episode > stop.steps:
-                return "steps"
-        if stop.seconds is not None and elapsed >= stop.seconds:
-            return "seconds"
-        return None
 
     # -- checkpoints -----------------------------------------------------------------------
     def state_dict(self) -> dict[str, Any]:
         return {"hall": [c.to_dict() for c in self.hall.values()],
                 "best": None if self.best is None else self.best.to_dict(),
-                "usage": self.usage.to_dict(), "stop_reason": self.stop_reason,
                 "finalized": self.finalized, "validated": self.validated}
 
-    def restore(self, state: SelectionState | None) -> None:
+    def restore(self, state: SelectionState) -> None:
         """Restore what :meth:`state_dict` saved, as :func:`~flctool.learners.checkpoint.
-        read_checkpoint` validated it (None: a checkpoint of a run without selection)."""
-        if state is None:
-            return
+        read_checkpoint` validated it."""
         self.hall = {c.key(): c for c in state.hall}
         best = state.best
         # the best is the same object as its hall entry, so later validations update both
         self.best = self.hall.get(best.key(), best) if best is not None else None
-        self.usage, self.stop_reason = state.usage, state.stop_reason
         self.finalized, self.validated = state.finalized, state.validated
 
     def record(self) -> dict[str, Any]:
-        """What run.json shows: the validation scheme, every candidate validated (in order:
-        where it came from, its training fitness, its validation mean and 95 % CI), the best,
-        and the episodes and steps spent on training and on selection."""
+        """What run.json shows of selection: the validation scheme, every candidate validated
+        (in order: where it came from, its training fitness, its validation mean and 95 %
+        CI) and the best."""
         return {"candidates": self.config.candidates, "episodes": self.config.episodes,
                 "seeds": f"{len(self.seeds)} fixed seeds in [2^62, 2^63) drawn from the "
                          "run's seed",
                 "validated": self.validated,
-                "best": None if self.best is None else self.best.record(),
-                "usage": self.usage.to_dict(), "stop_reason": self.stop_reason}
+                "best": None if self.best is None else self.best.record()}

@@ -153,6 +153,8 @@ class AdapterConfig(Section):
     """Base of every ``environment:`` section; its ``adapter`` names the plugin that reads it
     (flctool.plugins)."""
 
+    adapter: str = Field(description="which adapter reads this section")
+
     def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
         """What does not fit between this environment and the behaviour's input and command
         names (an observation it does not have, a command it cannot execute); none unless the

@@ -206,10 +206,10 @@ def keep_keys_read_by(learning: Mapping[str, Any], learner: str) -> dict[str, An
     or a run directory of an older flctool recorded every key for every learner. A learner
     nobody knows keeps every key, so that validation reports the name.
     """
-    from flctool.plugins import plugins
+    from flctool.plugins import plugin
 
-    models = {plugin.name: plugin.config_model() for plugin in plugins("learner")}
-    if learner not in models:
+    found = plugin("learner", learner)
+    if found is None:
         return dict(learning)
-    keys = learner_keys(models[learner])
+    keys = learner_keys(found.config_model())
     return {key: value for key, value in learning.items() if key in keys}

@@ -11,7 +11,7 @@ import typing
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, TypeAdapter, ValidationError
+from pydantic import BaseModel, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.plugins import names
@@ -27,14 +27,9 @@ from flctool.spec.checks import (
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import foreign_key_message
 from flctool.spec.located import attach_source
-from flctool.spec.models import (
-    FORMAT_VERSION,
-    Behaviour,
-    EnvironmentConfig,
-    InputVariable,
-    Rule,
-)
+from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
 from flctool.spec.rules import expand_dont_care
+from flctool.spec.sections import CHOSEN, section_model
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
 
@@ -83,7 +78,7 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None,
         behaviour = Behaviour.model_validate(data, context={"problems": semantic})
     except ValidationError as exc:
         reported = {p.path for p in problems}
-        problems += [p for p in (_translate(error, source) for error in exc.errors())
+        problems += [p for p in (_translate(error, source, data) for error in exc.errors())
                      if p.path not in reported]
         # Report the cross-field problems of the parts that did validate too, in one pass.
         semantic = [p for p in _partial_problems(data)
@@ -153,16 +148,14 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
                       learning.get("generations"), max_steps)))
     if isinstance(environment, dict) and isinstance(inputs, dict) and \
             isinstance(commands, dict):
+        model = section_model("environment", environment)
         try:
-            config = _ENVIRONMENT.validate_python(environment)
+            config = model.model_validate(environment) if model is not None else None
         except ValidationError:
             return problems
         if isinstance(config, AdapterConfig):
             problems += config.fit_problems(tuple(inputs), tuple(commands))
     return problems
-
-
-_ENVIRONMENT: TypeAdapter[Any] = TypeAdapter(EnvironmentConfig)
 
 
 def _number_problems(data: Any, source: SourceMap) -> list[Problem]:
@@ -223,16 +216,14 @@ def _version_problem(data: dict[str, Any], source: SourceMap) -> Problem | None:
     return None
 
 
-def _translate(error: Any, source: SourceMap) -> Problem:
-    """A pydantic error dict -> a located, human :class:`Problem`."""
+def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
+    """A pydantic error dict about ``data`` -> a located, human :class:`Problem`."""
     loc: list[PathPart] = list(error["loc"])
     kind = error["type"]
     message = error["msg"]
     hint = ""
-    # A discriminated union puts the chosen tag into the path; the file does not have it.
-    chosen = None
-    if len(loc) >= 2 and loc[0] in _CHOSEN_BY and loc[1] in names(_CHOSEN_BY[loc[0]][0]):
-        chosen = str(loc.pop(1))
+    # The plugin whose model read the section the error is in, if it is a chosen one.
+    chosen = CHOSEN[loc[0]].chosen(data.get(loc[0])) if loc and loc[0] in CHOSEN else None
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
@@ -265,21 +256,21 @@ def _translate(error: Any, source: SourceMap) -> Problem:
             and (foreign := foreign_key_message(str(loc[1]), chosen)) is not None:
         message = foreign  # another learner's key: say whose
     elif kind == "extra_forbidden":
-        allowed = _allowed_keys(loc[:-1], chosen)
+        allowed = _allowed_keys(loc[:-1], data)
         message = f"unknown key '{loc[-1]}'.{did_you_mean(str(loc[-1]), allowed)}"
         hint = f"allowed keys here: {', '.join(allowed)}" if allowed else "remove it"
-    elif kind == "union_tag_invalid" and loc and loc[0] in _CHOSEN_BY:
+    elif kind == "union_tag_invalid" and loc and loc[0] in CHOSEN:
         tag = error["ctx"]["tag"]
-        plugin_kind, key = _CHOSEN_BY[str(loc[0])]
-        known = names(plugin_kind)
-        loc.append(key)
-        message = f"unknown {key} '{tag}'.{did_you_mean(tag, known)}"
+        section = CHOSEN[str(loc[0])]
+        known = names(section.kind)
+        loc.append(section.key)
+        message = f"unknown {section.key} '{tag}'.{did_you_mean(tag, known)}"
         hint = f"use one of: {', '.join(known)}"
-    elif kind == "union_tag_not_found" and loc and loc[0] in _CHOSEN_BY:
-        plugin_kind, key = _CHOSEN_BY[str(loc[0])]
-        loc.append(key)
-        message = f"the {loc[0]} names no '{key}'"
-        hint = f"add '{key}:' with one of: {', '.join(names(plugin_kind))}"
+    elif kind == "union_tag_not_found" and loc and loc[0] in CHOSEN:
+        section = CHOSEN[str(loc[0])]
+        loc.append(section.key)
+        message = f"the {loc[0]} names no '{section.key}'"
+        hint = f"add '{section.key}:' with one of: {', '.join(names(section.kind))}"
     elif kind == "too_short":
         message = f"'{loc[-1]}' is empty"
         hint = f"give at least {error['ctx']['min_length']} entry"
@@ -292,10 +283,6 @@ def _translate(error: Any, source: SourceMap) -> Problem:
     return source.problem(tuple(loc), message, hint)
 
 
-#: The sections whose model a key chooses among plugins: section -> (plugin kind, key).
-_CHOSEN_BY = {"environment": ("environment", "adapter"), "learning": ("learner", "learner")}
-
-
 def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:
     """Whether the error is about the length of a range pair or a set quadruple."""
     if kind == "missing":
@@ -303,19 +290,18 @@ def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:
     return len(loc) >= 2 and (loc[-1] == "range" or loc[-2] == "sets")
 
 
-def _allowed_keys(path: list[PathPart], chosen: str | None) -> list[str]:
-    """The keys the model at ``path`` accepts, found by walking the type annotations;
-    ``chosen`` names the plugin whose model a section chosen by name is."""
+def _allowed_keys(path: list[PathPart], data: dict[str, Any]) -> list[str]:
+    """The keys the model at ``path`` in ``data`` accepts, found by walking the type
+    annotations (a section chosen by name: the named plugin's model)."""
     annotation: Any = Behaviour
+    container: Any = data
     for part in path:
-        annotation = _step(annotation, part, None)
+        annotation = _step(annotation, part, container)
         if annotation is None:
             return []
-    models = [m for m in _members(annotation) if isinstance(m, type) and issubclass(m, BaseModel)]
-    if len(path) == 1 and path[0] in _CHOSEN_BY and chosen is not None:
-        key = _CHOSEN_BY[str(path[0])][1]
-        models = [m for m in models if chosen in typing.get_args(
-            m.model_fields[key].annotation if key in m.model_fields else None)] or models
+        container = _item(container, part)
+    models = [m for m in _members(annotation, container)
+              if isinstance(m, type) and issubclass(m, BaseModel)]
     keys: list[str] = []
     for model in models:
         for name, info in model.model_fields.items():
@@ -325,24 +311,34 @@ def _allowed_keys(path: list[PathPart], chosen: str | None) -> list[str]:
     return keys
 
 
-def _members(annotation: Any) -> list[Any]:
+def _members(annotation: Any, value: Any = None) -> list[Any]:
+    """The types ``annotation`` allows; the base of a section chosen by name is the model of
+    the plugin ``value`` (the section as data, if known) names."""
     origin = typing.get_origin(annotation)
     if origin is typing.Annotated:
-        return _members(typing.get_args(annotation)[0])
+        return _members(typing.get_args(annotation)[0], value)
     if origin in (typing.Union, types.UnionType):
-        return [m for arg in typing.get_args(annotation) for m in _members(arg)]
+        return [m for arg in typing.get_args(annotation) for m in _members(arg, value)]
+    for chosen in CHOSEN.values():
+        if annotation is chosen.base:
+            name = chosen.chosen(value)
+            return [(chosen.model(name) if name is not None else None) or annotation]
     return [annotation]
 
 
+def _item(container: Any, part: PathPart) -> Any:
+    """The value at ``part`` in ``container`` (None where there is none)."""
+    if isinstance(container, dict):
+        return container.get(part)
+    if isinstance(container, list) and isinstance(part, int) and 0 <= part < len(container):
+        return container[part]
+    return None
+
+
 def _step(annotation: Any, part: PathPart, container: Any) -> Any:
-    """The annotation of ``part`` inside ``annotation`` (None if it has none); ``container``,
-    the value holding ``part`` if known, picks the member of a union tagged by 'adapter'."""
-    members = _members(annotation)
-    if isinstance(container, dict) and isinstance(container.get("adapter"), str):
-        members = [m for m in members if not (isinstance(m, type) and issubclass(m, BaseModel))
-                   or container["adapter"] in typing.get_args(
-                       m.model_fields["adapter"].annotation if "adapter" in m.model_fields
-                       else None)]
+    """The annotation of ``part`` inside ``annotation`` (None if it has none); ``container``
+    is the value holding ``part``, if known (it names the model of a chosen section)."""
+    members = _members(annotation, container)
     for member in members:
         origin = typing.get_origin(member)
         if origin is tuple and isinstance(part, int):

@@ -8,58 +8,33 @@ consequents. Structure and types are checked here; the checks that relate fields
 
 from __future__ import annotations
 
-import itertools
 import math
-from typing import TYPE_CHECKING, Annotated, Any, Union
+from typing import Annotated, Any
 
 from pydantic import (
     AfterValidator,
     ConfigDict,
     Field,
     PrivateAttr,
+    SerializeAsAny,
     ValidationInfo,
     field_validator,
     model_validator,
 )
 
 from flctool.errors import NotDeployableError
-from flctool.plugins import names, plugins
 from flctool.spec.base import BehaviourName, Name, Section
 from flctool.spec.checks import find_problems
-from flctool.spec.environment import default_gymnasium_ranges
-from flctool.spec.learning import DEFAULT_LEARNER, HybridConfig, section_for_learner
+from flctool.spec.environment import AdapterConfig, default_gymnasium_ranges
+from flctool.spec.learning import (
+    DEFAULT_LEARNER,
+    HybridConfig,
+    LearningConfig,
+    section_for_learner,
+)
 from flctool.spec.located import SourceRef
-
-# The sections chosen by name are unions built from the plugins (flctool.plugins): the config
-# models of the built-in learners and adapters and of any an installed package adds, chosen by
-# the key that names the plugin. mypy sees the built-ins.
-ADAPTER_NAMES = names("environment")
-
-
-def _chosen_by(kind: str, key: str) -> Any:
-    """The union of the config models of every plugin of ``kind``, discriminated by ``key``."""
-    models = tuple(plugin.config_model() for plugin in plugins(kind))
-    return Annotated[Union[models], Field(discriminator=key)]  # noqa: UP007
-
-
-if TYPE_CHECKING:
-    from flctool.spec.environment import (
-        BallchaseSimConfig,
-        GymnasiumConfig,
-        PitchConfig,
-        RobotLinkConfig,
-    )
-    from flctool.spec.learning import FuzzyQConfig, PittConfig
-
-    EnvironmentConfig = Annotated[
-        BallchaseSimConfig | PitchConfig | GymnasiumConfig | RobotLinkConfig,
-        Field(discriminator="adapter"),
-    ]
-    LearningSection = Annotated[PittConfig | FuzzyQConfig | HybridConfig,
-                                Field(discriminator="learner")]
-else:
-    EnvironmentConfig = _chosen_by("environment", "adapter")
-    LearningSection = _chosen_by("learner", "learner")
+from flctool.spec.rule_order import rule_grid
+from flctool.spec.sections import CHOSEN
 
 FORMAT_VERSION = 1
 
@@ -132,10 +107,12 @@ class Behaviour(Section):
     output: Output
     rules: list[Rule] = Field(default_factory=list, description=(
         "rule consequents; empty or partial for a behaviour still to be learned"))
-    learning: LearningSection = Field(HybridConfig(), description=(
+    # Typed by the base every plugin's model extends; each is validated by the model of the
+    # plugin it names (flctool.spec.sections) and dumped with all of that model's fields.
+    learning: SerializeAsAny[LearningConfig] = Field(HybridConfig(), description=(
         "the learner and its hyperparameters; without 'learner:' the section is the "
         f"{DEFAULT_LEARNER} learner's"))
-    environment: EnvironmentConfig | None = None
+    environment: SerializeAsAny[AdapterConfig] | None = None
     #: Where each field was written (:mod:`flctool.spec.located`); not part of the value,
     #: set once by the loader (:func:`flctool.spec.located.attach_source`).
     _source: SourceRef = PrivateAttr(default_factory=SourceRef)
@@ -156,6 +133,13 @@ class Behaviour(Section):
         if version < 1:
             raise ValueError(f"format version must be {FORMAT_VERSION}, got {version}")
         return version
+
+    @field_validator("learning", "environment", mode="before")
+    @classmethod
+    def _read_by_the_named_plugin(cls, value: Any, info: ValidationInfo) -> Any:
+        if value is None and info.field_name == "environment":
+            return None
+        return CHOSEN[str(info.field_name)].validate(value, info)
 
     @model_validator(mode="before")
     @classmethod
@@ -194,8 +178,10 @@ class Behaviour(Section):
         return math.prod(len(v.sets) for v in self.inputs.values())
 
     def antecedents(self) -> list[tuple[str, ...]]:
-        """Every rule's set names in grid order: the last input varies fastest (eq. 1)."""
-        return list(itertools.product(*(tuple(v.sets) for v in self.inputs.values())))
+        """Every rule's set names in rule order (eq. 1, :mod:`flctool.spec.rule_order`)."""
+        sets = [tuple(v.sets) for v in self.inputs.values()]
+        return [tuple(sets[i][j] for i, j in enumerate(rule))
+                for rule in rule_grid([len(s) for s in sets])]
 
     def missing_rules(self) -> list[tuple[str, ...]]:
         """Antecedents that have no rule yet; empty for a deployable controller."""

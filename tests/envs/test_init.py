@@ -9,9 +9,9 @@ from flctool import load_behaviour, parse_behaviour
 from flctool.envs import ENVIRONMENTS, BatchEnv, SingleEnv, check_env, make_env
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError
+from flctool.plugins import BUILTIN
 from flctool.registry import UnknownNameError
 from flctool.spec import behaviour_from_data, behaviour_to_data
-from flctool.spec.models import ADAPTER_NAMES
 
 from ..conftest import BEHAVIOURS, MINIMAL
 
@@ -21,7 +21,7 @@ EXAMPLES = {"ballchase-sim": "ballchase.yaml", "gymnasium": "cartpole.yaml",
 
 
 def test_every_adapter_has_a_config_and_an_example() -> None:
-    assert set(ENVIRONMENTS.names()) == set(ADAPTER_NAMES) == set(EXAMPLES)
+    assert set(ENVIRONMENTS.names()) == {p.name for p in BUILTIN["environment"]} == set(EXAMPLES)
 
 
 @pytest.mark.parametrize("adapter", sorted(EXAMPLES))

@@ -7,7 +7,7 @@ import numpy as np
 from flctool.learners import make_learner, train
 from flctool.learners.fuzzy_q import FuzzyQ
 from flctool.learners.ga import GeneticAlgorithm
-from flctool.learners.hybrid import HybridLearner
+from flctool.learners.genetic import HybridLearner
 from tests.learners.line_env import LineEnv, line_behaviour
 
 

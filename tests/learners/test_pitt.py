@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from flctool.learners import make_learner, train
-from flctool.learners.pitt import PittLearner
+from flctool.learners.genetic import PittLearner
 from tests.learners.line_env import LineEnv, line_behaviour
 
 

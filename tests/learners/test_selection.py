@@ -14,9 +14,10 @@ from flctool import load_behaviour
 from flctool.errors import LearnError
 from flctool.learners import Callback, GenerationMetrics, make_learner, train
 from flctool.learners.base import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
+from flctool.learners.budget import Usage
 from flctool.learners.selection import (
     VALIDATION_SEED_LOW,
-    Selection,
+    ModelSelection,
     validation_seeds,
 )
 from flctool.learners.trial import run_trial
@@ -68,7 +69,7 @@ def test_selection_seeds_are_disjoint_from_training_and_evaluation(name: str) ->
     assert all(TRAIN_SEED_LOW <= seed < TRAIN_SEED_HIGH for seed in training)
     evaluation = set(evaluation_seeds(0, 1000).tolist()) | set(range(1000))
     assert not set(validation[0]) & (set(training) | evaluation)
-    assert learner.selection.usage.selection_episodes == 7 * len(validation)
+    assert learner.usage.selection_episodes == 7 * len(validation)
 
 
 @pytest.mark.parametrize("name", names("learner"))
@@ -83,21 +84,21 @@ def test_the_returned_controller_is_the_best_validated_candidate(name: str) -> N
     assert candidate.validation is not None
     assert candidate.validation.value == max(values)
     assert history[-1].validated == max(values)
-    assert sum(m.selection_episodes for m in history) == selection.usage.selection_episodes
-    assert sum(m.episodes for m in history) == selection.usage.training_episodes
+    assert sum(m.selection_episodes for m in history) == learner.usage.selection_episodes
+    assert sum(m.episodes for m in history) == learner.usage.training_episodes
     assert 0 <= individual < learner.config.population and generation <= learner.generation
     assert consequents.shape == (3,)
 
 
 def test_the_hall_of_fame_ranks_by_mean_training_fitness_and_keeps_the_best() -> None:
-    selection = Selection(SelectionConfig(candidates=2, episodes=3), StopConfig(), 0)
+    selection = ModelSelection(SelectionConfig(candidates=2, episodes=3), 0, Usage())
     a, b, c = np.array([0, 0]), np.array([1, 1]), np.array([2, 2])
     selection.offer(np.stack([a, b, c]), np.array([1.0, 3.0, 2.0]), 0)
     assert [x.consequents.tolist() for x in selection.ranked()] == [[1, 1], [2, 2]]
     selection.offer(np.stack([b, a]), np.array([0.0, 5.0]), 1)  # b's mean falls to 1.5
     assert [(x.consequents.tolist(), x.fitness) for x in selection.ranked()] == [
         ([0, 0], 5.0), ([2, 2], 2.0)]
-    recency = Selection(SelectionConfig(candidates=2), StopConfig(), 0, rank_by="recency")
+    recency = ModelSelection(SelectionConfig(candidates=2), 0, Usage(), rank_by="recency")
     for generation, genes in enumerate((a, b, c)):
         recency.offer(genes[None, :], np.array([9.0 - generation]), generation)
     assert [x.consequents.tolist() for x in recency.ranked()] == [[2, 2], [1, 1]]
@@ -120,8 +121,8 @@ def test_an_episode_budget_counts_selection_and_is_never_exceeded(name: str) -> 
                                selection=SelectionConfig(candidates=2, episodes=5))
     learner = make_learner(behaviour, LineEnv())
     history = train(learner)
-    usage = learner.selection.usage
-    assert learner.selection.stop_reason == "episodes" and learner.finished
+    usage = learner.usage
+    assert learner.stop_reason == "episodes" and learner.finished
     assert usage.episodes <= 80 and usage.selection_episodes > 0
     assert usage.episodes == sum(m.episodes + m.selection_episodes for m in history)
     assert learner.generation < 49  # without the budget it would have gone on
@@ -131,10 +132,10 @@ def test_a_step_budget_and_a_time_budget_stop_the_run() -> None:
     steps = make_learner(line_behaviour(generations=50, stop=StopConfig(steps=300)),
                          LineEnv())
     train(steps)
-    assert steps.selection.stop_reason == "steps" and steps.generation < 49
+    assert steps.stop_reason == "steps" and steps.generation < 49
     seconds = make_learner(line_behaviour(generations=50, stop=StopConfig(seconds=1e-9)),
                            LineEnv())
-    assert len(train(seconds)) == 1 and seconds.selection.stop_reason == "seconds"
+    assert len(train(seconds)) == 1 and seconds.stop_reason == "seconds"
 
 
 def test_a_target_stops_the_run_once_a_validated_controller_reaches_it() -> None:
@@ -142,7 +143,7 @@ def test_a_target_stops_the_run_once_a_validated_controller_reaches_it() -> None
                            LineEnv())
     history = train(learner)
     best = learner.selection.best
-    assert learner.selection.stop_reason == "target"
+    assert learner.stop_reason == "target"
     assert best is not None and best.validation is not None
     assert best.validation.value >= 0.5 and history[-1].validated == best.validation.value
     assert len(history) < 40
@@ -218,7 +219,7 @@ def test_reusing_known_validation_episodes_changes_nothing(
         learned.env.replayable = replayable
         history = [{k: v for k, v in m.row().items() if k != "wall_time"}
                    for m in train(learned)]
-        runs.append((history, learned.selection.record(), learned.selected()[2].tolist(),
+        runs.append((history, learned.selection_record(), learned.selected()[2].tolist(),
                      len(ran)))
     (history, record, best, every), (history_, record_, best_, fewer) = runs
     assert (history_, record_, best_) == (history, record, best)

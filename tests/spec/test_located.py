@@ -13,7 +13,7 @@ from flctool.envs import BatchEnv, make_env
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import Problem
 from flctool.learners import LEARNERS, make_learner
-from flctool.learners.pitt import PittLearner
+from flctool.learners.genetic import PittLearner
 from flctool.runs import resolve_behaviour
 from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
 from flctool.spec.located import locate, locate_error, located, source_of
