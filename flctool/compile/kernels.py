@@ -201,21 +201,25 @@ def _compact(mu: FloatArray, b: int, ints: IntArray, scratch: IntArray,
 
 
 # Batched inference walks every rule for a block of states at once (loops over states that
-# vectorise, 0.13 to 0.23 ns per rule, input and state) while that costs less than finding
-# each state's fired rules and walking only those (about 2 ns per set, plus a cost per state
-# that grows with each input, whatever M is). The per-state costs below were
-# measured on both walks (benchmarks/bench_scaling.py prints them around the switch); with
-# the switch where they cross, going past it costs no more than staying (no cliff).
-_DENSE_NS_PER_RULE_INPUT = (0.15, 0.15, 0.15, 0.23)  # index: N (more: the last); 2 fused
-_SPARSE_NS_PER_SET = 2.0
-_SPARSE_NS_BY_INPUTS = (0.0, 50.0, 95.0, 170.0, 235.0, 450.0)  # index: N
+# vectorise, 0.11 to 0.22 ns per rule, input and state) while that costs less than finding
+# each state's fired rules and walking only those (about 1.2 ns per set, plus a cost per
+# state that grows with each input, whatever M is). The costs below were measured on both
+# walks for every N <= 8 and L <= 9 with M <= MAX_RULES (1,000 states a batch;
+# benchmarks/bench_scaling.py --sweep measures them again and prints the walk each size
+# takes); with the switch where they cross, going past it costs no more than staying (no
+# cliff). Past 8 inputs the cost per state is extrapolated (x1.7 per input, as from 7 to 8).
+_DENSE_NS_PER_RULE_INPUT = (0.17, 0.17, 0.17, 0.2)  # index: N (more: the last); 2 fused
+_SPARSE_NS_PER_SET = 1.2
+_SPARSE_NS_BY_INPUTS = (0.0, 140.0, 150.0, 200.0, 250.0, 330.0, 460.0, 720.0, 1230.0)  # N
+_SPARSE_GROWTH_PAST_LAST = 1.7
 
 
 def walks_every_rule(n_rules: int, n_inputs: int, n_sets: int) -> bool:
     """Whether batched inference walks every rule (else only each state's fired rules):
     the estimated cheaper one for M rules, N inputs and S sets in all."""
     last = len(_SPARSE_NS_BY_INPUTS) - 1
-    per_state = _SPARSE_NS_BY_INPUTS[min(n_inputs, last)] * 2.3 ** max(0, n_inputs - last)
+    per_state = (_SPARSE_NS_BY_INPUTS[min(n_inputs, last)]
+                 * _SPARSE_GROWTH_PAST_LAST ** max(0, n_inputs - last))
     sparse = _SPARSE_NS_PER_SET * n_sets + per_state
     dense = _DENSE_NS_PER_RULE_INPUT[min(n_inputs, len(_DENSE_NS_PER_RULE_INPUT) - 1)]
     return dense * n_rules * n_inputs <= sparse
@@ -549,6 +553,12 @@ CHEAP_DENSE_RULE_INPUTS = 64
 # two inputs and 8-10 for more.
 OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2
 OWN_SMALL_BATCH = 8
+# ... except for a tiny rule base (M x N rule-inputs at most this, walked every rule), whose
+# batches of up to _BLOCK states go through _tiny_states: a naive loop costs a few ns a state
+# there (1 to 3 ns a rule-input), less than either walk's set-up (measured: one input with
+# 2-9 sets and two inputs with 2 sets were up to 6 % slower than the naive kernel at 16-32
+# states through the other walks).
+TINY_RULE_INPUTS = 16
 
 
 @_jit
@@ -636,6 +646,37 @@ def _own_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Flo
 
 
 @_jit
+def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray,
+                 tables: IntArray) -> int:
+    # infer_own for at most _BLOCK states of a tiny rule base (TINY_RULE_INPUTS): the block's
+    # memberships, then every rule of each state in rule order -- the naive loop, whose
+    # few nanoseconds a state beat both other walks' set-up. Zeros add nothing (module doc).
+    lo, hi, quads, singletons, _, offsets, _, grid = _unpack(floats, ints)
+    n, sets = ints[0], ints[1]
+    count = states.shape[0]
+    work = np.empty((n + sets) * _BLOCK)
+    xs = work[: n * _BLOCK].reshape((n, _BLOCK))
+    mu = work[n * _BLOCK :].reshape((sets, _BLOCK))
+    nan_state = _block_memberships(states, 0, count, lo, hi, quads, offsets, xs, mu)
+    if nan_state >= 0:
+        return nan_state
+    low, high = _singleton_bounds(floats, ints)
+    for b in range(count):
+        numerator = 0.0
+        denominator = 0.0
+        for m in range(grid.shape[0]):
+            alpha = mu[grid[m, 0], b]
+            for i in range(1, n):
+                alpha = min(alpha, mu[grid[m, i], b])  # eq. 2
+            numerator += alpha * singletons[tables[0, m]]
+            denominator += alpha
+        if denominator == 0.0:  # no rule fires (see infer)
+            return b
+        out[b] = _within(numerator / denominator, low, high)
+    return -1
+
+
+@_jit
 def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray) -> int:
     """Eq. 3 for ``states (B, N)`` into ``out (B,)`` with the controller's own consequents,
     which follow the layout's ints in ``ints`` as for :func:`infer_one`; returns what
@@ -649,6 +690,8 @@ def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: Float
     """
     tables = _own_table(ints)
     count = states.shape[0]
+    if count <= _BLOCK and 0 < ints[3] * ints[0] <= TINY_RULE_INPUTS:
+        return _tiny_states(floats, ints, states, out, tables)
     small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 else OWN_SMALL_BATCH
     if count <= small:
         return _own_states(floats, ints, states, out, tables)
