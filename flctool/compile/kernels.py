@@ -553,12 +553,17 @@ CHEAP_DENSE_RULE_INPUTS = 64
 # two inputs and 8-10 for more.
 OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2
 OWN_SMALL_BATCH = 8
-# ... except for a tiny rule base (M x N rule-inputs at most this, walked every rule), whose
-# batches of up to _BLOCK states go through _tiny_states: a naive loop costs a few ns a state
-# there (1 to 3 ns a rule-input), less than either walk's set-up (measured: one input with
-# 2-9 sets and two inputs with 2 sets were up to 6 % slower than the naive kernel at 16-32
-# states through the other walks).
-TINY_RULE_INPUTS = 16
+# ... except for a small rule base walked every rule, whose batches of up to TINY_BATCH
+# states go through _tiny_states: a naive loop, 1-1.5 ns a rule-input and state there, costs
+# less than finding each state's fired rules (about 80 ns a state for three inputs, 200 for
+# four, more beyond) or the blocks' set-up. For one or two inputs (fired rules found in
+# 15-45 ns) only bases of at most TINY_RULES_FEW_INPUTS rules, and only past
+# OWN_SMALL_BATCH states; for more inputs bases of at most TINY_RULE_INPUTS (M x N).
+# Measured against the naive kernel at 1-65 states: one input of 2-9 sets, 2 x 2, 3 x 2,
+# 3 x 3, 4 x 2 and 5 x 2 sets were up to 21 % slower through the other walks.
+TINY_BATCH = 2 * _BLOCK
+TINY_RULES_FEW_INPUTS = 16
+TINY_RULE_INPUTS = 160
 
 
 @_jit
@@ -648,32 +653,44 @@ def _own_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Flo
 @_jit
 def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray,
                  tables: IntArray) -> int:
-    # infer_own for at most _BLOCK states of a tiny rule base (TINY_RULE_INPUTS): the block's
-    # memberships, then every rule of each state in rule order -- the naive loop, whose
-    # few nanoseconds a state beat both other walks' set-up. Zeros add nothing (module doc).
+    # infer_own for a few states of a tiny rule base (see TINY_BATCH): each block's
+    # memberships, then every rule of each state in rule order -- the naive loop, whose few
+    # nanoseconds a state beat both other walks' set-up. Zeros add nothing (module doc).
     lo, hi, quads, singletons, _, offsets, _, grid = _unpack(floats, ints)
     n, sets = ints[0], ints[1]
-    count = states.shape[0]
     work = np.empty((n + sets) * _BLOCK)
     xs = work[: n * _BLOCK].reshape((n, _BLOCK))
     mu = work[n * _BLOCK :].reshape((sets, _BLOCK))
-    nan_state = _block_memberships(states, 0, count, lo, hi, quads, offsets, xs, mu)
-    if nan_state >= 0:
-        return nan_state
     low, high = _singleton_bounds(floats, ints)
-    for b in range(count):
-        numerator = 0.0
-        denominator = 0.0
-        for m in range(grid.shape[0]):
-            alpha = mu[grid[m, 0], b]
-            for i in range(1, n):
-                alpha = min(alpha, mu[grid[m, i], b])  # eq. 2
-            numerator += alpha * singletons[tables[0, m]]
-            denominator += alpha
-        if denominator == 0.0:  # no rule fires (see infer)
-            return b
-        out[b] = _within(numerator / denominator, low, high)
+    for first in range(0, states.shape[0], _BLOCK):
+        count = min(_BLOCK, states.shape[0] - first)
+        nan_state = _block_memberships(states, first, count, lo, hi, quads, offsets, xs, mu)
+        if nan_state >= 0:
+            return nan_state
+        for b in range(count):
+            numerator = 0.0
+            denominator = 0.0
+            for m in range(grid.shape[0]):
+                alpha = mu[grid[m, 0], b]
+                for i in range(1, n):
+                    alpha = min(alpha, mu[grid[m, i], b])  # eq. 2
+                numerator += alpha * singletons[tables[0, m]]
+                denominator += alpha
+            if denominator == 0.0:  # no rule fires (see infer)
+                return first + b
+            out[first + b] = _within(numerator / denominator, low, high)
     return -1
+
+
+@_jit
+def _tiny(ints: IntArray, count: int) -> bool:
+    # Whether infer_own takes _tiny_states (see TINY_BATCH).
+    n, rules = ints[0], ints[3]
+    if rules == 0 or count > TINY_BATCH:
+        return False
+    if n <= 2:
+        return bool(rules <= TINY_RULES_FEW_INPUTS and count > OWN_SMALL_BATCH)
+    return bool(rules * n <= TINY_RULE_INPUTS)
 
 
 @_jit
@@ -690,7 +707,7 @@ def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: Float
     """
     tables = _own_table(ints)
     count = states.shape[0]
-    if count <= _BLOCK and 0 < ints[3] * ints[0] <= TINY_RULE_INPUTS:
+    if _tiny(ints, count):
         return _tiny_states(floats, ints, states, out, tables)
     small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 else OWN_SMALL_BATCH
     if count <= small:
