@@ -329,6 +329,8 @@ def flctool_run(task: Task, seed: int) -> dict[str, Any]:
     value = (float(result.mean_return.value) if task.metric == "return"
              else float(result.success_rate.value))
     usage = summary.usage
+    if not isinstance(usage, dict):  # a Usage object since the learners' budgets
+        usage = usage.to_dict()
     return {"task": task.name, "method": f"flctool {behaviour.learning.learner}",
             "seed": seed, "solved": value >= task.threshold, "held_out": value,
             "train_steps": usage["training_steps"], "train_episodes": usage["training_episodes"],
