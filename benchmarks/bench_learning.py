@@ -154,7 +154,7 @@ def train_one(task: tuple[str, int, str | None]) -> dict[str, Any]:
         best = max(m.best for m in history)
     else:
         summary = create_run(behaviour, Path(out)).train()
-        best = float(summary.best["fitness"])
+        best = float(summary.to_dict()["best"]["fitness"])
     return {"learner": learner, "seed": seed, "seconds": time.process_time() - start,
             "best": best}
 

@@ -50,19 +50,25 @@ def run_one(behaviour_path: Path, learner: str, seed: int, overrides: dict[str, 
     seeds = evaluation_seeds(0, episodes)  # what `flctool evaluate` runs
     assert seeds.max() < TRAIN_SEED_LOW  # held out: training and selection never use these
     result = evaluate(compile_behaviour(best), make_env(best, episodes), seeds)
-    usage = summary.usage
+    usage = summary.to_dict()["usage"]
     return {"learner": learner, "seed": seed,
             "success": float(result.success_rate.value),
             "mean_return": float(result.mean_return.value),
             "auc": float(sum(m.mean for m in metrics)),
-            "final_mean": metrics[-1].mean, "best_fitness": summary.best["fitness"],
-            "validated": (summary.best.get("validation") or {}).get("value"),
+            "final_mean": metrics[-1].mean, "best_fitness": summary.to_dict()["best"]["fitness"],
+            "validated": (summary.to_dict()["best"].get("validation") or {}).get("value"),
             "train_cpu_seconds": train_seconds,
             "training_episodes": int(sum(m.episodes for m in metrics)),
             "selection_episodes": int(sum(m.selection_episodes for m in metrics)),
-            "episodes": int(usage.get("training_episodes", 0)
-                            + usage.get("selection_episodes", 0)),
-            "steps": int(usage.get("training_steps", 0) + usage.get("selection_steps", 0))}
+            # every episode the run used: training, selection, confirmation, baselines
+            "episodes": int(usage.get("episodes", usage.get("training_episodes", 0)
+                                      + usage.get("selection_episodes", 0))),
+            "steps": int(usage.get("steps", usage.get("training_steps", 0)
+                                   + usage.get("selection_steps", 0))),
+            "status": summary.status,
+            "confirmed_fitness": ((summary.to_dict()["best"].get("confirmation") or {})
+                                  .get("mean_fitness") or {}),
+            "heldout_fitness": float(result.mean_fitness.value)}
 
 
 def main() -> None:

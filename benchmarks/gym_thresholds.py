@@ -48,9 +48,9 @@ def run_one(name: str, seed: int, overrides: dict[str, Any], episodes: int,
         result = evaluate(compile_behaviour(best), env, evaluation_seeds(0, episodes))
     finally:
         env.close()
-    usage = summary.usage
+    usage = summary.to_dict()["usage"]
     return {"file": name, "seed": seed, "mean_return": float(result.mean_return.value),
-            "validated": (summary.best.get("validation") or {}).get("value"),
+            "validated": (summary.to_dict()["best"].get("validation") or {}).get("value"),
             "generations": summary.generations,
             "training_episodes": usage["training_episodes"],
             "selection_episodes": usage["selection_episodes"],

@@ -15,6 +15,7 @@ The library raises these; only the CLI turns them into exit codes and coloured t
       NotDeployableError   rules are missing where a complete controller is needed
       UnknownNameError     no learner, adapter or format of that name
       MissingDependencyError  an optional package is not installed
+      PluginError          an installed plugin's own code failed (its package is at fault)
     ProtocolError (ValueError)   a robot-link line that is not a protocol message
     PluginWarning (UserWarning)  an installed plugin is skipped
 """
@@ -94,6 +95,21 @@ class SpecError(FlcError):
         return str(self.args[0])
 
 
+class InputFileError(SpecError):
+    """A file the user named cannot be read as text: missing, a folder, unreadable, or not
+    UTF-8 (then located at its first byte that is not). Worded by :mod:`flctool.inputs`,
+    the same for every command."""
+
+    @property
+    def problem(self) -> Problem:
+        return self.problems[0]
+
+    def __str__(self) -> str:  # one line: the file (and place) and what is wrong
+        problem = self.problem
+        fix = f" (fix: {problem.hint})" if problem.hint else ""
+        return f"{problem.location()}: {problem.message}{fix}"
+
+
 class InferenceError(FlcError):
     """Inference was asked something it cannot answer (NaN input, wrong shape)."""
 
@@ -131,6 +147,11 @@ class UnknownNameError(FlcError):
 class ProtocolError(ValueError):
     """A line from a robot link that is not a message of the protocol (not JSON, not an
     object, no type). The robot link turns it into a :class:`LinkError` naming the robot."""
+
+
+class PluginError(FlcError):
+    """An installed plugin's own code failed (not the behaviour file): the message names the
+    plugin and the package to report it to."""
 
 
 class PluginWarning(UserWarning):

@@ -186,7 +186,8 @@ def evaluate_behaviour(behaviour: Behaviour, seeds: list[int] | None = None, *,
     """Run a deployable ``behaviour`` in its environment, one episode per seed (see
     :func:`episode_seeds`), in chunks (:func:`evaluate_in_chunks`). ``controller`` is the
     behaviour compiled and ``env`` its environment (built for :func:`batch_size`), if the
-    caller has them already; the environment is closed at the end."""
+    caller has them already: a given environment is left open (its opener closes it), one
+    built here is closed at the end."""
     from flctool.compile import compile_behaviour
     from flctool.envs import make_env
 
@@ -194,10 +195,9 @@ def evaluate_behaviour(behaviour: Behaviour, seeds: list[int] | None = None, *,
     if controller is None:
         controller = compile_behaviour(behaviour)
     if env is None:
-        env = make_env(behaviour, batch_size(len(drawn)))
-    try:
+        with make_env(behaviour, batch_size(len(drawn))) as built:
+            result = evaluate_in_chunks(controller, built, drawn, on_chunk=on_chunk)
+    else:
         result = evaluate_in_chunks(controller, env, drawn, on_chunk=on_chunk)
-    finally:
-        env.close()
     return Evaluation(behaviour, result,
                       None if seeds is not None else (DEFAULT_SEED if seed is None else seed))

@@ -26,10 +26,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
-from flctool.compile.membership import trapezoid
+from flctool.compile.membership import memberships
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
+from flctool.inputs import no_such_file
 from flctool.runs import Run
 from flctool.spec import Behaviour
+from flctool.spec.models import FuzzySet
+from flctool.spec.shapes import set_row
 
 FloatArray = NDArray[np.float64]
 FORMATS = ("png", "svg")
@@ -221,8 +224,20 @@ def _axis_label(behaviour: Behaviour, name: str) -> str:
     return f"{name} ({unit})" if unit else name
 
 
-def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
-    """Each input's fuzzy sets (paper Fig. 1): membership over the input's range."""
+def _set_curve(value: FuzzySet, low: float, high: float) -> tuple[np.ndarray, np.ndarray]:
+    """Where to draw a set: a trapezoid is linear between its corners, so it is drawn through
+    them; another shape through 400 points of the range."""
+    code, row = set_row(value)
+    xs = (np.clip(np.array(row, dtype=np.float64), low, high) if code == 0
+          else np.linspace(low, high, 400))
+    return xs, memberships(xs, np.array([row], dtype=np.float64), [code])[:, 0]
+
+
+def plot_memberships(behaviour: Behaviour, path: Path,
+                     before: Behaviour | None = None) -> list[Path]:
+    """Each input's fuzzy sets (paper Fig. 1): membership over the input's range; with
+    ``before`` (the file a run learned the sets of) its sets dashed beneath, in the same
+    colours, so each set's movement shows."""
     plt = _pyplot()
     names = behaviour.input_names
     figure, axes_list = plt.subplots(len(names), 1, figsize=(7, 2.2 * len(names)),
@@ -230,11 +245,14 @@ def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
     for axes, name in zip(axes_list[:, 0], names, strict=True):
         variable = behaviour.inputs[name]
         low, high = variable.range
+        old = before.inputs.get(name) if before is not None else None
         for set_name, quad in variable.sets.items():
-            # the membership is linear between the corners: drawn through them
-            xs = np.clip(np.array(quad, dtype=np.float64), low, high)
-            axes.plot(xs, trapezoid(xs, np.array([quad], dtype=np.float64))[:, 0],
-                      label=set_name)
+            xs, ys = _set_curve(quad, low, high)
+            line, = axes.plot(xs, ys, label=set_name)
+            was = old.sets.get(set_name) if old is not None else None
+            if was is not None and was != quad:
+                axes.plot(*_set_curve(was, low, high), linestyle="--", linewidth=0.9,
+                          color=line.get_color(), alpha=0.6)
         axes.set_xlim(low, high)
         axes.set_ylim(-0.05, 1.1)
         axes.set_xlabel(_axis_label(behaviour, name))
@@ -242,7 +260,8 @@ def plot_memberships(behaviour: Behaviour, path: Path) -> list[Path]:
         axes.legend(fontsize="x-small", ncol=min(5, len(variable.sets)), loc="upper center",
                     bbox_to_anchor=(0.5, 1.3), frameon=False)
         axes.grid(alpha=0.3)
-    figure.suptitle(f"{behaviour.name}: fuzzy sets of each input", y=1.0)
+    moved = " (dashed: before learning)" if before is not None else ""
+    figure.suptitle(f"{behaviour.name}: fuzzy sets of each input{moved}", y=1.0)
     figure.tight_layout()
     return _save(figure, path)
 
@@ -415,11 +434,8 @@ def trace_controller(behaviour: Behaviour, seed: int) -> dict[str, FloatArray] |
     from flctool.envs import make_env
     from flctool.rollout import trace_episode
 
-    env = make_env(behaviour, 1)
-    try:
+    with make_env(behaviour, 1) as env:
         rows = trace_episode(compile_behaviour(behaviour), env, seed)
-    finally:
-        env.close()
     columns = trace_columns(rows)
     return columns if all(c in columns for c in _TRACE_COLUMNS) else None
 
@@ -432,10 +448,12 @@ def pitch_of(behaviour: Behaviour) -> tuple[float, float] | None:
     return float(pitch.length), float(pitch.width)
 
 
-def plot_controller(behaviour: Behaviour, folder: Path, seed: int, title: str) -> list[Path]:
-    """Every figure of a deployable controller into ``folder``: memberships, rule table,
-    control surface (two inputs) and trajectory (environments with a robot and a ball)."""
-    written = plot_memberships(behaviour, folder / "memberships.png")
+def plot_controller(behaviour: Behaviour, folder: Path, seed: int, title: str,
+                    before: Behaviour | None = None) -> list[Path]:
+    """Every figure of a deployable controller into ``folder``: memberships (over
+    ``before``'s when its sets were learned), rule table, control surface (two inputs) and
+    trajectory (environments with a robot and a ball)."""
+    written = plot_memberships(behaviour, folder / "memberships.png", before)
     written += plot_rule_table(behaviour, folder / "rules.png")
     if len(behaviour.input_names) == 2:
         written += plot_surface(behaviour, folder / "surface.png")
@@ -465,8 +483,7 @@ def _check_exist(sources: Sequence[Path]) -> None:
                        "trace CSV")
     for source in sources:
         if not source.exists():
-            raise FlcError(f"{source}: no such file or directory",
-                           hint="give an experiment, run directories, or one trace CSV")
+            raise no_such_file(source, "experiment, run directory or trace CSV")
 
 
 def plot_sources(sources: Sequence[Path], folder: Path, rule: int | None = None
@@ -502,8 +519,10 @@ def plot_sources(sources: Sequence[Path], folder: Path, rule: int | None = None
     if strengths:
         drawn.append(_strengths(runs[0], folder, rule))
     if len(runs) == 1 and (runs[0].path / "best.yaml").is_file():
-        drawn.append(_best(runs[0].path / "best.yaml", folder,
-                           f"{runs[0].path.name} best.yaml"))
+        run = runs[0]
+        learned_sets = getattr(run.behaviour.learning, "sets", None) is not None
+        drawn.append(_best(run.path / "best.yaml", folder, f"{run.path.name} best.yaml",
+                           run.behaviour if learned_sets else None))
     return drawn
 
 
@@ -512,13 +531,13 @@ def _strengths(run: Run, folder: Path, rule: int | None) -> Drawn:
     return [folder / "strengths.png", folder / "strengths.svg"], f" (rule {plotted})"
 
 
-def _best(best: Path, folder: Path, title: str) -> Drawn:
+def _best(best: Path, folder: Path, title: str, before: Behaviour | None = None) -> Drawn:
     from flctool.rollout import evaluation_seeds
     from flctool.spec import load_behaviour
 
     # the first episode of 'flctool evaluate --episodes 1': never a training start
     seed = int(evaluation_seeds(0, 1)[0])
-    return plot_controller(load_behaviour(best), folder, seed, title), ""
+    return plot_controller(load_behaviour(best), folder, seed, title, before), ""
 
 
 def _plot_experiment(path: Path, folder: Path, rule: int | None) -> list[Drawn]:

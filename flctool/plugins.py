@@ -20,14 +20,16 @@ from __future__ import annotations
 
 import importlib
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any
 
-from pydantic import BaseModel
+from pydantic import BaseModel, ValidationError
 
-from flctool.errors import PluginWarning
+from flctool.errors import FlcError, PluginError, PluginWarning
 from flctool.registry import Registry
 
 GROUPS = {"learner": "flctool.learners", "environment": "flctool.environments",
@@ -87,6 +89,7 @@ BUILTIN: dict[str, tuple[Plugin, ...]] = {
                f"{_ENVIRONMENT}:GymnasiumConfig"),
         Plugin("robot-link", "flctool.envs.robot_link:RobotLinkEnv",
                f"{_ENVIRONMENT}:RobotLinkConfig"),
+        Plugin("ros2", "flctool.envs.ros2_env:Ros2Env", "flctool.spec.ros2:Ros2Config"),
     ),
     "exporter": (
         Plugin("yaml", "flctool.export.yaml_format:YamlExporter", suffixes=(".yaml", ".yml")),
@@ -145,6 +148,28 @@ def _installed(kind: str, point: EntryPoint) -> Plugin | None:
         return None
     found: Plugin = loaded
     return found
+
+
+@contextmanager
+def blamed(kind: str, name: str) -> Iterator[None]:
+    """Run code of the plugin ``name`` of ``kind`` (its section's checks, building it): an
+    exception its code raises that is no :class:`FlcError` and no validation error becomes a
+    :class:`PluginError` naming the plugin, for an installed one. A built-in's failure stays
+    what it is (flctool's own bug)."""
+    try:
+        yield
+    except (FlcError, ValidationError):
+        raise
+    except Exception as error:
+        found = plugin(kind, name)
+        if found is None or found in BUILTIN[kind]:
+            raise
+        package = found.target.partition(":")[0].split(".")[0]
+        raise PluginError(
+            f"the {kind} plugin '{name}' ({found.target}) failed: {type(error).__name__}: "
+            f"{error}", hint=f"a fault of the plugin, not of the file: report it to the "
+            f"authors of its package ({package}), or uninstall it; --debug shows the "
+            "traceback") from error
 
 
 def names(kind: str) -> tuple[str, ...]:

@@ -3,7 +3,8 @@
 A run directory holds::
 
     behaviour.yaml          the resolved behaviour: the file, its seed, command-line overrides
-    run.json                learner, seed, status (running / stopped / finished), best so far,
+    run.json                learner, seed, status (running / stopped / finished /
+                            not_learned: no better than a baseline), best so far,
                             and the model-selection record: every validated candidate, the
                             episodes and steps of training and of selection, why it stopped
     metrics.csv             one row per generation: generation, mean, std, best, min fitness,
@@ -33,15 +34,15 @@ from __future__ import annotations
 
 import csv
 import errno
-import fcntl
 import io
 import json
+import math
 import os
 import re
 import time
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -49,23 +50,29 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
+from flctool.dirlock import DirectoryLock, is_locked
 from flctool.envs.base import BatchEnv
-from flctool.errors import FlcError, LearnError, PathPart, Problem, RunDirError, SpecError
+from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.learners.budget import Usage
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.learners.confirmation import Confirmed
+from flctool.rollout import Estimate
+from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
     Behaviour,
-    behaviour_from_data,
-    behaviour_to_data,
     behaviour_to_yaml,
     load_behaviour,
 )
-from flctool.spec.learning import keep_keys_read_by
-from flctool.spec.located import source_of
+from flctool.spec.overrides import Override, resolve_behaviour
 from flctool.spec.rules import with_rules
 from flctool.version import __version__
 
 RUN_FORMAT = 1
+#: The status of a run that ended without a controller clearly better than the baselines.
+NOT_LEARNED = "not_learned"
+#: The statuses of a run that has run to its end (all its generations, or a budget).
+ENDED = ("finished", NOT_LEARNED)
 BEHAVIOUR_FILE = "behaviour.yaml"
 RUN_FILE = "run.json"
 METRICS_FILE = "metrics.csv"
@@ -77,66 +84,6 @@ LOCK_FILE = "run.lock"
 #: rules = 20 million consequents, writes about 200 MB).
 MAX_CHECKPOINT_BYTES = 1 << 30
 _CHECKPOINT = re.compile(r"^gen-(\d+)\.json$")
-
-
-# -- resolving a behaviour for a run ------------------------------------------------------
-def override_path(key: str) -> tuple[str, ...]:
-    """The field path an override key names: ``q.alpha`` is ``learning.q.alpha``; keys may
-    also start with ``learning.`` or ``environment.``."""
-    path = tuple(key.split("."))
-    return path if path[0] in ("learning", "environment") else ("learning", *path)
-
-
-def override_label(where: str | Mapping[str, str], key: str) -> str:
-    """Where the override ``key`` was given: ``where`` names the place of every override
-    (``overrides (q.alpha)``), or each key's own (``command line (--set q.alpha)``)."""
-    if isinstance(where, str):
-        return f"{where} ({key})"
-    return where.get(key, f"overrides ({key})")
-
-
-def resolve_behaviour(behaviour: Behaviour, overrides: Mapping[str, Any],
-                      where: str | Mapping[str, str] = "overrides") -> Behaviour:
-    """The behaviour with ``overrides`` applied and validated like the file itself.
-
-    Keys are dotted paths under ``learning:`` (``seed``, ``q.temperature``), or start with
-    ``learning.`` / ``environment.``. Errors name the field, e.g. ``learning.crossover``; one
-    about an overridden field is placed where the override was given -- ``where``, a label
-    for all of them (``"overrides"`` reads ``overrides (q.alpha)``) or one per key (the
-    command line says ``command line (--set q.alpha)``) -- and any other at its line in the
-    behaviour's file. Overriding ``learner`` drops the keys of the behaviour's learner that
-    the new one does not read; keys the overrides give must be the new learner's.
-    """
-    data = behaviour_to_data(behaviour)
-    learner = next((value for key, value in overrides.items()
-                    if override_path(key) == ("learning", "learner")), None)
-    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
-        data["learning"] = keep_keys_read_by(data["learning"], learner)
-    given = apply_overrides(data, overrides, where)
-    return behaviour_from_data(data, source_of(behaviour).with_overrides(given))
-
-
-def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any],
-                    where: str | Mapping[str, str] = "overrides",
-                    ) -> dict[tuple[PathPart, ...], str]:
-    """Set each override in ``data`` (a behaviour as data, changed in place); returns where
-    each overridden field was given, for :meth:`SourceMap.with_overrides
-    <flctool.spec.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
-    given: dict[tuple[PathPart, ...], str] = {}
-    for key, value in overrides.items():
-        path = list(override_path(key))
-        node = data
-        for depth, part in enumerate(path[:-1]):
-            child = node.setdefault(part, {})
-            if not isinstance(child, dict):
-                raise SpecError([Problem(
-                    tuple(path[: depth + 1]), f"'{'.'.join(path[: depth + 1])}' is a value, "
-                    f"not a section, so '{key}' cannot be set", "set the value itself",
-                    file=override_label(where, key))], override_label(where, key))
-            node = child
-        node[path[-1]] = value
-        given[tuple(path)] = override_label(where, key)
-    return given
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -210,22 +157,102 @@ def _append(root: Path, path: Path, text: str) -> None:
 def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
     validation = provenance.get("validation")
     measured = (f"fitness {provenance['fitness']!r} in training, validated mean fitness "
-                f"{validation['value']!r} over {validation['n']} validation episodes"
+                f"{validation['value']!r} over {validation['n']} validation episodes "
+                "(the best of the candidates on them: optimistic)"
                 if validation else f"fitness {provenance['fitness']!r}")
+    confirmation = provenance.get("confirmation")
+    confirmed = (f"Confirmed on {confirmation['episodes']} fresh episodes: "
+                 f"{confirmation_text(confirmation)}.\n" if confirmation else "")
     return (f"Learned by flctool {__version__} with the {provenance['learner']} learner "
             f"(seed {provenance['seed']}) in run {run_name}:\n"
             f"generation {provenance['generation']}, individual {provenance['individual']}, "
-            f"{measured}.\n"
+            f"{measured}.\n{confirmed}"
             "Deployable: flctool validate / evaluate / export take it as it is.")
 
 
+def confirmation_text(confirmation: Mapping[str, Any]) -> str:
+    """``mean fitness 1.90 [1.84, 1.95], success rate 0.96 [0.87, 0.99], mean return ...``:
+    a confirmation record (:meth:`~flctool.learners.confirmation.Confirmed.record`) as
+    words."""
+    parts = []
+    for key, label in (("mean_fitness", "mean fitness"), ("success_rate", "success rate"),
+                       ("mean_return", "mean return")):
+        estimate = confirmation[key]
+        if estimate["value"] is None:
+            continue
+        interval = ("" if estimate["low"] is None
+                    else f" [{estimate['low']:.3f}, {estimate['high']:.3f}]")
+        parts.append(f"{label} {estimate['value']:.3f}{interval}")
+    return ", ".join(parts)
+
+
 def _provenance(run: Run, generation: int, individual: int, fitness: float,
-                validation: Mapping[str, Any] | None) -> dict[str, Any]:
-    provenance = {"learner": run.learner, "seed": run.seed, "generation": generation,
+                validation: Mapping[str, Any] | None,
+                confirmation: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    return _provenance_record(run.learner, run.seed, generation, individual, fitness,
+                              validation, confirmation)
+
+
+def _provenance_record(learner: str, seed: int, generation: int, individual: int,
+                       fitness: float, validation: Mapping[str, Any] | None,
+                       confirmation: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    provenance = {"learner": learner, "seed": seed, "generation": generation,
                   "individual": individual, "fitness": fitness}
     if validation is not None:
         provenance["validation"] = dict(validation)
+    if confirmation is not None:
+        provenance["confirmation"] = dict(confirmation)
     return provenance
+
+
+def _confirmation_of(confirmations: Iterable[Confirmed], consequents: Any,
+                     sets: Any = None) -> dict[str, Any] | None:
+    """The record of the latest confirmation of the controller ``consequents`` with the set
+    genome ``sets`` (None: the file's sets), if any."""
+    for confirmed in reversed(list(confirmations)):
+        if confirmed.is_of(consequents, sets):
+            return confirmed.record()
+    return None
+
+
+@dataclass(frozen=True)
+class BestController:
+    """Where a run's best controller (``best.yaml``) came from, and what it scored."""
+
+    learner: str
+    seed: int
+    generation: int
+    individual: int
+    #: Its mean fitness over its training trials.
+    fitness: float
+    #: Its mean fitness over the run's validation episodes; None if it was not validated.
+    validation: Estimate | None = None
+    #: Its confirmation on fresh episodes, the figure to read (run.json's record of it:
+    #: mean_fitness, success_rate, mean_return, episodes); None if it was not confirmed.
+    confirmation: dict[str, Any] | None = None
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> BestController:
+        """From run.json's ``best`` (:meth:`to_dict`)."""
+        validation = record.get("validation")
+
+        def number(key: str) -> float:
+            value = validation[key] if validation is not None else None
+            return math.nan if value is None else float(value)
+
+        return cls(str(record["learner"]), int(record["seed"]), int(record["generation"]),
+                   int(record["individual"]), float(record["fitness"]),
+                   None if validation is None else Estimate(
+                       number("value"), number("low"), number("high"), int(validation["n"])),
+                   None if record.get("confirmation") is None
+                   else dict(record["confirmation"]))
+
+    def to_dict(self) -> dict[str, Any]:
+        """As run.json records it (NaN as null)."""
+        return _provenance_record(self.learner, self.seed, self.generation, self.individual,
+                                  self.fitness, self.validation.to_dict()
+                                  if self.validation is not None else None,
+                                  self.confirmation)
 
 
 @dataclass(frozen=True)
@@ -237,19 +264,27 @@ class RunSummary:
     seed: int
     generations: int  # generations completed in the run (all sessions)
     status: str
-    best: dict[str, Any]
+    #: The run's best controller so far; None before its first generation.
+    best: BestController | None
     last: GenerationMetrics | None
     selection: dict[str, Any] | None = None  # run.json's record of model selection
 
     @property
-    def usage(self) -> dict[str, int]:
-        """Episodes and steps the run spent on training and on selection (validation)."""
-        return dict((self.selection or {}).get("usage") or {})
+    def usage(self) -> Usage | None:
+        """Episodes and steps the run spent on training, selection (validation),
+        confirmation and baselines; None if the run recorded none (counts a run of an
+        earlier version did not record are 0)."""
+        recorded = (self.selection or {}).get("usage")
+        return Usage(**{f.name: int(recorded.get(f.name, 0)) for f in fields(Usage)}) \
+            if recorded else None
 
     def to_dict(self) -> dict[str, Any]:
+        usage = self.usage
         return {"run": str(self.path), "learner": self.learner, "seed": self.seed,
-                "generations": self.generations, "status": self.status, "best": self.best,
-                "usage": self.usage, "selection": self.selection,
+                "generations": self.generations, "status": self.status,
+                "best": self.best.to_dict() if self.best is not None else {},
+                "usage": usage.to_dict() if usage is not None else {},
+                "selection": self.selection,
                 "last": self.last.row() if self.last else None,
                 "best_file": str(self.path / BEST_FILE)}
 
@@ -312,7 +347,7 @@ class Run:
             checkpoint = read_checkpoint(data, Expected(
                 behaviour.rule_count, len(behaviour.output.commands), generation=generation,
                 max_population=behaviour.learning.population, strengths=strengths,
-                metrics=True))
+                metrics=True, set_genes=set_gene_count(behaviour)))
         except LearnError as error:
             raise self._damaged(generation, error.args[0]) from None
         return data, checkpoint
@@ -324,38 +359,24 @@ class Run:
         resumed while it is still training would corrupt it)."""
         path = self.path / LOCK_FILE
         _refuse_links(self.path, path)
+        lock = DirectoryLock(path)
         try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+            acquired = lock.acquire()
         except OSError as exc:
             raise _write_error(path, exc) from None
+        if not acquired:
+            raise RunDirError(
+                f"{self.path} is being trained by another flctool process"
+                f"{f' (pid {lock.holder})' if lock.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then --resume")
         try:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
-                holder = os.read(fd, 32).decode("ascii", "replace").strip()
-                raise RunDirError(
-                    f"{self.path} is being trained by another flctool process"
-                    f"{f' (pid {holder})' if holder.isdigit() else ''}",
-                    hint="wait for it to finish, or stop it (Ctrl-C), then --resume") from None
-            os.ftruncate(fd, 0)
-            os.write(fd, f"{os.getpid()}\n".encode())
             yield
         finally:
-            os.close(fd)  # closing releases the lock
+            lock.release()
 
     def is_locked(self) -> bool:
         """Whether a process (this one included) holds the run's lock now."""
-        try:
-            fd = os.open(self.path / LOCK_FILE, os.O_RDONLY | os.O_NOFOLLOW)
-        except OSError:
-            return False
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-        except BlockingIOError:
-            return True
-        finally:
-            os.close(fd)
-        return False
+        return is_locked(self.path / LOCK_FILE)
 
     def _damaged(self, generation: int, problem: str) -> RunDirError:
         path = self.checkpoint_path(generation)
@@ -415,20 +436,27 @@ class Run:
             raise RunDirError(f"{self.path}: generation {generation} has individuals "
                               f"0..{len(population) - 1}, not {individual}",
                               hint="pick an individual in that range")
+        confirmations = checkpoint.selection.confirmations if checkpoint.selection else []
+        genes = None if checkpoint.set_genes is None else checkpoint.set_genes[individual]
         provenance = _provenance(self, generation, individual, float(fitness[individual]),
-                                 None)
-        return with_rules(self.behaviour, population[individual]), provenance
+                                 None, _confirmation_of(confirmations, population[individual],
+                                                        genes))
+        return with_rules(with_set_genes(self.behaviour, genes), population[individual]), \
+            provenance
 
     def _selected(self, generation: int) -> tuple[Behaviour, dict[str, Any]] | None:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
         selection = self._read_checkpoint(generation)[1].selection
         candidate = selection.best if selection is not None else None
-        if candidate is None:
+        if selection is None or candidate is None:
             return None
-        behaviour = with_rules(self.behaviour, candidate.consequents)
+        behaviour = with_rules(with_set_genes(self.behaviour, candidate.sets),
+                               candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
-                                      candidate.fitness, validation)
+                                      candidate.fitness, validation,
+                                      _confirmation_of(selection.confirmations,
+                                                       candidate.consequents, candidate.sets))
 
     # -- training ------------------------------------------------------------------------
     def train(self, callbacks: Iterable[Callback] = (), env: BatchEnv | None = None,
@@ -436,9 +464,11 @@ class Run:
         """Train from the last checkpoint (or from scratch) to ``learning.generations``.
 
         ``learner`` (made by :func:`~flctool.learners.make_learner` for this run's behaviour)
-        or ``env`` replace the ones built from the behaviour. The environment is closed when
-        training ends, however it ends (a robot over a link is sent ``stop``).
+        or ``env`` replace the ones built from the behaviour. An environment built here is
+        closed when training ends, however it ends (a robot over a link is sent ``stop``); a
+        given one, or a given learner's, is left to its opener.
         """
+        built = learner is None and env is None
         if learner is None:
             learner = make_learner(self.behaviour, env)
         try:
@@ -454,7 +484,8 @@ class Run:
                 train(learner, [RunRecorder(self), *callbacks])
                 return self.summary()
         finally:
-            learner.env.close()
+            if built:
+                learner.env.close()
 
     def summary(self) -> RunSummary:
         info = self.info()
@@ -462,9 +493,11 @@ class Run:
         # Only the last checkpoint is read: a summary of a long run costs one file, not all.
         last = (GenerationMetrics.from_row(self.checkpoint(done[-1])["metrics"]) if done
                 else None)
+        best = info.get("best")
         return RunSummary(self.path, self.learner, self.seed, len(done),
-                          str(info.get("status", "unknown")), dict(info.get("best") or {}),
-                          last, info.get("selection"))
+                          str(info.get("status", "unknown")),
+                          BestController.from_record(best) if best else None, last,
+                          info.get("selection"))
 
     def info(self) -> dict[str, Any]:
         """run.json; a run that says 'running' but whose lock nobody holds was killed (or
@@ -514,8 +547,8 @@ class Run:
             raise RunDirError(f"{self.path} already has {done[-1] + 1} generations; "
                               f"--generations {generations} would not add any",
                               hint=f"give more than {done[-1] + 1}")
-        behaviour = resolve_behaviour(self.behaviour, {"generations": generations},
-                                      {"generations": "the new generation budget"})
+        behaviour = resolve_behaviour(self.behaviour, [Override(
+            "generations", generations, "the new generation budget")])
         with self.lock():
             _write(self.path, self.path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
         self.behaviour = behaviour
@@ -601,8 +634,12 @@ class RunRecorder(Callback):
             generation, individual, consequents, fitness, candidate = learner.selected()
             validation = (candidate.validation.to_dict()
                           if candidate is not None and candidate.validation else None)
-            self._write_best(with_rules(run.behaviour, consequents),
-                             _provenance(run, generation, individual, fitness, validation))
+            learned_sets = learner.selected_sets()
+            learned = with_set_genes(run.behaviour, learned_sets)
+            self._write_best(with_rules(learned, consequents),
+                             _provenance(run, generation, individual, fitness, validation,
+                                         _confirmation_of(learner.confirmation.confirmed,
+                                                          consequents, learned_sets)))
             run.write_info("running", self.best, learner.selection_record())
         return True
 
@@ -614,23 +651,32 @@ class RunRecorder(Callback):
     def on_end(self) -> None:
         learner = self.learner
         finished = learner is not None and learner.finished
-        # The checkpoints are the record: a stop between a checkpoint and best.yaml (Ctrl-C,
-        # an error) still leaves best.yaml and run.json naming the last checkpoint's best.
-        if self.run.checkpoint_generations():
-            try:
-                behaviour, provenance = self.run.behaviour_for()
-            except FlcError:
-                pass  # a damaged checkpoint: report what the run knew, not a second error
-            else:
-                if provenance != self.best:
-                    self._write_best(behaviour, provenance)
-        selection = None  # kept from run.json, unless this session recorded generations
-        if learner is not None and self._recorded:
-            selection = learner.selection_record()
-        if self._unsynced is not None:
-            _fsync(self._unsynced)  # the last checkpoint (see the policy above)
-        self.run.write_info("finished" if finished else "stopped",
-                            self.best or self.run.info().get("best"), selection)
+        written = False  # whether best.yaml and the last checkpoint are on disk
+        try:
+            # The checkpoints are the record: a stop between a checkpoint and best.yaml
+            # (Ctrl-C, an error) still leaves best.yaml and run.json naming the last
+            # checkpoint's best.
+            if self.run.checkpoint_generations():
+                try:
+                    behaviour, provenance = self.run.behaviour_for()
+                except FlcError:
+                    pass  # a damaged checkpoint: report what the run knew, not a second error
+                else:
+                    if provenance != self.best:
+                        self._write_best(behaviour, provenance)
+            if self._unsynced is not None:
+                _fsync(self._unsynced)  # the last checkpoint (see the policy above)
+            written = True
+        finally:
+            # however the above ends (a full disk fails best.yaml first): never 'running'
+            selection = None  # kept from run.json, unless this session recorded generations
+            if learner is not None and self._recorded:
+                selection = learner.selection_record()
+            # a run whose best.yaml could not be written is not finished: resume writes it
+            status = "finished" if finished and written else "stopped"
+            if status == "finished" and learner is not None and learner.learned is False:
+                status = NOT_LEARNED  # no better than a baseline (flctool.learners.baselines)
+            self.run.write_info(status, self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------
@@ -676,7 +722,49 @@ def open_run(path: str | Path) -> Run:
     if not path.is_dir():
         raise RunDirError(f"{path}: no such run directory",
                           hint="give the directory flctool learn wrote (see its --out)")
+    for name in (BEHAVIOUR_FILE, RUN_FILE, BEST_FILE, CHECKPOINT_DIR):
+        if (path / name).is_symlink():  # reads, like writes, stay inside the directory
+            raise RunDirError(f"{path / name} is a symbolic link; flctool reads and writes "
+                              "only the run directory's own files",
+                              hint="replace the link with the file itself, or resume a copy "
+                              "of the run")
     if not (path / BEHAVIOUR_FILE).is_file():
         raise RunDirError(f"{path} is not a run directory: it has no {BEHAVIOUR_FILE}",
                           hint="give the directory flctool learn wrote (see its --out)")
-    return Run(path, load_behaviour(path / BEHAVIOUR_FILE))
+    run = Run(path, load_behaviour(path / BEHAVIOUR_FILE))
+    _check_record(run)
+    return run
+
+
+def _check_record(run: Run) -> None:
+    """Refuse a run.json that does not describe the run: another format, or a learner or
+    seed other than behaviour.yaml's (an edited record would otherwise be ignored, or
+    trusted)."""
+    path = run.path / RUN_FILE
+    try:
+        record: Any = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return  # a run killed inside create_run: behaviour.yaml is the record
+    except (OSError, ValueError, RecursionError) as exc:
+        raise RunDirError(f"{path} cannot be read ({exc})",
+                          hint=f"restore it, or delete it: flctool rebuilds it from "
+                          f"{BEHAVIOUR_FILE} and the checkpoints") from None
+    if not isinstance(record, dict):
+        raise RunDirError(f"{path} holds no run record (a {type(record).__name__})",
+                          hint=f"delete it: flctool rebuilds it from {BEHAVIOUR_FILE} and the "
+                          "checkpoints")
+    version = record.get("format")
+    if version != RUN_FORMAT:
+        newer = isinstance(version, int) and not isinstance(version, bool) and \
+            version > RUN_FORMAT
+        raise RunDirError(f"{path} has format {version!r}; this flctool reads run "
+                          f"directories of format {RUN_FORMAT}",
+                          hint="upgrade flctool: pip install --upgrade flctool" if newer
+                          else f"restore the file, or delete it: flctool rebuilds it from "
+                          f"{BEHAVIOUR_FILE} and the checkpoints")
+    for key, recorded in (("learner", run.learner), ("seed", run.seed)):
+        if key in record and record[key] != recorded:
+            raise RunDirError(f"{path} records {key} {record[key]!r}, but the run's "
+                              f"{BEHAVIOUR_FILE} has {recorded!r}: the record was edited",
+                              hint=f"restore it, or delete it: flctool rebuilds it from "
+                              f"{BEHAVIOUR_FILE} and the checkpoints")

@@ -11,14 +11,19 @@ What is accepted, and what is an error (every error names the file, line and col
 - blank lines at the end of the file (a blank line between rows is an error: a lost reading);
 - a header naming every input; a column named twice, or one with the output's name, is an
   error (which of the two would be meant?);
-- a cell of an input column must be a number (Python's ``float``); NaN is an error;
-  infinities are clipped to the input's range like any value beyond it.
+- a cell of an input column must be a number in one grammar (:data:`NUMBER`): ASCII
+  decimal digits with an optional sign, point and exponent, or ``inf``/``infinity`` (any
+  case), with spaces or tabs around -- not ``1_0`` or Arabic-Indic digits, which Python's
+  ``float`` reads; NaN is an error; infinities are clipped to the input's range like any
+  value beyond it;
+- text that is not UTF-8 (a Latin-1 file, UTF-16 with its byte order mark) is an error at
+  the line and column of its first byte that is not.
 
 Two readings of a chunk give the same values and the same errors: :meth:`StateReader.chunks`
-(numpy's C parser, falling back to cell-by-cell ``float``) and
-:meth:`StateReader.chunks_in_python` (cell-by-cell ``float`` alone, for a small table in a
-process that never loads numpy; a chunk it refuses is handed to the numpy reading, which
-gives the error, or accepts the few cells numpy's parser reads and ``float`` does not).
+(numpy's C parser for a chunk of printable ASCII without ``_``, where it reads exactly
+:data:`NUMBER`; else cell by cell) and :meth:`StateReader.chunks_in_python` (cell by cell,
+each cell matched against :data:`NUMBER` and read by ``float``, for a small table in a
+process that never loads numpy).
 """
 
 from __future__ import annotations
@@ -27,10 +32,12 @@ import csv
 import io
 import itertools
 import math
+import re
 from collections.abc import Iterator, Sequence
 from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
 
 from flctool.errors import Problem, SpecError
+from flctool.inputs import not_utf8
 
 if TYPE_CHECKING:
     import numpy as np
@@ -43,12 +50,25 @@ CHUNK_CHARACTERS = 2**21
 SHOWN_CELL = 40
 #: Most problems reported for one chunk before the rest are summarised.
 LISTED_PROBLEMS = 20
+#: What a cell of an input column may hold: a decimal number in ASCII digits, or an infinity
+#: (NaN matches too, and is refused as a missing reading), with spaces or tabs around.
+NUMBER = re.compile(r"[ \t]*[+-]?(?:(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                    r"|(?i:inf|infinity|nan))[ \t]*")
+#: A chunk without these is read by numpy's parser, which there reads exactly NUMBER: beyond
+#: printable ASCII it also reads other spaces (U+00A0) and skips control characters, and
+#: Python's float reads ``1_0`` and other scripts' digits.
+_BEYOND_NUMPY = re.compile(r'[^\x20-\x7e\t\n]|[_"]')
+#: Bytes that are not UTF-8 are decoded as lone surrogates (``surrogateescape``), so the
+#: reader can say at which line and column the first one is.
+_UNDECODED = re.compile("[\udc80-\udcff]")
 
 
 def text_stream(binary: BinaryIO) -> TextIO:
     """A text view of a binary stream that drops a UTF-8 BOM and reads every line ending
-    (LF, CRLF, CR) as LF."""
-    return io.TextIOWrapper(binary, encoding="utf-8-sig", newline=None)
+    (LF, CRLF, CR) as LF; bytes that are not UTF-8 become lone surrogates, which
+    :class:`StateReader` refuses at their line and column."""
+    return io.TextIOWrapper(binary, encoding="utf-8-sig", errors="surrogateescape",
+                            newline=None)
 
 
 def _shown(cell: str) -> str:
@@ -73,8 +93,9 @@ class StateReader:
         self._line = 1  # 1-based number of the last line read
         try:
             first = stream.readline()
-        except UnicodeDecodeError as error:
-            raise self._not_utf8(error) from None
+        except UnicodeDecodeError:  # a stream that does not escape them
+            raise self._not_utf8_here(1, None, 0) from None
+        self._check_decoded(first, 1)
         if not first.strip():
             raise self._error(1, None, "the CSV is empty; it needs a header row naming the "
                               f"columns {', '.join(self.columns)}")
@@ -85,7 +106,7 @@ class StateReader:
         self._index = [self.header.index(c) for c in self.columns]
         self._blank: list[int] = []  # blank lines seen since the last row
         self._numbers: Sequence[int] = []  # line numbers of the rows of the current chunk
-        self._quoted = False  # whether the current chunk has a quote
+        self._beyond_numpy = False  # whether numpy cannot read the current chunk (see NUMBER)
 
     # -- header --------------------------------------------------------------------------
     def _check_header(self, reserved: Sequence[str]) -> None:
@@ -125,17 +146,19 @@ class StateReader:
                 text = self._stream.read(size)
                 if text and not text.endswith("\n"):
                     text += self._stream.readline()  # complete the last line
-            except UnicodeDecodeError as error:
-                raise self._not_utf8(error) from None
+            except UnicodeDecodeError:  # a stream that does not escape them
+                raise self._not_utf8_here(self._line + 1, None, 0) from None
             if not text:
                 return
+            self._check_decoded(text, self._line + 1)
             lines = text.split("\n")
             if lines[-1] == "":
                 lines.pop()  # the end of the last line, not a line
             first = self._line + 1
             self._line += len(lines)
             rows = self._rows(lines, first)
-            self._quoted = '"' in text  # (one search of the text, not one per line)
+            # (one search of the text, not one per line)
+            self._beyond_numpy = _BEYOND_NUMPY.search(text) is not None
             if rows:
                 yield rows
 
@@ -172,7 +195,7 @@ class StateReader:
         (B, N) array."""
         import numpy as np
 
-        if not self._quoted:
+        if not self._beyond_numpy:
             values = self._parse_plain(lines)
             if values is not None:
                 return values
@@ -180,19 +203,11 @@ class StateReader:
             len(lines), len(self.columns))
 
     def parse_in_python(self, lines: list[str]) -> list[list[float]]:
-        """The inputs of the latest chunk's rows as lists of floats, read by ``float`` cell by
-        cell without loading numpy, exactly as :meth:`parse` reads them.
-
-        ``float`` accepts everything numpy's parser does but a few spellings (a number
-        followed by a control character such as 0x1c, which numpy skips as space), and reads
-        the same bits (tests compare them on generated cells); so a chunk with a cell it
-        refuses is read by :meth:`parse`, which raises the same error or accepts those.
-        """
-        try:
-            return self._parse_cells(lines)
-        except SpecError:
-            values: list[list[float]] = self.parse(lines).tolist()
-            return values
+        """The inputs of the latest chunk's rows as lists of floats, read cell by cell without
+        loading numpy, exactly as :meth:`parse` reads them: each cell matched against
+        :data:`NUMBER` and read by ``float``, which rounds correctly like numpy's parser
+        (tests compare the two on generated cells)."""
+        return self._parse_cells(lines)
 
     def _parse_plain(self, lines: list[str]) -> NDArray[np.float64] | None:
         """The input columns of rows without quotes, read by numpy's C parser (correctly
@@ -241,13 +256,13 @@ class StateReader:
                 continue
             row = []
             for c, i in enumerate(self._index):
-                try:
-                    value = float(cells[i])
-                except ValueError:
+                if NUMBER.fullmatch(cells[i]) is None:
                     problems.append(Problem((self.columns[c],),
                                             f"'{_shown(cells[i])}' is not a number",
+                                            _number_hint(cells[i]),
                                             file=self.file, line=number, column=i + 1))
                     continue
+                value = float(cells[i])
                 if math.isnan(value):
                     problems.append(Problem((self.columns[c],),
                                             "NaN is a missing reading, not a value",
@@ -273,16 +288,37 @@ class StateReader:
             raise self._error(number, None, f"not a CSV row: {error}",
                               "quote cells that contain commas or quotes") from None
 
-    def _not_utf8(self, error: UnicodeDecodeError) -> SpecError:
-        # decoded a block at a time, so the line is not known; the byte is the first bad one
-        byte = error.object[error.start]
-        return SpecError([Problem((), f"the CSV is not UTF-8 text (byte 0x{byte:02x})",
-                                  "save it as UTF-8 text", file=self.file)], self.file)
+    def _check_decoded(self, text: str, line: int) -> None:
+        """Refuse ``text`` (starting at ``line``) if it holds bytes that are not UTF-8."""
+        found = _UNDECODED.search(text)
+        if found is None:
+            return
+        at = found.start()
+        line += text.count("\n", 0, at)
+        column = at - (text.rfind("\n", 0, at) + 1) + 1
+        raise self._not_utf8_here(line, column, ord(found.group()) - 0xDC00,
+                                  utf16=line == 1 and column == 1 and text[:2] in _UTF16_BOMS)
+
+    def _not_utf8_here(self, line: int, column: int | None, byte: int | None = None,
+                       utf16: bool = False) -> SpecError:
+        return not_utf8(self.file, "CSV", line, column, None if utf16 else byte)
 
     def _error(self, line: int | None, column: int | None, message: str,
                hint: str = "") -> SpecError:
         return SpecError([Problem((), message, hint, file=self.file, line=line,
                                   column=column)], self.file)
+
+
+#: The byte order marks of UTF-16 as surrogateescape decodes them (FF FE, FE FF).
+_UTF16_BOMS = ("\udcff\udcfe", "\udcfe\udcff")
+
+
+def _number_hint(cell: str) -> str:
+    if "_" in cell:
+        return "write the digits without _"
+    if not cell.isascii():
+        return "write the number in ASCII digits 0-9, with a point for decimals"
+    return ""
 
 
 def format_rows(lines: Sequence[str], values: NDArray[np.float64] | Sequence[float]) -> str:

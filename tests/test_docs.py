@@ -133,6 +133,10 @@ def _environment() -> dict[str, str]:
     env.update(PATH=bin_dir + os.pathsep + env.get("PATH", ""), COLUMNS="88", NO_COLOR="1",
                TERM="dumb", PYTHONHASHSEED="0", MPLBACKEND="Agg")
     env.pop("FORCE_COLOR", None)
+    # docs/ros2.md's ROS 2 graphs: on this machine, in a DDS domain of this test run's own
+    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+               ROS_DOMAIN_ID=str(20 + os.getpid() % 80))
+    env.setdefault("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
     return env
 
 
@@ -205,6 +209,7 @@ PAGES_WITH_CODE = [p for p in PAGES if any(b.runnable() for b in extract_blocks(
 
 @pytest.mark.parametrize("page", PAGES_WITH_CODE,
                          ids=[str(p.relative_to(ROOT)) for p in PAGES_WITH_CODE])
+@pytest.mark.slow
 def test_page_code_blocks_run(page: Path, tmp_path: Path) -> None:
     """A page's blocks run in order in one folder, so a block sees what earlier ones made."""
     cwd = _workspace(tmp_path)

@@ -92,3 +92,22 @@ def test_no_success_statistics_where_the_environment_defines_none() -> None:
     assert [label for label, *_ in evaluation.rows()] == ["mean fitness", "mean return"]
     assert "success_rate" not in evaluation.summary()
     assert "steps_to_success" not in evaluation.to_dict()
+
+
+def test_whoever_opens_an_environment_closes_it(monkeypatch: pytest.MonkeyPatch) -> None:
+    behaviour = load_behaviour(HANDMADE)
+    closed: list[str] = []
+    with make_env(behaviour, 8) as env:
+        monkeypatch.setattr(env, "close", lambda: closed.append("given"))
+        evaluate_behaviour(behaviour, seed=1, episodes=8, env=env)
+        assert closed == []  # evaluated in, not opened by, evaluate_behaviour
+    assert closed == ["given"]  # the block that opened it closed it
+
+    def opened_here(*args: object) -> object:
+        built = make_env(*args)  # type: ignore[arg-type]
+        monkeypatch.setattr(built, "close", lambda: closed.append("built"))
+        return built
+
+    monkeypatch.setattr("flctool.envs.make_env", opened_here)
+    evaluate_behaviour(behaviour, seed=1, episodes=8)
+    assert closed == ["given", "built"]

@@ -212,3 +212,19 @@ def test_plot_an_experiment(tmp_path: Path) -> None:
     assert "training episodes (trials)" in (experiment.path / "learning.svg").read_text()
     both = runner.invoke(app, ["plot", str(experiment.path), str(experiment.path)])
     assert both.exit_code == 1 and "one experiment directory at a time" in both.output
+
+
+def test_a_run_that_learned_the_sets_draws_them_over_the_files(tmp_path: Path) -> None:
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"), {
+        "generations": 2, "population": 4, "sets": {"mode": "partition"}})
+    run = create_run(behaviour, tmp_path / "run")
+    run.train()
+    (tmp_path / "figures").mkdir()
+    plot_sources([run.path], tmp_path / "figures")
+    svg = (tmp_path / "figures" / "memberships.svg").read_text()
+    assert "dashed: before learning" in svg
+    # one dashed line per set that moved, in the learned set's colour
+    learned = load_behaviour(run.path / "best.yaml")
+    moved = sum(learned.inputs[n].sets[s] != q for n, v in behaviour.inputs.items()
+                for s, q in v.sets.items())
+    assert moved > 0 and svg.count("stroke-dasharray") >= moved

@@ -23,10 +23,11 @@ from flctool.envs.robot_server import RobotServer
 from flctool.export import EXPORTERS, IMPORTERS
 from flctool.learners import Callback, GenerationMetrics
 from flctool.plugins import BUILTIN, Plugin, plugins
-from flctool.runs import create_run, open_run, resolve_behaviour
+from flctool.runs import ENDED, create_run, open_run, resolve_behaviour
 from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data
 
 from .conftest import BEHAVIOURS
+from .ros2_support import robot_behaviour, sim_robot
 
 HANDMADE = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
 
@@ -36,6 +37,7 @@ ADAPTER_BEHAVIOURS = {
     "pitch": "dribble.yaml",
     "gymnasium": "cartpole.yaml",
     "robot-link": "ballchase-robot.yaml",
+    "ros2": "ballchase-ros2.yaml",
 }
 
 
@@ -68,14 +70,14 @@ def test_every_learner_is_reproducible_and_resumes_exactly(plugin: Plugin,
                                                            tmp_path: Path) -> None:
     behaviour = small_run(plugin.name)
     first = create_run(behaviour, tmp_path / "first" / "run")
-    assert first.train().status == "finished"
+    assert first.train().status in ENDED
     second = create_run(behaviour, tmp_path / "second" / "run")
     second.train()
     assert records(second.path) == records(first.path)
 
     cut = create_run(behaviour, tmp_path / "cut" / "run")
     assert cut.train([StopAfter(0)]).status == "stopped"
-    assert open_run(cut.path).train().status == "finished"
+    assert open_run(cut.path).train().status == first.summary().status
     assert records(cut.path) == records(first.path)
 
 
@@ -84,6 +86,10 @@ def adapter_behaviour(name: str) -> Iterator[Behaviour]:
     """The contract behaviour of the built-in adapter ``name``; for the robot link, pointed
     at the reference robot side on a free port, served for the duration."""
     behaviour = load_behaviour(BEHAVIOURS / ADAPTER_BEHAVIOURS[name])
+    if name == "ros2":
+        with sim_robot("/contract"):
+            yield robot_behaviour("/contract", startup_timeout=10.0, step_timeout=5.0)
+        return
     if name != "robot-link":
         yield behaviour
         return
@@ -110,7 +116,9 @@ def test_every_builtin_adapter_passes_the_checker(plugin: Plugin) -> None:
     with adapter_behaviour(plugin.name) as behaviour:
         assert behaviour.environment is not None
         assert behaviour.environment.adapter == plugin.name
-        check_env(lambda: make_env(behaviour, batch_size=3), batch_size=3, seed=11)
+        # a ROS 2 robot runs one episode at a time
+        batch = 1 if plugin.name == "ros2" else 3
+        check_env(lambda: make_env(behaviour, batch_size=batch), batch_size=batch, seed=11)
 
 
 @pytest.mark.parametrize("plugin", plugins("exporter"), ids=lambda p: p.name)

@@ -3,7 +3,9 @@ and environment are used from a behaviour file without touching flctool."""
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -133,7 +135,7 @@ def test_with_a_plugin_installed_the_readme_runs(installed_copy: dict[str, str])
     # The part of the README's test command that a plugin once broke: its code blocks,
     # the schema check among them.
     result = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                             "tests/test_docs.py", "-k", "README"],
+                             "tests/test_docs.py", "-k", "README", "-m", "slow"],
                             cwd=ROOT, env=installed_copy, capture_output=True, text=True,
                             timeout=600)
     assert result.returncode == 0, result.stdout[-3000:]
@@ -145,7 +147,7 @@ def test_an_installed_learner_and_environment_run_from_a_behaviour_file(tmp_path
     validated = _flctool(tmp_path, "validate", "demo.yaml")
     assert validated.returncode == 0, validated.stderr
     learned = _flctool(tmp_path, "learn", "demo.yaml", "--out", "run")
-    assert learned.returncode == 0, learned.stderr
+    assert learned.returncode in (0, 3), learned.stderr  # 3: it ended, but not learned
     assert (tmp_path / "run" / "best.yaml").is_file()
     assert "learner: random_search" in (tmp_path / "run" / "best.yaml").read_text()
     evaluated = _flctool(tmp_path, "evaluate", "run/best.yaml", "--episodes", "20")
@@ -174,7 +176,7 @@ def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
                                                      "learner: pitt\n  mutation: 0.2"))
     switched = _flctool(tmp_path, "learn", "pitt.yaml", "--learner", "random_search",
                         "--out", "run", "--json")
-    assert switched.returncode == 0, switched.stderr
+    assert switched.returncode in (0, 3), switched.stderr
     assert "keep: 1" in (tmp_path / "run" / "behaviour.yaml").read_text()
 
 
@@ -196,3 +198,72 @@ def test_an_entry_point_must_be_named_like_its_plugin() -> None:
 def test_an_adapter_plugin_must_extend_adapter_config() -> None:
     found = _problem("environment", Plugin("mine", "x:Y", "flctool.spec.base:Section"), set())
     assert found is not None and "must extend flctool.spec.environment.AdapterConfig" in found
+
+
+BROKEN = '''\
+from typing import Literal
+
+from pydantic import field_validator
+
+from flctool.plugins import Plugin
+from flctool.spec.environment import AdapterConfig
+
+
+class WobblyConfig(AdapterConfig):
+    adapter: Literal["wobbly"]
+    max_steps: int = 5
+
+    @field_validator("max_steps")
+    @classmethod
+    def _check(cls, value: int) -> int:
+        return {}[value]  # a bug of the plugin's: KeyError
+
+
+ENVIRONMENT = Plugin("wobbly", "flctool_wobbly:Nothing", WobblyConfig)
+'''
+
+
+def test_an_error_inside_a_plugins_check_is_named_as_the_plugins(tmp_path: Path) -> None:
+    site = tmp_path / "site-packages"
+    (site / "flctool_wobbly-0.1.dist-info").mkdir(parents=True)
+    (site / "flctool_wobbly-0.1.dist-info" / "METADATA").write_text(
+        "Metadata-Version: 2.1\nName: flctool-wobbly\nVersion: 0.1\n")
+    (site / "flctool_wobbly-0.1.dist-info" / "entry_points.txt").write_text(
+        "[flctool.environments]\nwobbly = flctool_wobbly:ENVIRONMENT\n")
+    (site / "flctool_wobbly.py").write_text(BROKEN)
+    (tmp_path / "demo.yaml").write_text(DEMO.replace("adapter: line", "adapter: wobbly")
+                                        .replace("  max_steps: 15", "  max_steps: 3"))
+    result = subprocess.run([sys.executable, "-m", "flctool", "validate", "demo.yaml"],
+                            cwd=tmp_path, env=_with_package(site), capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 1
+    message = " ".join(result.stderr.split())
+    assert "the environment plugin 'wobbly' (flctool_wobbly:Nothing) failed: KeyError: 3" in (
+        message)
+    assert "report it to the authors of its package (flctool_wobbly)" in message
+    assert "internal error" not in message and "Traceback" not in result.stderr
+
+
+def test_a_plugin_learners_own_state_is_checkpointed_and_resumed_bit_for_bit(
+        tmp_path: Path) -> None:
+    (tmp_path / "demo.yaml").write_text(DEMO)
+    for args in (("--out", "parts", "-g", "2"), ("--resume", "parts", "-g", "4"),
+                 ("--out", "straight",)):
+        result = _flctool(tmp_path, "learn", *(("demo.yaml",) if "--out" in args else ()),
+                          *args)
+        assert result.returncode in (0, 3), result.stderr  # 3: it ended, but not learned
+    checkpoints = sorted((tmp_path / "parts" / "checkpoints").iterdir())
+    assert json.loads(checkpoints[-1].read_text())["drawn"] == 6 + 3 * (6 - 2)  # its hook
+    assert (tmp_path / "parts" / "best.yaml").read_text().split("\n", 2)[2] == (
+        tmp_path / "straight" / "best.yaml").read_text().split("\n", 2)[2]
+
+
+def test_the_plugins_page_shows_the_package_as_it_is() -> None:
+    # docs/plugins.md lists the package's files for readers to copy: word for word these
+    page = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"^```(?:python|toml)\n# (\S+)\n(.*?)^```$", page, re.M | re.S)
+    assert sorted(name for name, _ in blocks) == [
+        "flctool_demo/__init__.py", "flctool_demo/env.py", "flctool_demo/learner.py",
+        "pyproject.toml"]
+    for name, text in blocks:
+        assert text == (PACKAGE / name).read_text(encoding="utf-8"), name

@@ -153,3 +153,44 @@ def test_the_python_reading_matches_on_spellings_the_parsers_disagree_on(cell: s
     # Arabic-Indic digits and numpy's parser does not: the readings still agree
     for data in (f"a,b\n{cell},1\n", f"a,b\n{cell},1\n1_0,\u0661\n", f'a,b\n"{cell}",1\n'):
         assert _outcome(data, in_python=True) == _outcome(data, in_python=False)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_SPELLINGS)
+def test_both_readings_accept_exactly_the_documented_grammar(cell: str) -> None:
+    """A cell is a number when it matches NUMBER (ASCII digits, no _), whichever reading
+    reads its chunk: numpy's parser, the cell-by-cell fallback, or plain Python."""
+    import math
+
+    from flctool.tabular import NUMBER
+
+    data = f"a,b\n{cell},1\n"
+    for in_python in (True, False):
+        outcome = _outcome(data, in_python)
+        if NUMBER.fullmatch(cell) is None:
+            assert isinstance(outcome, str) and "is not a number" in outcome
+        elif math.isnan(float(cell)):
+            assert isinstance(outcome, str) and "NaN is a missing reading" in outcome
+        else:
+            assert outcome == (np.array([[float(cell), 1.0]]).tobytes(),)
+
+
+@pytest.mark.parametrize(("cell", "hint"), [("1_0", "without _"), ("\u0661.\u0662", "ASCII"),
+                                            ("1\xa0", "ASCII"), ("\x1c1", "")])
+def test_underscores_and_other_scripts_digits_are_not_numbers(cell: str, hint: str) -> None:
+    for in_python in (True, False):
+        outcome = _outcome(f"a,b\n0,1\n{cell},2\n", in_python)
+        assert isinstance(outcome, str) and "t.csv:3:1: a: '" in outcome
+        assert hint in outcome
+
+
+@pytest.mark.parametrize(("data", "where", "what"), [
+    ("a,b\n1,2\n3,caf\u00e9\n".encode("latin-1"), "t.csv:3:6", "not UTF-8 text (byte 0xe9;"),
+    ("a,b\n1,2\n".encode("utf-16"), "t.csv:1:1", "UTF-16 text (it starts with a UTF-16 byte "
+     "order mark)"),
+    (b"a,\xff\n1,2\n", "t.csv:1:3", "(byte 0xff;"),
+])
+def test_text_that_is_not_utf8_is_refused_at_its_line_and_column(data: bytes, where: str,
+                                                                 what: str) -> None:
+    message = _error(data)
+    assert f"{where}: the CSV is" in message and what in message

@@ -7,8 +7,10 @@ from pathlib import Path
 import pytest
 
 from flctool import SpecError, load_behaviour
+from flctool.cli.app import command_line_overrides
 from flctool.errors import RunDirError
-from flctool.training import parse_assignments, resume_run, start_run
+from flctool.spec.overrides import Override
+from flctool.training import resume_run, start_run
 
 from .conftest import BEHAVIOURS
 
@@ -16,12 +18,16 @@ BALLCHASE = BEHAVIOURS / "ballchase.yaml"
 TINY = {"population": 4, "seed": 2}
 
 
-def test_assignments_read_values_as_yaml() -> None:
-    assert parse_assignments(["q.temperature=0.2", "common_starts=true", "name=[oops",
-                              "empty="]) == {"q.temperature": 0.2, "common_starts": True,
-                                             "name": "[oops", "empty": ""}
+def test_command_line_assignments_read_values_as_yaml_and_say_where_they_were_given() -> None:
+    overrides = command_line_overrides(["q.temperature=0.2", "common_starts=true",
+                                        "name=[oops", "empty="], {"seed": ("--seed", 3),
+                                                                  "population": ("-p", None)})
+    assert {o.key: o.value for o in overrides} == {
+        "q.temperature": 0.2, "common_starts": True, "name": "[oops", "empty": "", "seed": 3}
+    assert overrides[0].where == "command line (--set q.temperature)"
+    assert overrides[-1].where == "command line (--seed)"
     with pytest.raises(SpecError, match="'nonsense' is not key=value"):
-        parse_assignments(["nonsense"])
+        command_line_overrides(["nonsense"])
 
 
 def test_a_run_started_and_resumed_equals_one_run_straight(tmp_path: Path) -> None:
@@ -44,13 +50,13 @@ def test_a_resumed_run_continues_only_as_recorded(tmp_path: Path) -> None:
     start_run(BALLCHASE, {**TINY, "generations": 1}, tmp_path / "run").train()
     with pytest.raises(RunDirError, match=r"differ from it at: learning\.q\.alpha"):
         resume_run(tmp_path / "run", overrides={"q.alpha": 0.3})
-    with pytest.raises(RunDirError, match="ask for different budgets"):
-        resume_run(tmp_path / "run", overrides={"generations": 5}, generations=4)
+    with pytest.raises(SpecError, match="budget is given on its own"):
+        resume_run(tmp_path / "run", overrides={"generations": 5})
     with pytest.raises(SpecError) as caught:
-        resume_run(tmp_path / "run", overrides={"generations": "many"}, where="my script")
-    assert caught.value.problems[0].location() == "my script (generations)"
-    # the same behaviour and overrides, and a new budget given as an override, are fine
-    training = resume_run(tmp_path / "run", BALLCHASE, {**TINY, "generations": 2})
+        resume_run(tmp_path / "run", generations=Override("generations", "many", "my script"))
+    assert caught.value.problems[0].location() == "my script"
+    # the same behaviour and overrides, with a new budget, are fine
+    training = resume_run(tmp_path / "run", BALLCHASE, TINY, generations=2)
     try:
         assert training.run.behaviour.learning.generations == 2
     finally:

@@ -295,6 +295,9 @@ EQUATIONS: dict[str, str] = {
     "elites": "GA exploration: elitism, the best copied unchanged",
     "trials": ("experiments: one trial per individual per generation; fitness is the mean of "
                "`trials` trials; fuzzy_q: population × trials episodes per generation"),
+    "restart_after": ("an addition against premature convergence: fresh individuals after "
+                      "this many generations without a better selected controller (0: never, "
+                      "as in the paper)"),
     "common_starts": ("experiments: the start states of a generation's trials (an addition: the "
                       "same for every individual when true)"),
     "q": "eq. 4-9: the fuzzy Q-learning of rule strengths",
@@ -313,13 +316,26 @@ EQUATIONS: dict[str, str] = {
     "selection": ("an addition to the paper: which controller the run returns, chosen on "
                   "validation episodes instead of one noisy trial"),
     "selection.candidates": "an addition: the best distinct controllers kept for validation",
+    "selection.confirmation": ("an addition: fresh episodes the returned controller is confirmed "
+                               "on, the figure a run reports (seeds disjoint from all others)"),
     "selection.episodes": ("an addition: validation episodes per candidate (seeds disjoint from "
                            "training and from evaluate)"),
     "stop": "an addition: the run's budget; the paper stops after a number of generations",
     "stop.episodes": "an addition: stop after this many episodes, selection included",
     "stop.steps": "an addition: stop after this many environment steps",
     "stop.seconds": "an addition: stop after this much training time",
-    "stop.target": "an addition: stop once the validated controller reaches this fitness",
+    "stop.target": ("an addition: stop once the selected controller's confirmation on fresh "
+                    "episodes reaches this success rate, return or fitness"),
+    "sets": ("the paper's future work: evolve the antecedents (the fuzzy sets of Sec. II) "
+             "with the consequents"),
+    "sets.inputs": "which inputs' sets (Sec. II) are learned",
+    "sets.mode": ("how a set genome becomes sets: a strong partition's gaps, or lateral shifts "
+                  "of each set"),
+    "sets.bound": "how far a set (Sec. II's quadruple) may move",
+    "sets.bound_in": "whether bound is a fraction of the spacing or in the input's units",
+    "sets.floor": "lateral: the least coverage kept, so eq. 3 never divides by near zero",
+    "sets.mutation": "GA exploration: mutation probability of a set gene",
+    "sets.sigma": "GA exploration: the step of a set gene's mutation",
 }
 
 
@@ -344,8 +360,10 @@ def learning_keys(schema: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     for key in keys:
         prop = next(node["properties"][key] for node in learners if key in node["properties"])
         found.append((key, prop))
-        if "$ref" in prop:
-            for sub, sub_prop in defs[_def_name(prop["$ref"])]["properties"].items():
+        # a section, or an optional one (anyOf: the section or null)
+        refs = [prop] if "$ref" in prop else [o for o in prop.get("anyOf", []) if "$ref" in o]
+        for ref in refs[:1]:
+            for sub, sub_prop in defs[_def_name(ref["$ref"])]["properties"].items():
                 found.append((f"{key}.{sub}", sub_prop))
     return found
 

@@ -43,11 +43,13 @@ from typer._click.utils import make_default_short_help
 from typer.core import TyperGroup
 from typer.main import get_command_from_info, get_command_name
 
-from flctool.errors import FlcError, SpecError
+from flctool.errors import FlcError, InputFileError, Problem, SpecError
+from flctool.inputs import no_such_file
 from flctool.version import __version__
 
 if TYPE_CHECKING:
     from flctool.spec import Behaviour
+    from flctool.spec.overrides import Override
 
 #: Exit codes, the same for every command.
 EXIT_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 1, 2, 130
@@ -254,6 +256,9 @@ def print_message(message: str, hint: str = "") -> None:
 
 def print_error(error: FlcError) -> None:
     """Render a flctool error for a person: one located line per problem."""
+    if isinstance(error, InputFileError):  # one line: the file and what is wrong with it
+        say(str(error), "error:", "red", err=True)
+        return
     if isinstance(error, SpecError):
         count = len(error.problems)
         say(f"{error.file or 'input'} has {count} problem{'s' if count != 1 else ''}",
@@ -380,15 +385,34 @@ def user_errors() -> Iterator[None]:
 
 
 # -- input -----------------------------------------------------------------------------------
-def command_line_labels(assignments: list[str],
-                        options: dict[str, str] | None = None) -> dict[str, str]:
-    """Where each override came from, for messages: ``--set key=value`` gives
-    ``command line (--set key)``; ``options`` maps keys set by an option to the option
-    (``{"seed": "--seed"}``)."""
-    labels = {key: f"command line (--set {key})"
-              for key in (text.partition("=")[0].strip() for text in assignments)}
-    labels.update({key: f"command line ({option})" for key, option in (options or {}).items()})
-    return labels
+def command_line_overrides(assignments: Sequence[str],
+                           options: Mapping[str, tuple[str, Any]] | None = None,
+                           ) -> list[Override]:
+    """The overrides a command line gives, each placed where it was given: ``--set
+    key=value`` (the value read as YAML, or kept as text if it is not YAML) is at
+    ``command line (--set key)``; ``options`` maps a key an option sets to the option and its
+    value (``{"seed": ("--seed", 3)}``), at ``command line (--seed)``; None values are left
+    out."""
+    import yaml
+
+    from flctool.spec.overrides import Override
+
+    overrides: list[Override] = []
+    for text in assignments:
+        key, sep, value = text.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise SpecError([Problem(("--set",), f"'{text}' is not key=value",
+                                     "write e.g. --set q.temperature=0.2", file="command line")],
+                            "command line")
+        try:
+            parsed = yaml.safe_load(value) if value.strip() else ""
+        except yaml.YAMLError:  # not YAML: the text itself
+            parsed = value
+        overrides.append(Override(key, parsed, f"command line (--set {key})"))
+    overrides += [Override(key, value, f"command line ({option})")
+                  for key, (option, value) in (options or {}).items() if value is not None]
+    return overrides
 
 
 def controller_file(path: Path) -> Path:
@@ -403,8 +427,7 @@ def controller_file(path: Path) -> Path:
                            "one generation (flctool learn)")
         return best
     if not path.exists():
-        raise FlcError(f"{path}: no such file or directory",
-                       hint="give a behaviour file or a run directory")
+        raise no_such_file(path, "behaviour file or run directory")
     return path
 
 
@@ -420,15 +443,11 @@ def load_controller(path: Path) -> tuple[Behaviour, Path]:
 
 
 def read_user_file(path: Path, what: str) -> str:
-    """The text of a file the user named; an unreadable one is a clear error, not a traceback."""
-    try:
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as error:
-        raise FlcError(f"{path}: the {what} is not UTF-8 text (byte {error.start})",
-                       hint="save it as UTF-8 text") from None
-    except OSError as error:
-        raise FlcError(f"cannot read the {what} {path}: {error.strerror}",
-                       hint="check the path") from None
+    """The text of a file the user named; an unreadable one is a clear error, not a traceback
+    (worded by :mod:`flctool.inputs`, as every command words it)."""
+    from flctool.inputs import read_input
+
+    return read_input(path, what)
 
 
 # -- output ----------------------------------------------------------------------------------
@@ -511,6 +530,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
                    "tests and whether the paper's claims hold."),
     "export": ("flctool.cli.export_commands", "Export a controller so that it runs elsewhere, "
                "with the same outputs."),
+    "fit-sim": ("flctool.cli.bags", "Fit the simulator's motion and noise tables (per command: "
+                "forward, sideways and rotation per step, their standard deviations) to logged "
+                "commands and odometry; writes an environment: section and reports the fit."),
     "import": ("flctool.cli.export_commands", "Import a controller from FLL, FCL or FIS as a "
                "behaviour file."),
     "infer": ("flctool.cli.infer", "Run a deployable controller on states from CSV; adds the "
@@ -522,6 +544,15 @@ COMMANDS: dict[str, tuple[str, str]] = {
             "left to learn."),
     "plot": ("flctool.cli.plot", "Plot learning curves, strengths, a trajectory and the "
              "controller as PNG and SVG files."),
+    "record": ("flctool.cli.bags", "Record a learning or deployment session over ROS 2 (inputs, "
+               "commands, status, rewards, and any --topic) as an MCAP bag, until --duration or "
+               "Ctrl-C."),
+    "replay": ("flctool.cli.bags", "Run a controller over a bag's recorded inputs: at each "
+               "recorded command, its output from the latest inputs, beside the recorded one "
+               "and their difference (CSV)."),
+    "run": ("flctool.cli.run", "Deploy a controller on a robot: publish its command at the "
+            "control rate from the latest inputs, with a watchdog that publishes stop at once "
+            "on a stale, NaN or out-of-range input or a lost publisher, and again on Ctrl-C."),
     "serve": ("flctool.cli.serve", "Serve a behaviour's simulator over the robot-link "
               "protocol (docs/robot-link.md), for trying the link without a robot and as an "
               "example for bridge writers."),

@@ -88,7 +88,7 @@ def evaluate_command(
         evaluate_behaviour,
         parse_seeds,
     )
-    from flctool.rollout import TRAIN_SEED_LOW, trace_episode
+    from flctool.rollout import EVALUATION_SEED_HIGH, trace_episode
 
     listed: list[int] | None = None
     if seeds is not None:
@@ -103,17 +103,19 @@ def evaluate_command(
         if trace is not None:
             check_output(trace, "trace", force=force)
         controller = compile_behaviour(behaviour)
-        if listed is not None and max(listed) >= TRAIN_SEED_LOW:
-            err_console.print(f"[yellow]warning:[/] seeds from {TRAIN_SEED_LOW} up are "
-                              "the range training episodes use; these are not held out",
+        if listed is not None and max(listed) >= EVALUATION_SEED_HIGH:
+            err_console.print(f"[yellow]warning:[/] seeds from {EVALUATION_SEED_HIGH} up are "
+                              "the ranges learning uses (confirmation, training, selection); "
+                              "these are not held out",
                               highlight=False)
         # Inference starts in numpy; if the work grows enough to pay for the compiled kernels,
         # loading them (compiling, on a machine's first run) is announced.
         controller_module.kernel_loading = compiling
         total = len(listed) if listed is not None else (episodes or DEFAULT_EPISODES)
         success = defines_success(behaviour)
-        env = make_env(behaviour, batch_size(total))  # its errors come before the progress bar
-        with Progress("episodes", total, terminal=not json_output) as progress:
+        # The environment first: its errors come before the progress bar.
+        with (make_env(behaviour, batch_size(total)) as env,
+              Progress("episodes", total, terminal=not json_output) as progress):
 
             def chunk_done(done: int, successes: int) -> None:
                 if success:
@@ -126,11 +128,8 @@ def evaluate_command(
                                             on_chunk=chunk_done)
         first_seed = int(evaluation.result.seeds[0])
         if trace is not None:
-            single = make_env(behaviour, 1)
-            try:
+            with make_env(behaviour, 1) as single:
                 rows = trace_episode(controller, single, first_seed)
-            finally:
-                single.close()
             write_output(trace, _csv(rows), "trace", force=force)
     if json_output:
         typer.echo(json.dumps(evaluation.to_dict(str(source)), indent=2))

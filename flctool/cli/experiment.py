@@ -8,7 +8,14 @@ from typing import Annotated
 
 import typer
 
-from flctool.cli.app import app, command_line_labels, console, escape, example, user_errors
+from flctool.cli.app import (
+    app,
+    command_line_overrides,
+    console,
+    escape,
+    example,
+    user_errors,
+)
 from flctool.cli.progress import Progress
 
 
@@ -56,16 +63,14 @@ def experiment(
         write_report,
     )
     from flctool.experiment.runner import JobOutcome
-    from flctool.training import parse_assignments
 
     with user_errors():
         names = parse_learners(learners)
-        overrides = parse_assignments(set_ or [])
+        overrides = command_line_overrides(set_ or [])
         runner = make_executor(executor, workers, address)
-        behaviour = read_experiment_behaviour(file, names, overrides,
-                                              command_line_labels(set_ or []))
+        behaviour = read_experiment_behaviour(file, names, overrides)
         plan = ExperimentPlan(behaviour.name, names, seeds, heldout_episodes=heldout,
-                              overrides=overrides)
+                              overrides={o.key: o.value for o in overrides})
         folder = out if out is not None else Path("experiments") / behaviour.name
         study = prepare_experiment(behaviour, plan, folder)
         with Progress("runs", len(names) * seeds, terminal=not as_json) as progress:
@@ -85,7 +90,9 @@ def experiment(
         console.print(f"  {escape(claim['claim'])}: [bold]{escape(claim['verdict'])}[/]")
     for name in names:
         entry = summary["learners"][name]["heldout_success"]
-        console.print(f"  {name}: held-out success median {entry['median']:.3f} "
-                      f"[{entry['q25']:.3f}, {entry['q75']:.3f}]")
+        # the spread across seeds, not a confidence interval: said in words, not brackets
+        console.print(f"  {name}: held-out success median {entry['median']:.3f}, "
+                      f"interquartile range {entry['q25']:.3f} to {entry['q75']:.3f} "
+                      f"across {seeds} seeds")
     console.print(f"report: {escape(str(folder / 'report.md'))}; figures: flctool plot "
                   f"{escape(str(folder))}")

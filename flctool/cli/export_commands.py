@@ -91,7 +91,7 @@ def import_controller(
     format: Annotated[str | None, typer.Option(
         "--format", "-f", help="fll, fcl or fis (default: from the file's suffix).")] = None,
     mamdani_singletons: Annotated[bool, typer.Option(
-        "--mamdani-singletons", help="fis only: replace a Mamdani system's output sets by "
+        "--mamdani-singletons", help="fis and fll: replace a Mamdani system's output sets by "
         "singletons at their centroids, and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
@@ -111,20 +111,27 @@ def import_controller(
                                f"suffix of {implied}",
                                hint="name it .yaml, or use 'flctool export' for other formats")
         importer_class = IMPORTERS.get(name)
-        if mamdani_singletons and name != "fis":
-            raise FlcError("--mamdani-singletons applies to FIS files only",
+        if mamdani_singletons and name not in ("fis", "fll"):
+            raise FlcError("--mamdani-singletons applies to FIS and FLL files only",
                            hint="leave it out")
         importer = (importer_class(mamdani_singletons=True)  # type: ignore[call-arg]
                     if mamdani_singletons else importer_class())
-        behaviour = importer.from_file(file)
-        report = getattr(importer, "report", "")
-        if report:  # on stderr: the YAML may be going to stdout
-            say(report, err=True)
-        text = imported_yaml(behaviour, f"{behaviour.name}: imported by flctool {__version__} "
-                             f"from {comment_safe(file)}")
+        behaviours = importer.from_file_all(file)
+        if importer.report:  # on stderr: the YAML may be going to stdout
+            say(importer.report, err=True)
+        texts = [imported_yaml(b, f"{b.name}: imported by flctool {__version__} from "
+                               f"{comment_safe(file)}") for b in behaviours]
         if output is None:
-            sys.stdout.write(text)
+            if len(behaviours) > 1:
+                raise FlcError(f"{file} has {len(behaviours)} outputs, imported as one "
+                               "behaviour file each", hint="give -o NAME.yaml: each goes to "
+                               "NAME_<output>.yaml")
+            sys.stdout.write(texts[0])
             return
         make_parent(output, "behaviour file")
-        write_files({output: text}, force=force)
-    console.print(f"wrote {escape(str(output))}")
+        targets = ([output] if len(behaviours) == 1 else
+                   [output.with_name(f"{output.stem}_{b.name}{output.suffix or '.yaml'}")
+                    for b in behaviours])
+        write_files(dict(zip(targets, texts, strict=True)), force=force)
+    for target in targets:
+        console.print(f"wrote {escape(str(target))}")

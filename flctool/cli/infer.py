@@ -26,6 +26,7 @@ from flctool.cli.app import Force, app, check_output, example, load_controller, 
 from flctool.cli.progress import compiling
 from flctool.cli.spec_commands import ControllerArgument
 from flctool.errors import FlcError
+from flctool.inputs import open_error
 
 if TYPE_CHECKING:
     from flctool.compile import Controller
@@ -136,8 +137,7 @@ def _states(input: str) -> Iterator[tuple[TextIO, str]]:
     try:
         handle = open(input, "rb")  # noqa: SIM115 - closed below
     except OSError as error:
-        raise FlcError(f"cannot read the states CSV {input}: {error.strerror}",
-                       hint="check the path") from None
+        raise open_error(input, "states CSV", error) from None
     with handle:
         yield text_stream(handle), input
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import shlex
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -11,7 +12,7 @@ import typer
 
 from flctool.cli.app import (
     app,
-    command_line_labels,
+    command_line_overrides,
     console,
     err_console,
     escape,
@@ -25,13 +26,15 @@ from flctool.plugins import names
 
 if TYPE_CHECKING:
     from flctool.runs import RunSummary
+    from flctool.spec.overrides import Override
     from flctool.training import Training
 
 
 @app.command(epilog=example(
     "flctool learn behaviours/ballchase.yaml -o runs/first",
     "flctool learn behaviours/ballchase.yaml --learner pitt --seed 3 --set mutation=0.2",
-    "flctool learn --resume runs/first --generations 60"))
+    "flctool learn --resume runs/first --generations 60",
+    "flctool learn behaviours/ballchase-ros2.yaml --init runs/first"))
 def learn(
     file: Annotated[Path | None, typer.Argument(
         help="The behaviour file (YAML); optional with --resume.")] = None,
@@ -53,42 +56,58 @@ def learn(
     set_: Annotated[list[str] | None, typer.Option(
         "--set", help="Override a learning hyperparameter, e.g. --set q.temperature=0.2 "
         "(repeatable; keys as under 'learning:').")] = None,
+    baseline: Annotated[list[Path] | None, typer.Option(
+        "--baseline", help="A hand-made controller of the same rules that the learned one "
+        "must beat (repeatable); constant commands and random tables are always compared.")]
+    = None,
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print a JSON summary instead of text (progress stays on stderr).")]
     = False,
+    init: Annotated[Path | None, typer.Option(
+        "--init", help="Start around this controller (a run directory or a behaviour file): "
+        "the first generation seeded around it, q values carried over where rules match.")]
+    = None,
 ) -> None:
     """Learn the rule consequents of a behaviour (Pitt GA, fuzzy Q-learning or the hybrid).
 
     Writes a run directory with metrics, checkpoints and best.yaml, the learned controller.
     """
-    from flctool.training import parse_assignments, resume_run, start_run
+    from flctool.training import resume_run, start_run
 
     with user_errors():
-        overrides = parse_assignments(set_ or [])
-        options: dict[str, str] = {}
-        for key, option, value in (("learner", "--learner", learner), ("seed", "--seed", seed),
-                                   ("population", "--population", population)):
-            if value is not None:
-                overrides[key], options[key] = value, option
+        overrides = command_line_overrides(set_ or [], {
+            "learner": ("--learner", learner), "seed": ("--seed", seed),
+            "population": ("--population", population)})
         if resume is not None:
+            if baseline:
+                raise RunDirError("--baseline is given when a run starts; a resumed run "
+                                  "compares with the baselines it started with",
+                                  hint="leave out --baseline")
+            if init is not None:
+                raise RunDirError("--init starts a new run; a resumed run continues from its "
+                                  "checkpoint", hint="leave out --init")
             if out is not None:
                 raise RunDirError("--resume continues in its own directory; --out is for new "
                                   "runs", hint="leave out --out")
-            training = resume_run(resume, file, overrides, generations,
-                                  where=command_line_labels(set_ or [], options))
+            overrides, budget = _budget(overrides, generations)
+            training = resume_run(resume, file, overrides, budget)
         else:
             if file is None:
                 raise RunDirError("give a behaviour file to learn, or --resume a run directory",
                                   hint="flctool learn behaviours/ballchase.yaml")
-            if generations is not None:
-                overrides["generations"], options["generations"] = generations, "--generations"
-            training = start_run(file, overrides, out,
-                                 where=command_line_labels(set_ or [], options))
+            overrides += command_line_overrides([], {"generations": ("--generations",
+                                                                     generations)})
+            training = start_run(file, overrides, out, baselines=baseline or [])
+            if init is not None:
+                _warm_start(training, init)
         run, behaviour = training.run, training.run.behaviour
         err_console.print(f"{'resuming' if training.resumed else 'learning'} "
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
                           f"from generation {training.done} in the run directory "
                           f"{escape(str(run.path))}", highlight=False)
+        from flctool.learners.budget import describe_budget
+
+        err_console.print(escape(describe_budget(training.learner)), highlight=False)
         try:
             summary = _train(training, show_progress=not as_json)
         except KeyboardInterrupt:
@@ -99,6 +118,51 @@ def learn(
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
+    if summary.status == "not_learned":  # flctool.runs.NOT_LEARNED (kept lazy)
+        from flctool.learners.baselines import NOT_LEARNED_HINT
+
+        verdict = (summary.selection or {}).get("baseline") or {}
+        difference = verdict.get("difference") or {}
+        err_console.print(
+            f"[yellow]not learned:[/] the learned controller is not clearly better than the "
+            f"baseline '{escape(str(verdict.get('baseline')))}' (mean fitness "
+            f"{verdict.get('baseline_fitness', float('nan')):.3f}; difference "
+            f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
+            f"{_number(difference.get('high'))}] over the same {difference.get('n')} "
+            f"episodes)\n  try: {NOT_LEARNED_HINT}", highlight=False)
+        raise typer.Exit(NOT_LEARNED_EXIT)
+
+
+#: The exit code of a run that ended without learning (docs/cli.md).
+NOT_LEARNED_EXIT = 3
+
+
+def _number(value: object) -> str:
+    return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
+
+
+def _warm_start(training: Training, init: Path) -> None:
+    from flctool.warm_start import warm_start_from_path
+
+    try:
+        started = warm_start_from_path(training.learner, training.run.behaviour, init)
+    except BaseException:
+        training.close()  # the environment (a robot is sent stop)
+        raise
+    err_console.print(escape(started.describe()), highlight=False)
+
+
+def _budget(overrides: list[Override], generations: int | None,
+            ) -> tuple[list[Override], Override | None]:
+    """A resumed run's new budget, from --generations or --set generations=N (which must
+    agree), and the other overrides."""
+    budgets = [o for o in overrides if o.path == ("learning", "generations")]
+    budgets += command_line_overrides([], {"generations": ("--generations", generations)})
+    if len({repr(o.value) for o in budgets}) > 1:
+        given = " and ".join(o.where.removeprefix("command line ") for o in budgets)
+        raise RunDirError(f"{given} ask for different budgets",
+                          hint="give the new total once")
+    return [o for o in overrides if o not in budgets], budgets[0] if budgets else None
 
 
 def resume_command(path: Path) -> str:
@@ -123,6 +187,8 @@ def _train(training: Training, show_progress: bool) -> RunSummary:
 
 
 def _report(summary: RunSummary) -> None:
+    from flctool.runs import confirmation_text
+
     best = summary.best
     console.print(f"[green]{summary.status}[/] {summary.learner} (seed {summary.seed}): "
                   f"{summary.generations} generations in {escape(str(summary.path))}")
@@ -131,17 +197,33 @@ def _report(summary: RunSummary) -> None:
         console.print(f"last generation: mean fitness {last.mean:.3f} (std {last.std:.3f}), "
                       f"best {last.best:.3f}; {last.wall_time:.2f} s of training")
     usage = summary.usage
-    if usage:
-        console.print(f"used {usage['training_episodes']} training episodes "
-                      f"({usage['training_steps']} steps) and {usage['selection_episodes']} "
-                      f"selection episodes ({usage['selection_steps']} steps)")
-    if best:
-        validation = best.get("validation")
-        score = (f"validated mean fitness {validation['value']:.3f} [{validation['low']:.3f}, "
-                 f"{validation['high']:.3f}] over {validation['n']} episodes"
-                 if validation and validation.get("low") is not None
-                 else f"fitness {best['fitness']:.3f} in training")
-        console.print(f"best controller: generation {best['generation']}, individual "
-                      f"{best['individual']}, {score} -> "
-                      f"{escape(str(summary.path / 'best.yaml'))}")
+    if usage is not None:
+        console.print(f"used {usage.training_episodes} training episodes "
+                      f"({usage.training_steps} steps), {usage.selection_episodes} selection "
+                      f"({usage.selection_steps} steps), {usage.confirmation_episodes} "
+                      f"confirmation ({usage.confirmation_steps} steps) and "
+                      f"{usage.baseline_episodes} baseline episodes "
+                      f"({usage.baseline_steps} steps)")
+    if best is not None:
+        console.print(f"best controller: generation {best.generation}, individual "
+                      f"{best.individual} -> {escape(str(summary.path / 'best.yaml'))}")
+        confirmation = best.confirmation
+        if confirmation:
+            console.print(f"  confirmed on {confirmation['episodes']} fresh episodes: "
+                          f"{confirmation_text(confirmation)}")
+        validation = best.validation
+        if validation is not None and not math.isnan(validation.low):
+            console.print(f"  selection's figure (the best of the candidates on the same "
+                          f"{validation.n} episodes, so optimistic): validated mean "
+                          f"fitness {validation.value:.3f} [{validation.low:.3f}, "
+                          f"{validation.high:.3f}]")
+        elif not confirmation:
+            console.print(f"  fitness {best.fitness:.3f} in training")
+        verdict = (summary.selection or {}).get("baseline")
+        if verdict and verdict.get("learned"):
+            difference = verdict["difference"]
+            console.print(f"  learned: better than the strongest baseline, "
+                          f"'{escape(str(verdict['baseline']))}', by "
+                          f"{_number(difference['value'])} [{_number(difference['low'])}, "
+                          f"{_number(difference['high'])}] mean fitness on the same episodes")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

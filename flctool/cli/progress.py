@@ -55,6 +55,7 @@ class Progress:
         self._last_line = self._start
         self._bar: Any = None
         self._task: Any = None
+        self._printed: tuple[int, str] | None = None  # the count and fields last printed
 
     def __enter__(self) -> Progress:
         if self.enabled and self.terminal and on_terminal():
@@ -92,7 +93,8 @@ class Progress:
                  traceback: TracebackType | None) -> None:
         if self._bar is not None:
             self._bar.__exit__(kind, error, traceback)
-        elif self.enabled and kind is None and self._last_line != self._start:
+        elif self.enabled and kind is None and self._last_line != self._start \
+                and self._printed != (self.done, self._text()):
             self._line()  # the end, after periodic lines (shorter work: the result says it)
 
     def _text(self) -> str:
@@ -101,6 +103,7 @@ class Progress:
     def _line(self) -> None:
         elapsed = time.monotonic() - self._start
         text = self._text()
+        self._printed = (self.done, text)
         err_console.print(f"{escape(self.what)} {self.done}/{self.total}"
                           f"{'  ' + escape(text) if text else ''}  ({elapsed:.0f} s)",
                           highlight=False)

@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -21,7 +22,7 @@ from flctool.cli.app import (
     user_errors,
     write_output,
 )
-from flctool.errors import FlcError
+from flctool.errors import FlcError, Problem, SpecError, format_path
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -34,40 +35,90 @@ ControllerArgument = Annotated[Path, typer.Argument(
 DEFAULT_SCHEMA = Path("schemas/behaviour.schema.json")
 
 
-@app.command(epilog=example("flctool validate behaviours/*.yaml"))
+@app.command(epilog=example("flctool validate behaviours/*.yaml",
+                            "flctool validate behaviours/*.yaml --json | jq '.files[].problems'"))
 def validate(
     files: Annotated[list[Path], typer.Argument(
         metavar="FILE...", help="Behaviour files to check (a run directory: its best.yaml).")],
+    as_json: Annotated[bool, typer.Option(
+        "--json", help="Print every file's problems as JSON on stdout (docs/cli.md has the "
+        "schema), for editors and CI.")] = False,
 ) -> None:
     """Check behaviour files and report every problem in each (exit 1 if any is invalid).
 
     Runs the environment adapter's checks too, when the adapter can be built here."""
-    failed = 0
-    for path in files:
-        try:
-            report = validate_file(controller_file(path))
-        except FlcError as error:
-            failed += 1
-            print_error(error)
-            continue
-        except Exception as error:  # a bug on one file must not stop the check of the others
-            if debug_enabled():
-                raise
-            failed += 1
-            print_error(FlcError(f"{path}: internal error while checking it: "
-                                 f"{type(error).__name__}: {error}",
-                                 hint="run with --debug for the traceback, and report it"))
-            continue
-        behaviour = report.behaviour
-        for warning in report.warnings:
-            say(str(warning), "warning:", "yellow", err=True)
-        if report.adapter_note:
-            say(f"{path}: {report.adapter_note}", "note:", "yellow")
-        state = ("deployable" if behaviour.is_deployable
-                 else f"{len(behaviour.missing_rules())} of {behaviour.rule_count} rules to learn")
-        say(f"{path}: {behaviour.name} ({state})", "ok")
-    if failed:
+    checked = [_check(path) for path in files]
+    results = [result for result, _ in checked]
+    if as_json:
+        print(json.dumps({"format": VALIDATE_FORMAT,
+                          "valid": all(r["valid"] for r in results), "files": results},
+                         indent=2))
+    else:
+        for result, error in checked:
+            _say(result, error)
+    if not all(r["valid"] for r in results):
         raise typer.Exit(1)
+
+
+#: The version of ``validate --json``'s output (docs/cli.md); raised when a field changes.
+VALIDATE_FORMAT = 1
+
+
+def _check(path: Path) -> tuple[dict[str, Any], FlcError | None]:
+    """One file's result as data (valid or not, its problems, warnings and notes), and the
+    error that made it invalid."""
+    result: dict[str, Any] = {"file": str(path), "valid": False, "behaviour": None,
+                              "deployable": None, "rules": None, "rules_to_learn": None,
+                              "problems": [], "warnings": [], "notes": []}
+    try:
+        report = validate_file(controller_file(path))
+    except FlcError as error:
+        result["problems"] = [_problem(p) for p in error.problems] if isinstance(
+            error, SpecError) else [{"file": str(path), "line": None, "column": None,
+                                     "field": None, "message": str(error.args[0]),
+                                     "fix": error.hint or None}]
+        return result, error
+    except Exception as error:  # a bug on one file must not stop the check of the others
+        if debug_enabled():
+            raise
+        internal = FlcError(f"{path}: internal error while checking it: "
+                            f"{type(error).__name__}: {error}",
+                            hint="run with --debug for the traceback, and report it")
+        result["problems"] = [{"file": str(path), "line": None, "column": None,
+                               "field": None, "message": str(internal.args[0]),
+                               "fix": internal.hint}]
+        return result, internal
+    behaviour = report.behaviour
+    result.update(valid=True, behaviour=behaviour.name, deployable=behaviour.is_deployable,
+                  rules=behaviour.rule_count, rules_to_learn=len(behaviour.missing_rules()),
+                  warnings=[_problem(w) for w in report.warnings],
+                  notes=[report.adapter_note] if report.adapter_note else [])
+    return result, None
+
+
+def _problem(problem: Problem) -> dict[str, Any]:
+    """A located problem as ``validate --json`` gives it."""
+    return {"file": problem.file, "line": problem.line, "column": problem.column,
+            "field": format_path(problem.path) if problem.path else None,
+            "message": problem.message, "fix": problem.hint or None}
+
+
+def _say(result: dict[str, Any], error: FlcError | None) -> None:
+    """One file's result as lines for a person (stderr for errors and warnings)."""
+    if error is not None:
+        print_error(error)
+        return
+    for warning in result["warnings"]:
+        where = ":".join(str(result_part) for result_part in (
+            warning["file"], warning["line"], warning["column"]) if result_part is not None)
+        fix = f" (fix: {warning['fix']})" if warning["fix"] else ""
+        say(f"{where}: {warning['field'] or '(top level)'}: {warning['message']}{fix}",
+            "warning:", "yellow", err=True)
+    for note in result["notes"]:
+        say(f"{result['file']}: {note}", "note:", "yellow")
+    state = ("deployable" if result["deployable"]
+             else f"{result['rules_to_learn']} of {result['rules']} rules to learn")
+    say(f"{result['file']}: {result['behaviour']} ({state})", "ok")
 
 
 def validate_file(path: Path) -> FileReport:
@@ -78,15 +129,27 @@ def validate_file(path: Path) -> FileReport:
 
 
 @app.command(epilog=example("flctool show behaviours/ballchase-handmade.yaml",
-                            "flctool show runs/first"))
-def show(file: ControllerArgument) -> None:
+                            "flctool show runs/first",
+                            "flctool show runs/first --compare behaviours/pendulum.yaml"))
+def show(
+    file: ControllerArgument,
+    compare: Annotated[Path | None, typer.Option(
+        "--compare", metavar="FILE", help=(
+            "List how far each set moved from this behaviour's (e.g. the file a run learned "
+            "the sets of), with the partitions' coverage and neighbour overlap."))] = None,
+) -> None:
     """Show a behaviour: its inputs and sets, M and K, and the rule table."""
     from rich.table import Table
 
     from flctool.spec import load_behaviour
+    from flctool.spec.shapes import is_trapezoid
 
     with user_errors():
         behaviour = load_behaviour(controller_file(file))
+        reference = None if compare is None else load_behaviour(controller_file(compare))
+        if reference is not None:
+            console.print(_set_movements(reference, behaviour, compare or Path()))
+            return
     console.print(f"[bold]{escape(behaviour.name)}[/]  {escape(behaviour.description)}")
     sets = Table(title="inputs", title_justify="left")
     for column in ("input", "range", "set", "pa", "pb", "pc", "pd"):
@@ -95,8 +158,11 @@ def show(file: ControllerArgument) -> None:
         unit = f" {variable.unit}" if variable.unit else ""
         span = f"[{variable.range[0]:g}, {variable.range[1]:g}]{unit}"
         for i, (set_name, quad) in enumerate(variable.sets.items()):
+            # a set of another shape: its name, then its parameters (flctool.spec.shapes)
+            cells = ([f"{v:g}" for v in quad] if is_trapezoid(quad) else
+                     [f"{quad.kind} {' '.join(f'{v:g}' for v in quad.params)}", "", "", ""])
             sets.add_row(name if i == 0 else "", span if i == 0 else "", set_name,
-                         *(f"{v:g}" for v in quad), end_section=i == len(variable.sets) - 1)
+                         *cells, end_section=i == len(variable.sets) - 1)
     console.print(sets)
     commands = Table(title=f"output '{behaviour.output.name}'", title_justify="left")
     commands.add_column("command")
@@ -113,6 +179,45 @@ def show(file: ControllerArgument) -> None:
         console.print(_rule_grid(behaviour))
     elif behaviour.rules:
         console.print(_rule_list(behaviour))
+
+
+def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) -> Table:
+    """Each set's movement from ``reference``'s: a :class:`FlcError` if the two do not have
+    the same inputs and sets (then they are not one behaviour before and after learning)."""
+    from rich.table import Table
+
+    from flctool.sets.measures import movements, partition_measures, trapezoid_sets
+    from flctool.spec.shapes import is_trapezoid
+
+    layout = {n: (v.range, tuple(v.sets)) for n, v in behaviour.inputs.items()}
+    if layout != {n: (v.range, tuple(v.sets)) for n, v in reference.inputs.items()}:
+        raise FlcError(
+            f"{compare} has other inputs, ranges or set names than the behaviour shown, so "
+            "its sets cannot be compared", hint="compare a learned behaviour with the file "
+            "it was learned from")
+    table = Table(title=f"sets moved from {escape(str(compare))}", title_justify="left")
+    for column in ("input", "set", "before", "after", "moved", "of range"):
+        table.add_column(column, justify="right" if column in ("moved", "of range") else "left")
+    moved = movements(reference, behaviour)
+    for name, variable in behaviour.inputs.items():
+        rows = [m for m in moved if m.input == name]
+        unit = f" {variable.unit}" if variable.unit else ""
+        for i, m in enumerate(rows):
+            table.add_row(name if i == 0 else "", m.set, _quad(m.before), _quad(m.after),
+                          f"{m.largest:.4g}{unit}", f"{100 * m.fraction:.1f} %",
+                          end_section=i == len(rows) - 1)
+    measures = [(name, partition_measures(v.range, trapezoid_sets(v.sets)))
+                for name, v in behaviour.inputs.items()
+                if all(is_trapezoid(s) for s in v.sets.values())]
+    table.caption = "; ".join(
+        f"{name}: coverage {m['coverage']:.3g}, neighbour overlap "
+        + (f"{m['least_overlap']:.3g}..{m['greatest_overlap']:.3g}"
+           if m["least_overlap"] is not None else "-") for name, m in measures)
+    return table
+
+
+def _quad(quad: tuple[float, ...]) -> str:
+    return "[" + ", ".join(f"{v:.4g}" for v in quad) + "]"
 
 
 def _rule_list(behaviour: Behaviour) -> Table:

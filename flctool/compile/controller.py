@@ -22,10 +22,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.compile import vectorised
-from flctool.compile.membership import trapezoid
+from flctool.compile.membership import memberships
 from flctool.compile.rules import rule_consequents, rule_grid
 from flctool.errors import InferenceError, NotDeployableError
 from flctool.spec.models import Behaviour
+from flctool.spec.shapes import set_row
 
 if TYPE_CHECKING:
     from flctool.compile.kernels import Layout
@@ -111,10 +112,13 @@ class Controller:
     Attributes, with N inputs, L_i sets per input, M = prod(L_i) rules and K commands:
         input_names (N,), set_names (N, L_i), output_name, command_names (K,)
         ranges (N, 2): each input's [low, high]
-        quadruples: N arrays of shape (L_i, 4)
+        quadruples: N arrays of shape (L_i, 4): each set's trapezoid corners, or the
+            parameters of its shape padded with 0 (flctool.spec.shapes.set_row)
         rule_grid (M, N): set index of each input in each rule
         singletons (K,): the commands' values c^k
         consequents (M,) or None: command index of each rule, when deployable
+        kinds: None when every set is a trapezoid, else N tuples (L_i,) of the sets'
+            shape codes (flctool.spec.shapes.CODES; 0 the trapezoid)
     """
 
     input_names: tuple[str, ...]
@@ -126,6 +130,7 @@ class Controller:
     rule_grid: IntArray
     singletons: FloatArray
     consequents: IntArray | None
+    kinds: tuple[tuple[int, ...], ...] | None = None
 
     @property
     def n_inputs(self) -> int:
@@ -161,7 +166,9 @@ class Controller:
     def memberships(self, states: FloatArray) -> list[FloatArray]:
         """Membership of each input in each of its sets: (B, N) -> N arrays (B, L_i)."""
         clipped = self.check_states(states)
-        return [trapezoid(clipped[:, i], q) for i, q in enumerate(self.quadruples)]
+        kinds = self.kinds
+        return [memberships(clipped[:, i], q, None if kinds is None else kinds[i])
+                for i, q in enumerate(self.quadruples)]
 
     def activations(self, states: FloatArray) -> FloatArray:
         """Rule activations alpha_m(S), Mamdani minimum (eq. 2): (B, N) -> (B, M).
@@ -174,8 +181,8 @@ class Controller:
             started = time.thread_time()
             if np.isnan(array).any():
                 self._raise_nan(array)
-            dense = vectorised.activations(array, self.ranges, self.quadruples, self._strides,
-                                           self.n_rules)
+            dense = vectorised.activations(array, self.ranges, self.quadruples, self.kinds,
+                                           self._strides, self.n_rules)
             _spent_in_numpy(time.thread_time() - started)
             return dense
         alpha = np.zeros((array.shape[0], self.n_rules))
@@ -195,7 +202,8 @@ class Controller:
         if not _kernels_on:
             if np.isnan(x).any():
                 self._raise_nan(x[None, :])
-            return vectorised.active_rules(x, self.ranges, self.quadruples, self._strides)
+            return vectorised.active_rules(x, self.ranges, self.quadruples, self.kinds,
+                                           self._strides)
         layout = self._layout
         rules, alpha, nan_input = _kernel("active_one")(layout.floats, layout.ints, x)
         if nan_input >= 0:
@@ -246,8 +254,9 @@ class Controller:
         table = self._consequents(consequents)  # (raises if there are none)
         if np.isnan(states).any():
             self._raise_nan(states)
-        out, failed = vectorised.output(states, self.ranges, self.quadruples, self._strides,
-                                        self.singletons, table.reshape(-1, self.n_rules))
+        out, failed = vectorised.output(states, self.ranges, self.quadruples, self.kinds,
+                                        self._strides, self.singletons,
+                                        table.reshape(-1, self.n_rules))
         if failed >= 0:
             self._raise_undefined(states, failed)
         _spent_in_numpy(time.thread_time() - started)
@@ -341,7 +350,8 @@ class Controller:
     def _layout(self) -> Layout:
         from flctool.compile import kernels
 
-        return kernels.layout(self.ranges, self.quadruples, self.rule_grid, self.singletons)
+        return kernels.layout(self.ranges, self.quadruples, self.rule_grid, self.singletons,
+                              self.kinds)
 
     @cached_property
     def _tables(self) -> IntArray:
@@ -430,7 +440,8 @@ class Controller:
             raise InferenceError("with_consequents takes one (M,) vector")
         controller = Controller(self.input_names, self.set_names, self.output_name,
                                 self.command_names, self.ranges, self.quadruples,
-                                self.rule_grid, self.singletons, _frozen(table.copy()))
+                                self.rule_grid, self.singletons, _frozen(table.copy()),
+                                self.kinds)
         for shared in ("_layout", "_rules", "_strides"):  # same sets: share what depends on them
             if shared in self.__dict__:
                 controller.__dict__[shared] = self.__dict__[shared]
@@ -456,15 +467,18 @@ def compile_behaviour(behaviour: Behaviour) -> Controller:
     commands = tuple(behaviour.output.commands)
     order = rule_consequents(behaviour)
     consequents = None if order is None else _frozen(np.array(order, dtype=np.intp))
+    rows = [[set_row(value) for value in v.sets.values()] for v in behaviour.inputs.values()]
+    kinds = tuple(tuple(code for code, _ in sets) for sets in rows)
     return Controller(
         input_names=names,
         set_names=set_names,
         output_name=behaviour.output.name,
         command_names=commands,
         ranges=_frozen(np.array([v.range for v in behaviour.inputs.values()], dtype=np.float64)),
-        quadruples=tuple(_frozen(np.array(list(v.sets.values()), dtype=np.float64))
-                         for v in behaviour.inputs.values()),
+        quadruples=tuple(_frozen(np.array([p for _, p in sets], dtype=np.float64))
+                         for sets in rows),
         rule_grid=_frozen(grid),
         singletons=_frozen(np.array(list(behaviour.output.commands.values()), dtype=np.float64)),
         consequents=consequents,
+        kinds=kinds if any(any(k) for k in kinds) else None,
     )

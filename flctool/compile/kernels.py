@@ -32,6 +32,7 @@ release the GIL, so threads can infer parts of a batch at once.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any, NamedTuple, TypeVar, cast
 
@@ -82,9 +83,71 @@ def _membership_free(s: float, pa: float, pb: float, pc: float, pd: float) -> fl
 
 
 @_jit
+def _sigmoid(x: float, centre: float, slope: float) -> float:
+    return 1.0 / (1.0 + math.exp(-slope * (x - centre)))
+
+
+@_jit
+def _s_shape(x: float, a: float, b: float) -> float:
+    if x <= a:
+        return 0.0
+    if x <= (a + b) / 2.0:
+        t = (x - a) / (b - a)
+        return 2.0 * t * t
+    if x < b:
+        u = (x - b) / (b - a)
+        return 1.0 - 2.0 * u * u
+    return 1.0
+
+
+@_jit
+def _z_shape(x: float, a: float, b: float) -> float:
+    if x <= a:
+        return 1.0
+    if x <= (a + b) / 2.0:
+        t = (x - a) / (b - a)
+        return 1.0 - 2.0 * t * t
+    if x < b:
+        u = (x - b) / (b - a)
+        return 2.0 * u * u
+    return 0.0
+
+
+@_jit
+def _gauss(x: float, mean: float, sigma: float) -> float:
+    return math.exp(-((x - mean) * (x - mean)) / (2.0 * sigma * sigma))
+
+
+@_jit
+def _shaped(kind: int, p0: float, p1: float, p2: float, p3: float, x: float) -> float:
+    # membership.shape_membership, operation for operation (math.exp and ** are the C
+    # library's exp and pow, as Python's are, so the bits are the same)
+    if kind == 1:
+        return _gauss(x, p0, p1)
+    if kind == 2:
+        left = _gauss(x, p0, p1) if x < p0 else 1.0
+        right = _gauss(x, p2, p3) if x > p2 else 1.0
+        return left * right
+    if kind == 3:
+        power: float = abs((x - p2) / p0) ** (2.0 * p1)
+        return 1.0 / (1.0 + power)
+    if kind == 4:
+        return _sigmoid(x, p0, p1)
+    if kind == 5:
+        return abs(_sigmoid(x, p0, p1) - _sigmoid(x, p2, p3))
+    if kind == 6:
+        return _sigmoid(x, p0, p1) * _sigmoid(x, p2, p3)
+    if kind == 7:
+        return _s_shape(x, p0, p1)
+    if kind == 8:
+        return _z_shape(x, p0, p1)
+    return _s_shape(x, p0, p1) * _z_shape(x, p2, p3)
+
+
+@_jit
 def _fired_sets(states: FloatArray, b: int, lo: FloatArray, hi: FloatArray,
-                quads: FloatArray, offsets: IntArray, sets: IntArray, mus: FloatArray,
-                counts: IntArray) -> int:
+                quads: FloatArray, kinds: IntArray, offsets: IntArray, sets: IntArray,
+                mus: FloatArray, counts: IntArray) -> int:
     """Each input's non-zero sets for state ``b``: into ``sets``/``mus`` (N, max L_i) and
     ``counts`` (N,). Returns the index of an input that is NaN, or -1."""
     for i in range(states.shape[1]):
@@ -96,7 +159,10 @@ def _fired_sets(states: FloatArray, b: int, lo: FloatArray, hi: FloatArray,
         count = 0
         first = offsets[i]
         for j in range(first, offsets[i + 1]):
-            mu = _membership(s, quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3])
+            if kinds[j]:  # a shape other than the trapezoid (flctool.spec.shapes)
+                mu = _shaped(kinds[j], quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3], s)
+            else:
+                mu = _membership(s, quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3])
             if mu > 0.0:
                 sets[i, count] = j - first
                 mus[i, count] = mu
@@ -152,8 +218,8 @@ _BLOCK = 64  # states whose memberships are computed together (fits in L1 with ~
 
 @_jit
 def _block_memberships(states: FloatArray, start: int, count: int, lo: FloatArray,
-                       hi: FloatArray, quads: FloatArray, offsets: IntArray, xs: FloatArray,
-                       mu: FloatArray) -> int:
+                       hi: FloatArray, quads: FloatArray, kinds: IntArray, offsets: IntArray,
+                       xs: FloatArray, mu: FloatArray) -> int:
     """Memberships of states[start:start + count] in every set, into ``mu (S, _BLOCK)``.
 
     Returns -1, or the index of the first state with a NaN input. Branch-free
@@ -173,6 +239,11 @@ def _block_memberships(states: FloatArray, start: int, count: int, lo: FloatArra
     for i in range(states.shape[1]):
         for j in range(offsets[i], offsets[i + 1]):
             pa, pb, pc, pd = quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3]
+            kind = kinds[j]
+            if kind:  # a shape other than the trapezoid (flctool.spec.shapes)
+                for b in range(count):
+                    mu[j, b] = _shaped(kind, pa, pb, pc, pd, xs[i, b])
+                continue
             for b in range(count):
                 mu[j, b] = _membership_free(xs[i, b], pa, pb, pc, pd)
     return -1
@@ -285,14 +356,15 @@ def _first_zero(denominators: FloatArray, count: int, start: int) -> int:
 @_jit
 def _unpack(floats: FloatArray, ints: IntArray) -> tuple[FloatArray, FloatArray, FloatArray,
                                                          FloatArray, int, IntArray, IntArray,
-                                                         IntArray]:
+                                                         IntArray, IntArray]:
     # Views of Layout.floats / Layout.ints: calls pass two arrays instead of eight, because
     # unboxing each argument is a good part of a small call.
     n, sets, max_sets, dense_rules = ints[0], ints[1], ints[2], ints[3]
     quads = floats[2 * n : 2 * n + 4 * sets].reshape((sets, 4))
-    grid = ints[4 + 2 * n + 1 : 4 + 2 * n + 1 + dense_rules * n].reshape((dense_rules, n))
+    kinds = 5 + 2 * n  # where the sets' shape codes start in ints
+    grid = ints[kinds + sets : kinds + sets + dense_rules * n].reshape((dense_rules, n))
     return (floats[:n], floats[n : 2 * n], quads, floats[2 * n + 4 * sets :], max_sets,
-            ints[4 : 5 + n], ints[5 + n : 5 + 2 * n], grid)
+            ints[4 : 5 + n], ints[5 + n : 5 + 2 * n], grid, ints[kinds : kinds + sets])
 
 
 @_jit
@@ -321,7 +393,7 @@ def infer(states: FloatArray, floats: FloatArray, ints: IntArray, tables: IntArr
 def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables: IntArray,
                   out: FloatArray, start: int, stop: int, dense: bool) -> int:
     # infer() block by block (_BLOCK states share the memberships' loops).
-    lo, hi, quads, singletons, max_sets, offsets, _, grid = _unpack(floats, ints)
+    lo, hi, quads, singletons, max_sets, offsets, _, grid, kinds = _unpack(floats, ints)
     n = states.shape[1]
     population = tables.shape[0]
     batch = states.shape[0]
@@ -353,7 +425,8 @@ def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables
     fired_alphas = np.empty(fired_rules.shape[0])
     for first in range(start, stop, _BLOCK):
         count = min(_BLOCK, stop - first)
-        nan_state = _block_memberships(states, first, count, lo, hi, quads, offsets, xs, mu)
+        nan_state = _block_memberships(states, first, count, lo, hi, quads, kinds, offsets,
+                                       xs, mu)
         if nan_state >= 0:
             return nan_state
         if dense:
@@ -393,6 +466,7 @@ def _state_sets(floats: FloatArray, ints: IntArray, state: FloatArray, scratch: 
     n, max_sets = ints[0], ints[2]
     quads = 2 * n  # where the quadruples start in floats
     offsets = 4  # where the offsets start in ints
+    kinds = 5 + 2 * n  # where the sets' shape codes start in ints
     for i in range(n):
         s = state[i]
         if s != s:
@@ -402,7 +476,12 @@ def _state_sets(floats: FloatArray, ints: IntArray, state: FloatArray, scratch: 
         first = ints[offsets + i]
         for j in range(first, ints[offsets + i + 1]):
             q = quads + 4 * j
-            mu = _membership_free(s, floats[q], floats[q + 1], floats[q + 2], floats[q + 3])
+            if ints[kinds + j]:  # a shape other than the trapezoid (flctool.spec.shapes)
+                mu = _shaped(ints[kinds + j], floats[q], floats[q + 1], floats[q + 2],
+                             floats[q + 3], s)
+            else:
+                mu = _membership_free(s, floats[q], floats[q + 1], floats[q + 2],
+                                      floats[q + 3])
             scratch[i * max_sets + count] = j - first
             mus[i * max_sets + count] = mu
             count += mu > 0.0  # kept only if non-zero, without a branch to mispredict
@@ -594,7 +673,7 @@ def _infer_small(states: FloatArray, floats: FloatArray, ints: IntArray, tables:
 def _own_table(ints: IntArray) -> IntArray:
     # The consequents that follow the layout's ints in infer_one's / infer_own's ``ints``,
     # as the (1, M) table the shared walks take.
-    table = 5 + 2 * ints[0] + ints[3] * ints[0]
+    table = 5 + 2 * ints[0] + ints[1] + ints[3] * ints[0]
     return ints[table:].reshape((1, ints.shape[0] - table))
 
 
@@ -656,7 +735,7 @@ def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Fl
     # infer_own for a few states of a tiny rule base (see TINY_BATCH): each block's
     # memberships, then every rule of each state in rule order -- the naive loop, whose few
     # nanoseconds a state beat both other walks' set-up. Zeros add nothing (module doc).
-    lo, hi, quads, singletons, _, offsets, _, grid = _unpack(floats, ints)
+    lo, hi, quads, singletons, _, offsets, _, grid, kinds = _unpack(floats, ints)
     n, sets = ints[0], ints[1]
     work = np.empty((n + sets) * _BLOCK)
     xs = work[: n * _BLOCK].reshape((n, _BLOCK))
@@ -664,7 +743,8 @@ def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Fl
     low, high = _singleton_bounds(floats, ints)
     for first in range(0, states.shape[0], _BLOCK):
         count = min(_BLOCK, states.shape[0] - first)
-        nan_state = _block_memberships(states, first, count, lo, hi, quads, offsets, xs, mu)
+        nan_state = _block_memberships(states, first, count, lo, hi, quads, kinds, offsets,
+                                       xs, mu)
         if nan_state >= 0:
             return nan_state
         for b in range(count):
@@ -722,10 +802,10 @@ def active_one(floats: FloatArray, ints: IntArray,
     """The fired rules of one ``state (N,)`` in increasing order and their activations
     (eq. 2): ``(rules (A,), alpha (A,), nan_input)``, ``nan_input`` -1 unless an input is NaN.
     """
-    lo, hi, quads, _, max_sets, offsets, strides, _ = _unpack(floats, ints)
+    lo, hi, quads, _, max_sets, offsets, strides, _, kinds = _unpack(floats, ints)
     sets, mus, counts = _work(state.shape[0], max_sets)
-    nan_input = _fired_sets(state.reshape((1, state.shape[0])), 0, lo, hi, quads, offsets,
-                            sets, mus, counts)
+    nan_input = _fired_sets(state.reshape((1, state.shape[0])), 0, lo, hi, quads, kinds,
+                            offsets, sets, mus, counts)
     if nan_input >= 0:
         return np.empty(0, np.intp), np.empty(0), nan_input
     capacity = _capacity(counts)
@@ -740,12 +820,12 @@ def active_one(floats: FloatArray, ints: IntArray,
 def activations(states: FloatArray, floats: FloatArray, ints: IntArray, out: FloatArray) -> int:
     """Dense eq. 2 for ``states (B, N)`` into a zeroed ``out (B, M)``; returns -1 or the
     first state with a NaN input."""
-    lo, hi, quads, _, max_sets, offsets, strides, _ = _unpack(floats, ints)
+    lo, hi, quads, _, max_sets, offsets, strides, _, kinds = _unpack(floats, ints)
     sets, mus, counts = _work(states.shape[1], max_sets)
     rules = np.empty(16, np.intp)
     alphas = np.empty(16)
     for b in range(states.shape[0]):
-        if _fired_sets(states, b, lo, hi, quads, offsets, sets, mus, counts) >= 0:
+        if _fired_sets(states, b, lo, hi, quads, kinds, offsets, sets, mus, counts) >= 0:
             return b
         capacity = _capacity(counts)
         if capacity > rules.shape[0]:
@@ -797,13 +877,15 @@ class Layout(NamedTuple):
     floats: FloatArray  # lo (N,), hi (N,), quads (S, 4) input after input, singletons (K,)
     # N, S, max L_i, M if the grid is kept (else 0), offsets (N + 1,): input i's sets are
     # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
-    # last input fastest; grid (M, N): each rule's rows of quads, if walks_every_rule
+    # last input fastest; kinds (S,): each set's shape code (0 the trapezoid, whose quad
+    # holds its corners; else its parameters, flctool.spec.shapes); grid (M, N): each
+    # rule's rows of quads, if walks_every_rule
     ints: IntArray
     dense: bool  # whether batched inference walks every rule (walks_every_rule)
 
 
 def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: IntArray,
-           singletons: FloatArray) -> Layout:
+           singletons: FloatArray, kinds: tuple[tuple[int, ...], ...] | None = None) -> Layout:
     """Lay out ``ranges (N, 2)``, ``quadruples`` (N arrays (L_i, 4)), ``rule_grid (M, N)`` and
     ``singletons (K,)`` for the kernels: writable C arrays, so that each kernel is compiled
     for one signature only."""
@@ -817,6 +899,8 @@ def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: In
     quads = np.concatenate(quadruples).astype(np.float64)
     header = [len(sizes), len(quads), max(sizes), grid.shape[0]]
     floats = np.concatenate([ranges[:, 0], ranges[:, 1], quads.ravel(), singletons])
-    ints = np.concatenate([header, offsets, strides, grid.ravel()])
+    codes = (np.zeros(len(quads), dtype=np.intp) if kinds is None
+             else np.array([k for input_kinds in kinds for k in input_kinds], dtype=np.intp))
+    ints = np.concatenate([header, offsets, strides, codes, grid.ravel()])
     return Layout(floats=np.array(floats, dtype=np.float64), ints=np.array(ints, dtype=np.intp),
                   dense=dense)

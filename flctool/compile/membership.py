@@ -20,12 +20,32 @@ loop, where numpy's per-call overhead would cost more than the arithmetic. Both 
 operations in the same order, so they give the same bits (a test checks it over many random
 sets and values).
 
-This module imports numpy only inside :func:`trapezoid`: ``flctool infer`` on a small table
-uses :func:`firing_sets` in a process that never loads numpy.
+The other shapes (:mod:`flctool.spec.shapes`: Gaussian, bell, sigmoids, S, Z, Pi) are coded
+once too, in :func:`shape_membership` (plain Python floats and ``math.exp`` / ``**``, which are
+the C library's ``exp`` and ``pow``, as the compiled kernels', the C export's and fuzzylite's
+are: numpy's own ``exp`` differs from them in the last bit of a few percent of values, so
+the array form :func:`memberships` calls the scalar one value by value for those shapes).
+Their formulas are scikit-fuzzy's and fuzzylite's:
+
+- ``gauss`` (m, s): ``exp(-((x - m) * (x - m)) / (2 * s * s))``
+- ``gauss2`` (m1, s1, m2, s2): the left Gaussian below m1, the right one above m2, 1 between
+- ``bell`` (w, b, c): ``1 / (1 + |(x - c) / w| ** (2 * b))``
+- ``sigmoid`` (c, a): ``1 / (1 + exp(-a * (x - c)))``
+- ``sigmoid_difference``: ``|sigmoid(c1, a1) - sigmoid(c2, a2)|`` (fuzzylite and MATLAB take
+  the absolute value; scikit-fuzzy's ``dsigmf`` does not, which differs only where the second
+  sigmoid is above the first)
+- ``sigmoid_product``: ``sigmoid(c1, a1) * sigmoid(c2, a2)``
+- ``s_shape`` (a, b): 0 up to a, ``2 t * t`` with ``t = (x - a) / (b - a)`` up to the
+  midpoint, ``1 - 2 u * u`` with ``u = (x - b) / (b - a)`` below b, then 1; ``z_shape`` is
+  its mirror, and ``pi_shape`` (a, b, c, d) is ``s_shape(a, b) * z_shape(c, d)``.
+
+This module imports numpy only inside :func:`trapezoid` and :func:`memberships`: ``flctool
+infer`` on a small table uses :func:`firing_sets` in a process that never loads numpy.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -56,12 +76,107 @@ def trapezoid(x: NDArray[Any], quads: NDArray[Any]) -> NDArray[Any]:
     return result
 
 
-def firing_sets(s: float, sets: Sequence[Sequence[float]]) -> list[tuple[int, float]]:
+def memberships(x: NDArray[Any], rows: NDArray[Any], kinds: Sequence[int] | None
+                ) -> NDArray[Any]:
+    """:func:`trapezoid` for sets of any shape: ``rows (L, 4)`` are trapezoid corners or a
+    shape's parameters (padded with 0), ``kinds`` their codes (:data:`flctool.spec.shapes.
+    CODES`; None: all trapezoids). Shapes other than the trapezoid are computed in float64
+    by :func:`shape_membership`, value by value, and then cast to the dtype of ``x``."""
+    import numpy as np
+
+    result = trapezoid(x, rows)
+    if kinds is None or not any(kinds):
+        return result
+    values = np.asarray(x, dtype=np.float64).tolist()
+    rows = np.asarray(rows, dtype=np.float64)
+    for j, kind in enumerate(kinds):
+        if kind:
+            p = rows[j].tolist()
+            result[:, j] = [shape_membership(kind, p[0], p[1], p[2], p[3], v) for v in values]
+    return result
+
+
+def _exp(v: float) -> float:
+    # math.exp raises where C's exp returns inf (what every other engine computes with)
+    try:
+        return math.exp(v)
+    except OverflowError:
+        return math.inf
+
+
+def _power(base: float, exponent: float) -> float:
+    try:
+        return float(base ** exponent)
+    except OverflowError:
+        return math.inf
+
+
+def _sigmoid(x: float, centre: float, slope: float) -> float:
+    return 1.0 / (1.0 + _exp(-slope * (x - centre)))
+
+
+def _s_shape(x: float, a: float, b: float) -> float:
+    if x <= a:
+        return 0.0
+    if x <= (a + b) / 2.0:
+        t = (x - a) / (b - a)
+        return 2.0 * t * t
+    if x < b:
+        u = (x - b) / (b - a)
+        return 1.0 - 2.0 * u * u
+    return 1.0
+
+
+def _z_shape(x: float, a: float, b: float) -> float:
+    if x <= a:
+        return 1.0
+    if x <= (a + b) / 2.0:
+        t = (x - a) / (b - a)
+        return 1.0 - 2.0 * t * t
+    if x < b:
+        u = (x - b) / (b - a)
+        return 2.0 * u * u
+    return 0.0
+
+
+def _gauss(x: float, mean: float, sigma: float) -> float:
+    return _exp(-((x - mean) * (x - mean)) / (2.0 * sigma * sigma))
+
+
+def shape_membership(kind: int, p0: float, p1: float, p2: float, p3: float, x: float) -> float:
+    """The membership of ``x`` in the set of shape code ``kind`` (1-9, the shapes of
+    :mod:`flctool.spec.shapes` in order) with parameters ``p0..p3`` (the formulas above)."""
+    if kind == 1:
+        return _gauss(x, p0, p1)
+    if kind == 2:
+        left = _gauss(x, p0, p1) if x < p0 else 1.0
+        right = _gauss(x, p2, p3) if x > p2 else 1.0
+        return left * right
+    if kind == 3:
+        return 1.0 / (1.0 + _power(abs((x - p2) / p0), 2.0 * p1))
+    if kind == 4:
+        return _sigmoid(x, p0, p1)
+    if kind == 5:
+        return abs(_sigmoid(x, p0, p1) - _sigmoid(x, p2, p3))
+    if kind == 6:
+        return _sigmoid(x, p0, p1) * _sigmoid(x, p2, p3)
+    if kind == 7:
+        return _s_shape(x, p0, p1)
+    if kind == 8:
+        return _z_shape(x, p0, p1)
+    return _s_shape(x, p0, p1) * _z_shape(x, p2, p3)
+
+
+def firing_sets(s: float, sets: Sequence[Sequence[float]],
+                kinds: Sequence[int] | None = None) -> list[tuple[int, float]]:
     """The sets a clipped value ``s`` belongs to: ``(index, membership)`` in set order, for
-    the sets whose membership is above 0 (the same operations as :func:`trapezoid`)."""
+    the sets whose membership is above 0 (the same operations as :func:`trapezoid`, or
+    :func:`shape_membership` for a set whose code in ``kinds`` is not 0)."""
     fired = []
     for j, (pa, pb, pc, pd) in enumerate(sets):
-        if s > pc:
+        if kinds is not None and kinds[j]:
+            mu = shape_membership(kinds[j], pa, pb, pc, pd, s)
+        elif s > pc:
             mu = (pd - s) / (pd - pc) if pd > pc else 0.0
         elif s < pb:
             mu = (s - pa) / (pb - pa) if pb > pa else 0.0

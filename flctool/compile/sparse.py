@@ -19,6 +19,7 @@ from flctool.compile.defuzzify import centre_of_area
 from flctool.compile.membership import firing_sets
 from flctool.errors import InferenceError
 from flctool.spec.models import Behaviour
+from flctool.spec.shapes import set_row
 
 if TYPE_CHECKING:
     from flctool.compile.controller import Controller
@@ -35,7 +36,7 @@ class SparseRules:
         """The rule base of a compiled controller (see also :meth:`from_behaviour`)."""
         self._build(controller.input_names, controller.ranges.tolist(),
                     [quads.tolist() for quads in controller.quadruples],
-                    controller.singletons.tolist())
+                    controller.singletons.tolist(), controller.kinds)
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour) -> SparseRules:
@@ -43,16 +44,21 @@ class SparseRules:
         the same numbers as ``SparseRules(compile_behaviour(behaviour))``."""
         rules = cls.__new__(cls)
         inputs = behaviour.inputs.values()
+        rows = [[set_row(value) for value in v.sets.values()] for v in inputs]
+        kinds = tuple(tuple(code for code, _ in sets) for sets in rows)
         rules._build(list(behaviour.inputs), [v.range for v in inputs],
-                     [list(v.sets.values()) for v in inputs],
-                     list(behaviour.output.commands.values()))
+                     [[p for _, p in sets] for sets in rows],
+                     list(behaviour.output.commands.values()),
+                     kinds if any(any(k) for k in kinds) else None)
         return rules
 
     def _build(self, input_names: Sequence[str], ranges: Sequence[Sequence[float]],
                quadruples: Sequence[Sequence[Sequence[float]]],
-               singletons: Sequence[float]) -> None:
+               singletons: Sequence[float],
+               kinds: Sequence[Sequence[int]] | None) -> None:
         # From plain numbers: each input's [low, high], each of its sets' four corners
-        # (pa, pb, pc, pd) in set order, and the commands' singletons, all as Python floats.
+        # (pa, pb, pc, pd) in set order (or its shape's parameters, whose code is in kinds),
+        # and the commands' singletons, all as Python floats.
         self.singletons: list[float] = [float(v) for v in singletons]
         self.n_commands = len(self.singletons)
         self.n_rules = math.prod(len(quads) for quads in quadruples)
@@ -62,6 +68,8 @@ class SparseRules:
         self._highs = [float(high) for _, high in ranges]
         self._sets = [[tuple(float(v) for v in quad) for quad in quads]
                       for quads in quadruples]
+        self._kinds = [None if kinds is None else tuple(kinds[i])
+                       for i in range(len(self._sets))]
 
     def fire(self, state: list[float]) -> tuple[list[int], list[float], list[float]]:
         """Active rules of one state (N,) in increasing order, their activations alpha_m
@@ -81,10 +89,13 @@ class SparseRules:
             if value != value:  # NaN: every comparison below would be false
                 raise InferenceError(f"the environment observed NaN for input "
                                      f"'{self._names[i]}'",
-                                     hint="NaN has no membership; fix the adapter's sensor")
+                                     hint="NaN has no membership: check what the environment "
+                                     "observes for it (a Gymnasium environment's or a robot's "
+                                     "reading; flctool's simulators refuse the file values "
+                                     "that could overflow)")
             low, high, sets = self._lows[i], self._highs[i], self._sets[i]
             s = low if value < low else high if value > high else value  # clip to the range
-            members = firing_sets(s, sets)  # (index, mu > 0) in set order
+            members = firing_sets(s, sets, self._kinds[i])  # (index, mu > 0) in set order
             if i == 0:  # the first input: min(1.0, mu) is mu, as 0 < mu <= 1
                 rules = [j for j, _ in members]
                 alphas = [mu for _, mu in members]

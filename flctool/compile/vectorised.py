@@ -7,7 +7,8 @@ seconds), while a call here costs a few microseconds of numpy per operation. The
 much as loading the kernels would cost, then loads them (see ``Controller.output``).
 
 The arithmetic is the kernels' (and the reference loop's), so the results are the same bits:
-each input's memberships by :func:`~flctool.compile.membership.trapezoid`, then, vectorised
+each input's memberships by :func:`~flctool.compile.membership.memberships` (trapezoids
+vectorised, other shapes value by value), then, vectorised
 over the states, the rules that combine each state's fired sets, enumerated in increasing
 rule order (each input's fired sets in set order, the last input fastest): for each, eq. 2's
 min, then eq. 3's sums accumulated from 0.0 in that order and one division, kept within the
@@ -27,7 +28,7 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from flctool.compile.membership import trapezoid
+from flctool.compile.membership import memberships
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -38,15 +39,19 @@ IntArray = NDArray[np.intp]
 Slots = list[tuple[IntArray, FloatArray]]
 
 
+#: Each input's set shape codes, or None when every set is a trapezoid (Controller.kinds).
+Kinds = tuple[tuple[int, ...], ...] | None
+
+
 def fired_sets(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
-               ) -> list[Slots]:
+               kinds: Kinds) -> list[Slots]:
     """Each input's fired sets for ``states (B, N)`` (no NaN), as many slots as the most
     any state fires."""
     clipped = np.minimum(np.maximum(states, ranges[:, 0]), ranges[:, 1])  # as np.clip does
     rows = np.arange(states.shape[0])
     fired = []
     for i, quads in enumerate(quadruples):
-        mu = trapezoid(clipped[:, i], quads)  # (B, L_i)
+        mu = memberships(clipped[:, i], quads, None if kinds is None else kinds[i])  # (B, L_i)
         nonzero = mu > 0.0
         rank = np.cumsum(nonzero, axis=1, dtype=np.intp)  # k-th fired set: rank k, non-zero
         counts = rank[:, -1]
@@ -73,7 +78,7 @@ def fired_rules(fired: list[Slots], strides: Sequence[int],
 
 
 def output(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
-           strides: Sequence[int], singletons: FloatArray, tables: IntArray,
+           kinds: Kinds, strides: Sequence[int], singletons: FloatArray, tables: IntArray,
            ) -> tuple[FloatArray, int]:
     """Eq. 3 of ``states (B, N)`` (no NaN) with consequents ``tables (P, M)``: ``(out (P, B),
     failed)``, ``failed`` -1 or the first state where no rule fires (its output is then NaN;
@@ -81,7 +86,7 @@ def output(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArr
     count = states.shape[0]
     numerators = np.zeros((tables.shape[0], count))
     denominators = np.zeros(count)
-    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples), strides):
+    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples, kinds), strides):
         numerators += alpha * singletons[tables[:, rule]]
         denominators += alpha
     empty = np.flatnonzero(denominators == 0.0)
@@ -92,21 +97,22 @@ def output(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArr
 
 
 def activations(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
-                strides: Sequence[int], n_rules: int) -> FloatArray:
+                kinds: Kinds, strides: Sequence[int], n_rules: int) -> FloatArray:
     """Dense eq. 2 of ``states (B, N)`` (no NaN): ``(B, M)``."""
     alphas = np.zeros((states.shape[0], n_rules))
     rows = np.arange(states.shape[0])
-    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples), strides):
+    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples, kinds), strides):
         fired = alpha > 0.0
         alphas[rows[fired], rule[fired]] = alpha[fired]
     return alphas
 
 
 def active_rules(state: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
-                 strides: Sequence[int]) -> tuple[IntArray, FloatArray]:
+                 kinds: Kinds, strides: Sequence[int]) -> tuple[IntArray, FloatArray]:
     """The fired rules of one ``state (N,)`` (no NaN) in increasing order, and their
     activations (eq. 2)."""
-    pairs = list(fired_rules(fired_sets(state[None, :], ranges, quadruples), strides))
+    pairs = list(fired_rules(fired_sets(state[None, :], ranges, quadruples, kinds),
+                             strides))
     if not pairs:
         return np.empty(0, np.intp), np.empty(0)
     return (np.concatenate([rule for rule, _ in pairs]).astype(np.intp),

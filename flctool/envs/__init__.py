@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Protocol
 
 from flctool.errors import EnvError
 from flctool.lazy import lazy_attributes
-from flctool.plugins import registry
+from flctool.plugins import blamed, registry
 from flctool.registry import Registry
 from flctool.spec.located import located
 from flctool.spec.models import Behaviour
@@ -56,7 +56,8 @@ def make_env(behaviour: Behaviour, batch_size: int = 1) -> BatchEnv:
     if batch_size < 1:
         raise EnvError(f"batch_size must be at least 1, got {batch_size}")
     factory = ENVIRONMENTS.get(behaviour.environment.adapter)
-    with located(behaviour):  # the adapter's checks name fields; this adds file and line
+    with located(behaviour), blamed("environment", behaviour.environment.adapter):
+        # the adapter's checks name fields; located adds file and line
         return factory.from_behaviour(behaviour, batch_size)
 
 

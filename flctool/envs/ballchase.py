@@ -25,7 +25,8 @@ from __future__ import annotations
 
 import math
 
-from flctool.envs.pitch import OutcomeRule, PitchSim, World
+from flctool.envs.pitch import PitchSim
+from flctool.envs.pitch_world import OutcomeRule, Test, World
 from flctool.errors import EnvError, Problem, SpecError
 from flctool.spec.environment import BALLCHASE_OBSERVATIONS, BallchaseSimConfig
 from flctool.spec.models import Behaviour
@@ -51,9 +52,10 @@ def ballchase_world(config: BallchaseSimConfig) -> World:
                    -half_y + robot.radius, half_y - robot.radius),
         heading_mid=0.0, heading_half=math.pi, obstacles=(), home=(0.0, 0.0),
         noise={"ball_size": config.sensor_noise.ball_size, "pan": config.sensor_noise.pan},
-        outcomes=(OutcomeRule("ball_reached", 1.0, True, distance=goal.distance,
-                              bearing=goal.bearing * _RAD),
-                  OutcomeRule("ball_lost", -1.0, False), OutcomeRule("off_pitch", -1.0, False)),
+        outcomes=(OutcomeRule(Test("ball_reached", distance=goal.distance,
+                                   bearing=goal.bearing * _RAD), 1.0, True),
+                  OutcomeRule(Test("ball_lost"), -1.0, False),
+                  OutcomeRule(Test("off_pitch"), -1.0, False)),
         timeout_reward=0.0, timeout_success=False)
 
 

@@ -12,16 +12,25 @@ map to a Gymnasium action). Observations are ordered like the behaviour's inputs
 Episode ``b`` draws all its randomness from ``seeds[b]`` alone, so stepping B episodes
 together gives exactly what stepping each on its own gives. Once an episode has ended, further
 steps leave it unchanged (reward 0, flags still set): callers step until all are done.
+
+Whoever opens an environment closes it (on a robot link, closing sends ``stop``): a function
+given one uses it and leaves it open; one that builds its own closes it. An environment is a
+context manager, as Gymnasium's are::
+
+    with make_env(behaviour, batch_size=100) as env:
+        result = evaluate(controller, env, seeds)
 """
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from typing_extensions import Self
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -58,6 +67,10 @@ class BatchEnv(ABC):
     #: (a simulator; never a robot): learning then reuses a validation episode's outcome for
     #: a controller that would act the same in it, instead of running it again.
     replayable: bool = False
+    #: The lowest and highest fitness :meth:`episode_fitness` can give (unbounded by
+    #: default): confidence intervals of a mean fitness are clipped to it, and a
+    #: ``stop.target`` outside it is refused.
+    fitness_range: tuple[float, float] = (-math.inf, math.inf)
 
     @abstractmethod
     def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:
@@ -99,7 +112,14 @@ class BatchEnv(ABC):
         return {}
 
     def close(self) -> None:  # noqa: B027 - an optional hook, not every adapter holds resources
-        """Release resources (sockets, subprocesses); the default holds none."""
+        """Release resources (sockets, subprocesses); the default holds none. Closing twice
+        is harmless."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
 
 
 class SingleEnv:

@@ -87,7 +87,8 @@ def check_env(env: BatchEnv | Callable[[], BatchEnv], batch_size: int = 4,
     """Check an adapter (or a zero-argument factory of fresh adapters) against the protocol.
 
     Raises :class:`EnvError` naming the first broken rule; returns None when all hold. Every
-    adapter the check made (or the one given) is closed when it ends, however it ends.
+    adapter a factory made is closed when the check ends, however it ends; one given is
+    left open, for its opener to close.
     """
     if isinstance(env, BatchEnv):
         instance = env
@@ -114,9 +115,10 @@ def check_env(env: BatchEnv | Callable[[], BatchEnv], batch_size: int = 4,
     try:
         _check(make_one, release, batch_size, seed)
     finally:
-        for left in {id(e): e for e in opened}.values():
-            if isinstance(left, BatchEnv):
-                left.close()
+        if fresh:
+            for left in {id(e): e for e in opened}.values():
+                if isinstance(left, BatchEnv):
+                    left.close()
 
 
 def _check(make: Callable[[], BatchEnv], release: Callable[[BatchEnv], None],

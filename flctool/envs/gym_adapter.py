@@ -20,6 +20,7 @@ and one-at-a-time runs agree. gymnasium is an optional extra: ``pip install 'flc
 from __future__ import annotations
 
 import importlib
+import inspect
 import re
 from collections.abc import Iterable
 from typing import Any
@@ -79,11 +80,55 @@ def _spec_error(path: tuple[str | int, ...], message: str, hint: str = "") -> Sp
     return SpecError([Problem(path, message, hint)])
 
 
+#: Keyword arguments gymnasium.make takes itself, whatever the environment.
+_MAKE_OPTIONS = frozenset({"max_episode_steps", "disable_env_checker"})
+
+
+def option_problems(gym: Any, config: GymnasiumConfig) -> list[Problem]:
+    """``environment.options`` checked against what the registered environment accepts,
+    before it is made: ``render_mode`` against its ``metadata['render_modes']``, every other
+    key against its constructor's parameters (unless it takes ``**kwargs``). Only the module
+    the id is registered from is imported (as making it would); an id that names another
+    module, or no registered id, is left to :func:`id_module_problem` and ``gym.make``."""
+    if not config.options or id_module_problem(config.id) is not None:
+        return []
+    try:
+        spec = gym.spec(config.id)
+        creator = (gym.envs.registration.load_env_creator(spec.entry_point)
+                   if isinstance(spec.entry_point, str) else spec.entry_point)
+        parameters = inspect.signature(creator).parameters
+    except Exception:  # an unknown id or an entry point that cannot be inspected: make says
+        return []
+    problems: list[Problem] = []
+    modes = (getattr(creator, "metadata", None) or {}).get("render_modes")
+    mode = config.options.get("render_mode")
+    if mode is not None and isinstance(modes, (list, tuple)) and mode not in modes:
+        problems.append(Problem(("environment", "options", "render_mode"),
+                                f"'{mode}' is not a render mode of '{config.id}'."
+                                f"{did_you_mean(str(mode), [str(m) for m in modes])}",
+                                f"use one of: {', '.join(map(str, modes)) or '(none)'}, or "
+                                "leave render_mode out"))
+    if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
+        accepted = [name for name, p in parameters.items()
+                    if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD,
+                                  inspect.Parameter.KEYWORD_ONLY)]
+        for key in config.options:
+            if key not in accepted and key not in _MAKE_OPTIONS:
+                problems.append(Problem(("environment", "options", key),
+                                        f"'{config.id}' takes no option '{key}'."
+                                        f"{did_you_mean(key, accepted)}",
+                                        f"its options: {', '.join(accepted) or '(none)'}"))
+    return problems
+
+
 def observation_space_bounds(config: GymnasiumConfig) -> tuple[list[float], list[float]]:
     """The low and high bounds ``(D,)`` of the environment's one-dimensional Box observation
     space, each the shortest decimal of its dtype (entries may be infinite). Makes the
     environment once, then closes it."""
     gym = import_gymnasium()
+    problems = option_problems(gym, config)
+    if problems:
+        raise SpecError(problems)
     try:
         env = gym.make(config.id, disable_env_checker=True, **config.options)
     except (gym.error.Error, TypeError) as error:  # make_env reports it in full
@@ -146,6 +191,9 @@ class GymnasiumEnv(BatchEnv):
         problem = id_module_problem(config.id)
         if problem is not None:
             raise SpecError([problem])
+        problems = option_problems(gym, config)
+        if problems:
+            raise SpecError(problems)
         try:
             return gym.make(config.id, disable_env_checker=True, **config.options)
         except gym.error.Error as error:

@@ -5,9 +5,11 @@ checks the rest when it is built (a Gymnasium id that does not exist, an observa
 past the space, a singleton outside the action space, a command without an action), so it is
 built here too, whenever building it has no effect outside this process and checks something
 loading did not. A robot link is not built: connecting would talk to a robot; its checks run
-when ``learn`` connects. The simulators are not built either: everything building them checks
-is their section's ``fit_problems``, which loading already ran, and building them would only
-cost the import of numpy and the simulator (most of ``validate``'s time).
+when ``learn`` connects. A ``ros2`` section's topics, types and fields are checked by loading,
+against the message definitions (flctool.spec.ros2_messages); building it would join the
+graph. The simulators are not built either: everything building them checks is their
+section's ``fit_problems``, which loading already ran, and building them would only cost the
+import of numpy and the simulator (most of ``validate``'s time).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ _NOT_BUILT = {"robot-link": "the robot-link adapter's checks run when learn conn
                             "robot (validate does not connect)"}
 #: Adapters whose construction checks nothing beyond their section's model and
 #: ``fit_problems`` (both run by :func:`load_behaviour`), so validate need not build them.
-_CHECKED_BY_LOADING = frozenset({"ballchase-sim", "pitch"})
+_CHECKED_BY_LOADING = frozenset({"ballchase-sim", "pitch", "ros2"})
 
 
 @dataclass(frozen=True)
@@ -60,5 +62,6 @@ def check_adapter(behaviour: Behaviour) -> None:
     """Build the behaviour's adapter once and close it: raises what building raises."""
     from flctool.envs import make_env
 
-    make_env(behaviour, 1).close()
+    with make_env(behaviour, 1):
+        pass
 

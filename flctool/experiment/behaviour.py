@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 from flctool.errors import Problem, SpecError
-from flctool.runs import apply_overrides, override_label, override_path
 from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data
 from flctool.spec.dump import data_to_yaml
 from flctool.spec.learning import (
@@ -30,6 +29,7 @@ from flctool.spec.learning import (
 )
 from flctool.spec.load import read_behaviour_text
 from flctool.spec.located import source_of
+from flctool.spec.overrides import Override, Overrides, apply_overrides, as_overrides
 from flctool.spec.yaml_source import SourceMap, read_yaml
 
 #: Keys the experiment decides for each run.
@@ -77,14 +77,12 @@ class ExperimentBehaviour:
 
 
 def read_experiment_behaviour(file: str | Path, learners: Sequence[str],
-                              overrides: Mapping[str, Any] | None = None,
-                              where: str | Mapping[str, str] = "overrides",
-                              ) -> ExperimentBehaviour:
+                              overrides: Overrides | None = None) -> ExperimentBehaviour:
     """Read the behaviour file ``file`` for an experiment comparing ``learners``, with
-    ``overrides`` applied (keys and ``where`` as for :func:`flctool.runs.resolve_behaviour`).
+    ``overrides`` applied (as :func:`flctool.spec.overrides.resolve_behaviour` reads them).
     :class:`SpecError` lists every problem, each placed in the file or at its override."""
     data, source = read_yaml(read_behaviour_text(file), str(file))
-    return experiment_behaviour(data, source, learners, overrides, where)
+    return experiment_behaviour(data, source, learners, overrides)
 
 
 def share_behaviour(behaviour: Behaviour, learners: Sequence[str]) -> ExperimentBehaviour:
@@ -94,18 +92,16 @@ def share_behaviour(behaviour: Behaviour, learners: Sequence[str]) -> Experiment
 
 
 def experiment_behaviour(data: Any, source: SourceMap, learners: Sequence[str],
-                         overrides: Mapping[str, Any] | None = None,
-                         where: str | Mapping[str, str] = "overrides",
-                         ) -> ExperimentBehaviour:
+                         overrides: Overrides | None = None) -> ExperimentBehaviour:
     """Behaviour data (as read from ``source``) for an experiment comparing ``learners``:
     see :func:`read_experiment_behaviour`."""
-    overrides = overrides or {}
-    problems = _override_problems(overrides, learners, where)
+    given = as_overrides(overrides)
+    problems = _override_problems(given, learners)
     if problems:
         raise SpecError(problems, source.file)
     data = copy.deepcopy(data)
     if isinstance(data, dict):
-        source = source.with_overrides(apply_overrides(data, overrides, where))
+        source = source.with_overrides(apply_overrides(data, given))
     learning = data.get("learning", {}) if isinstance(data, dict) else None
     if not isinstance(learning, dict):
         behaviour_from_data(data, source)  # not a behaviour's shape: raises, saying why
@@ -160,14 +156,12 @@ def _split(learning: dict[str, Any], own: Any, learners: Sequence[str], source: 
     return own_section, extra, problems
 
 
-def _override_problems(overrides: Mapping[str, Any], learners: Sequence[str],
-                       where: str | Mapping[str, str]) -> list[Problem]:
+def _override_problems(overrides: list[Override], learners: Sequence[str]) -> list[Problem]:
     """Overrides the experiment refuses: of the learner or seed, which it decides for each
     run, and of a learning key no compared learner reads."""
     problems: list[Problem] = []
-    for key in overrides:
-        path = override_path(key)
-        label = override_label(where, key)
+    for override in overrides:
+        key, path, label = override.key, override.path, override.where
         if path in DECIDED_KEYS:
             problems.append(Problem(path, f"'{key}' is decided by the experiment for each "
                                     "run", f"use {DECIDED_KEYS[path]}", file=label))

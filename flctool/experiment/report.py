@@ -77,7 +77,7 @@ def read_records(experiment: Experiment) -> list[RunRecord]:
             np.array([m.std for m in metrics]),
             np.cumsum([m.episodes for m in metrics]).astype(np.float64),
             int(sum(m.episodes for m in metrics)), int(sum(m.steps for m in metrics)),
-            int(usage.get("selection_episodes", 0)), int(usage.get("selection_steps", 0)),
+            usage.selection_episodes if usage else 0, usage.selection_steps if usage else 0,
             read_heldout(directory)))
     return records
 

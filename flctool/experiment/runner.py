@@ -4,6 +4,7 @@ held-out set.
 An experiment directory holds::
 
     experiment.json     the plan: learners, seeds, held-out episodes and seed, overrides
+    experiment.lock     held while a process runs the experiment (see flctool.dirlock)
     behaviour.yaml      the resolved behaviour every run starts from (the file plus --set);
                         its learning: may carry the keys of every compared learner
                         (:mod:`flctool.experiment.behaviour`)
@@ -30,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
+from flctool.dirlock import DirectoryLock
 from flctool.errors import RunDirError
 from flctool.evaluation import evaluate_behaviour
 from flctool.experiment.behaviour import (
@@ -42,18 +44,20 @@ from flctool.runs import (
     BEHAVIOUR_FILE,
     BEST_FILE,
     CHECKPOINT_DIR,
+    ENDED,
     Run,
     create_run,
     open_run,
-    resolve_behaviour,
 )
 from flctool.spec import Behaviour, load_behaviour
+from flctool.spec.overrides import resolve_behaviour
 from flctool.version import __version__
 
 EXPERIMENT_FORMAT = 1
 PLAN_FILE = "experiment.json"
 RUNS_DIR = "runs"
 HELDOUT_FILE = "heldout.json"
+LOCK_FILE = "experiment.lock"
 #: Default seed of the held-out episodes: ``flctool evaluate best.yaml --seed 0`` draws the same.
 HELDOUT_SEED = 0
 HELDOUT_EPISODES = 500
@@ -143,9 +147,9 @@ def run_job(job: Job, directory: Path) -> JobOutcome:
     else:
         _clear_unstarted(directory)
         run = create_run(job.behaviour, directory)
-    if heldout_path.is_file() and run.info().get("status") == "finished":
+    if heldout_path.is_file() and run.info().get("status") in ENDED:
         return JobOutcome(job.learner, job.seed, read_heldout(directory)["success_rate"], True)
-    if run.info().get("status") != "finished":
+    if run.info().get("status") not in ENDED:
         run.train()
     result = heldout_evaluation(run, job.heldout_seed, job.heldout_episodes)
     write_text_atomic(heldout_path, json.dumps(result, indent=2) + "\n")
@@ -219,12 +223,33 @@ class Experiment:
             info = json.loads((directory / "run.json").read_text(encoding="utf-8"))
         except (OSError, ValueError):
             return False
-        return isinstance(info, dict) and info.get("status") == "finished"
+        return isinstance(info, dict) and info.get("status") in ENDED
 
     def run(self, executor: Executor, on_done: Callable[[JobOutcome], None] = lambda _: None,
             ) -> list[JobOutcome]:
         """Run every unfinished job with ``executor``; finished ones are reported as skipped.
-        Returns the outcomes in job order."""
+        Returns the outcomes in job order. Holds the experiment's lock meanwhile: two
+        processes running one experiment would both run its unfinished jobs."""
+        lock = DirectoryLock(self.path / LOCK_FILE)
+        try:
+            acquired = lock.acquire()
+        except OSError as exc:
+            raise RunDirError(f"cannot lock {self.path / LOCK_FILE}: {exc.strerror or exc}",
+                              hint="the lock file must be a plain file (not a link) in a "
+                              "writable folder") from None
+        if not acquired:
+            raise RunDirError(
+                f"{self.path} is being run by another flctool process"
+                f"{f' (pid {lock.holder})' if lock.holder else ''}",
+                hint="wait for it to finish, or stop it (Ctrl-C), then run the same command "
+                "again to continue")
+        try:
+            return self._run(executor, on_done)
+        finally:
+            lock.release()
+
+    def _run(self, executor: Executor, on_done: Callable[[JobOutcome], None],
+             ) -> list[JobOutcome]:
         jobs = self.jobs()
         outcomes: dict[str, JobOutcome] = {}
         todo = []

@@ -19,7 +19,9 @@ from typing import ClassVar
 
 from flctool.atomic import regular_target, replace_all, write_text_atomic
 from flctool.errors import ExportError
+from flctool.inputs import read_input
 from flctool.spec import Behaviour
+from flctool.spec.bounded import no_collection
 from flctool.version import __version__
 
 
@@ -69,8 +71,9 @@ class Exporter(ABC):
 
 #: The largest file an importer reads, in characters: far above any controller written by
 #: hand or by a tool (a 4-input, 10-set grid of 10,000 rules is about 1 MB of FCL), and small
-#: enough that every importer, linear in the text, reads it in seconds.
-MAX_IMPORT_CHARS = 8_000_000
+#: enough that the densest format (FIS, 14 characters a rule: 140,000 rules) imports in
+#: seconds (benchmarks/bench_limits.py).
+MAX_IMPORT_CHARS = 2_000_000
 
 
 class Importer(ABC):
@@ -81,29 +84,53 @@ class Importer(ABC):
     """
 
     format: ClassVar[str]
+    #: What the last import changed or split, to tell the user ("" when nothing).
+    report: str = ""
 
     def from_string(self, text: str, file: str = "<string>") -> Behaviour:
-        """The controller in ``text`` as a behaviour (``file`` names it in messages)."""
+        """The controller in ``text`` as a behaviour (``file`` names it in messages); a file
+        with several outputs is refused here (see :meth:`from_string_all`)."""
+        behaviours = self.from_string_all(text, file)
+        if len(behaviours) > 1:
+            names = ", ".join(f"'{b.output.name}'" for b in behaviours)
+            raise ExportError(f"{file}:1: the controller has {len(behaviours)} outputs "
+                              f"({names}); a behaviour has one",
+                              hint="import it as one behaviour per output: flctool import "
+                              "FILE -o NAME.yaml writes NAME_<output>.yaml for each")
+        return behaviours[0]
+
+    def from_string_all(self, text: str, file: str = "<string>") -> list[Behaviour]:
+        """The controller in ``text`` as one behaviour per output, in file order (outputs
+        are independent: each is computed from its own rules)."""
         if len(text) > MAX_IMPORT_CHARS:
             raise ExportError(f"{file}:1: the file holds {len(text):,} characters, more than "
                               f"the {MAX_IMPORT_CHARS:,} an import reads",
                               hint="is it really a controller? split it or shorten it")
-        return self.parse(text, file)
+        # a UTF-8 byte-order mark (Windows editors write one) is not part of the text
+        text = text.removeprefix("\ufeff")
+        with no_collection():  # see flctool.spec.bounded
+            return self.parse_all(text, file)
 
     @abstractmethod
     def parse(self, text: str, file: str) -> Behaviour:
         """The controller in ``text`` (at most MAX_IMPORT_CHARS long) as a behaviour."""
 
+    def parse_all(self, text: str, file: str) -> list[Behaviour]:
+        """:meth:`parse` for a format whose files may hold several outputs: one behaviour
+        per output. A format that reads one output only keeps this default."""
+        return [self.parse(text, file)]
+
     def from_file(self, path: str | Path) -> Behaviour:
+        return self.from_string(*self._read(path))
+
+    def from_file_all(self, path: str | Path) -> list[Behaviour]:
+        """:meth:`from_string_all` of a file."""
+        return self.from_string_all(*self._read(path))
+
+    def _read(self, path: str | Path) -> tuple[str, str]:
         path = Path(path)
-        try:
-            with path.open(encoding="utf-8") as handle:
-                text = handle.read(MAX_IMPORT_CHARS + 1)
-        except FileNotFoundError:
-            raise ExportError(f"{path}: no such file", hint="check the path") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ExportError(f"{path}: cannot read the file: {exc}") from None
-        return self.from_string(text, str(path))
+        text = read_input(path, f"{self.format.upper()} file", MAX_IMPORT_CHARS)
+        return text, str(path)
 
 
 def write_files(texts: Mapping[Path, str], *, force: bool) -> list[Path]:

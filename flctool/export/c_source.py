@@ -21,6 +21,7 @@ from flctool.export.float_error import check_float_error
 from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
 from flctool.spec.checks import uncovered_gap
+from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
 _PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 FLOAT_MAX = float(np.finfo(np.float32).max)
@@ -57,7 +58,8 @@ class CExporter(Exporter):
         for name, variable in behaviour.inputs.items():
             rounded = variable.model_copy(update={
                 "range": tuple(_single(v) for v in variable.range),
-                "sets": {s: tuple(_single(v) for v in q) for s, q in variable.sets.items()}})
+                "sets": {s: tuple(_single(v) for v in q) for s, q in
+                         zip(variable.sets, trapezoids(variable.sets.values()), strict=True)}})
             gap = uncovered_gap(rounded)
             if gap is not None:
                 a, b = gap
@@ -90,6 +92,11 @@ class CExporter(Exporter):
                               hint="rename one of them in the behaviour file")
         values = list(behaviour.output.commands.values())
         accuracy = []
+        shaped = _shaped_sets(behaviour)
+        if shaped and self.options.single:
+            raise ExportError(
+                f"set '{shaped[0]}' is a {shaped[1]}: the float export's error is measured for "
+                "trapezoids only", hint="export without --float (double arithmetic)")
         if self.options.single:
             error, bound, count = check_float_error(behaviour)
             accuracy = [f" * float: the largest difference from flctool's (64-bit) output, "
@@ -100,8 +107,10 @@ class CExporter(Exporter):
         lines = ["/*", *(f" * {line}" for line in about), " *",
                  f" * A fuzzy logic controller: {len(behaviour.inputs)} inputs, "
                  f"{behaviour.rule_count} rules, {len(behaviour.output.commands)} commands.",
-                 " * C99, no heap, no libm. The state holds the inputs in this order; a value "
-                 "outside",
+                 " * C99, no heap, " + (f"libm's exp{' and pow' if shaped[2] else ''} (link "
+                                     "with -lm: the sets include "
+                                     f"a {shaped[1]})." if shaped else "no libm.")
+                 + " The state holds the inputs in this order; a value outside",
                  " * its range is clipped to it. A NaN input gives a NaN output, and so does an "
                  "input",
                  " * at which no set fires (which flctool's checks rule out):"]
@@ -134,6 +143,11 @@ class CExporter(Exporter):
                   "   near ones, the smaller singleton), as flctool's 'nearest' action picks "
                   "it; -1 for a NaN output. */",
                   f"int {prefix}command(const {real} state[{macro}N_INPUTS]);", "",
+                  "/* Both from one inference: writes the output (as <prefix>output gives "
+                  "it) to *output",
+                  "   and returns the command (as <prefix>command does). */",
+                  f"int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output);",
+                  "",
                   "#ifdef __cplusplus", "}", "#endif", "", f"#endif /* {guard} */"]
         return "\n".join(lines) + "\n"
 
@@ -144,7 +158,10 @@ class CExporter(Exporter):
         real = self.real
         lit = self.literal
         variables = list(behaviour.inputs.values())
-        quads = [q for v in variables for q in v.sets.values()]
+        rows = [set_row(q) for v in variables for q in v.sets.values()]
+        quads = [q for _, q in rows]
+        kinds = [k for k, _ in rows]
+        shaped = any(kinds)
         first = [0]
         for variable in variables:
             first.append(first[-1] + len(variable.sets))
@@ -156,6 +173,8 @@ class CExporter(Exporter):
         ctype = ("unsigned char" if k <= 256 else "unsigned short" if k <= 65536
                  else "unsigned int")
         lines = [f'#include "{include}"', ""] if include else []
+        if shaped:
+            lines += ["#include <math.h>", ""]
         lines += ["#if defined(__FAST_MATH__)",
                   '#error "compile without -ffast-math: it reorders the sums of eq. 3 and '
                   'removes the NaN checks"', "#endif", ""]
@@ -166,9 +185,14 @@ class CExporter(Exporter):
             f"static const {real} {prefix}ranges[{macro}N_INPUTS][2] = {{",
             *(f"    {{{lit(v.range[0])}, {lit(v.range[1])}}}," for v in variables), "};", "",
             "/* Every input's sets as (pa, pb, pc, pd) (paper Sec. II); the sets of input i are",
-            f"   {prefix}first_set[i] to {prefix}first_set[i + 1] - 1. */",
+            f"   {prefix}first_set[i] to {prefix}first_set[i + 1] - 1."
+            + (f" A set whose {prefix}shapes entry is not 0 holds that shape's parameters"
+               if shaped else " */"),
+            *([f"   instead (see {prefix}shaped). */"] if shaped else []),
             f"static const {real} {prefix}sets[{macro}N_SETS][4] = {{",
             *(f"    {{{', '.join(lit(x) for x in q)}}}," for q in quads), "};",
+            *([f"static const unsigned char {prefix}shapes[{macro}N_SETS] = {{",
+               *_wrapped([str(k) for k in kinds]), "};"] if shaped else []),
             f"static const long {prefix}first_set[{macro}N_INPUTS + 1] = "
             f"{{{', '.join(map(str, first))}}};", "",
             "/* The commands' singletons c^k. */",
@@ -182,7 +206,8 @@ class CExporter(Exporter):
             "/* The command of each rule, in rule order: the last input varies fastest (eq. 1). */",
             f"static const {ctype} {prefix}consequents[{macro}N_RULES] = {{",
             *_wrapped([str(c) for c in consequents]), "};", "",
-            *_functions(prefix, macro, real),
+            *(_shape_functions(prefix, real) if shaped else []),
+            *_functions(prefix, macro, real, shaped),
         ]
         return "\n".join(lines) + "\n"
 
@@ -204,8 +229,88 @@ def _wrapped(items: list[str], width: int = 96) -> list[str]:
     return [*lines, line]
 
 
-def _functions(prefix: str, macro: str, real: str) -> list[str]:
+def _shaped_sets(behaviour: Behaviour) -> tuple[str, str, bool] | None:
+    """The first set of a shape other than the trapezoid (its name and shape), and whether
+    any such set is a bell (which needs pow); None if every set is a trapezoid."""
+    found = [(name, value.kind) for v in behaviour.inputs.values()
+             for name, value in v.sets.items() if not is_trapezoid(value)]
+    if not found:
+        return None
+    return found[0][0], found[0][1], any(kind == "bell" for _, kind in found)
+
+
+def _shape_functions(prefix: str, real: str) -> list[str]:
+    """The shapes of flctool.spec.shapes, coded as flctool/compile/membership.py codes them
+    (``exp`` and ``pow`` are libm's, as Python's and numba's are)."""
+    return f"""\
+static {real} {prefix}sigmoid({real} x, {real} c, {real} a)
+{{
+    return 1.0 / (1.0 + exp(-a * (x - c)));
+}}
+
+static {real} {prefix}gauss({real} x, {real} m, {real} s)
+{{
+    return exp(-((x - m) * (x - m)) / (2.0 * s * s));
+}}
+
+static {real} {prefix}s_shape({real} x, {real} a, {real} b)
+{{
+    {real} t;
+    if (x <= a) return 0.0;
+    if (x <= (a + b) / 2.0) {{
+        t = (x - a) / (b - a);
+        return 2.0 * t * t;
+    }}
+    if (x < b) {{
+        t = (x - b) / (b - a);
+        return 1.0 - 2.0 * t * t;
+    }}
+    return 1.0;
+}}
+
+static {real} {prefix}z_shape({real} x, {real} a, {real} b)
+{{
+    {real} t;
+    if (x <= a) return 1.0;
+    if (x <= (a + b) / 2.0) {{
+        t = (x - a) / (b - a);
+        return 1.0 - 2.0 * t * t;
+    }}
+    if (x < b) {{
+        t = (x - b) / (b - a);
+        return 2.0 * t * t;
+    }}
+    return 0.0;
+}}
+
+/* The membership of x in a set of shape `kind` with parameters p: 1 gauss, 2 gauss2, 3 bell,
+   4 sigmoid, 5 sigmoid_difference, 6 sigmoid_product, 7 s_shape, 8 z_shape, 9 pi_shape. */
+static {real} {prefix}shaped(int kind, {real} x, const {real} p[4])
+{{
+    {real} left, right;
+    switch (kind) {{
+    case 1: return {prefix}gauss(x, p[0], p[1]);
+    case 2:
+        left = x < p[0] ? {prefix}gauss(x, p[0], p[1]) : 1.0;
+        right = x > p[2] ? {prefix}gauss(x, p[2], p[3]) : 1.0;
+        return left * right;
+    case 3: return 1.0 / (1.0 + pow(fabs((x - p[2]) / p[0]), 2.0 * p[1]));
+    case 4: return {prefix}sigmoid(x, p[0], p[1]);
+    case 5: return fabs({prefix}sigmoid(x, p[0], p[1]) - {prefix}sigmoid(x, p[2], p[3]));
+    case 6: return {prefix}sigmoid(x, p[0], p[1]) * {prefix}sigmoid(x, p[2], p[3]);
+    case 7: return {prefix}s_shape(x, p[0], p[1]);
+    case 8: return {prefix}z_shape(x, p[0], p[1]);
+    default: return {prefix}s_shape(x, p[0], p[1]) * {prefix}z_shape(x, p[2], p[3]);
+    }}
+}}
+""".splitlines()
+
+
+def _functions(prefix: str, macro: str, real: str, shaped: bool = False) -> list[str]:
     zero, one = ("0.0f", "1.0f") if real == "float" else ("0.0", "1.0")
+    membership = (f"{prefix}shapes[j] ? {prefix}shaped({prefix}shapes[j], s, {prefix}sets[j])"
+                  f"\n                          : {prefix}membership(s, {prefix}sets[j])"
+                  if shaped else f"{prefix}membership(s, {prefix}sets[j])")
     return f"""\
 /* Trapezoid membership (paper Sec. II), written as flctool computes it: a vertical edge
    (pa == pb or pc == pd) jumps without dividing by zero. */
@@ -242,7 +347,7 @@ static {real} {prefix}membership({real} s, const {real} q[4])
         count[i] = 0;
         pick[i] = 0;
         for (j = {prefix}first_set[i]; j < {prefix}first_set[i + 1]; ++j) {{
-            mu[j] = {prefix}membership(s, {prefix}sets[j]);
+            mu[j] = {membership};
             if (mu[j] > {zero}) active[{prefix}first_set[i] + count[i]++] = j;
         }}
         /* flctool checked that the sets cover the range, so some set fires; should
@@ -277,9 +382,10 @@ static {real} {prefix}membership({real} s, const {real} q[4])
     return weighted;
 }}
 
-int {prefix}command(const {real} state[{macro}N_INPUTS])
+/* The command nearest an output (see the header). */
+static int {prefix}nearest({real} out)
 {{
-    {real} out = {prefix}output(state), gap = {zero}, d;
+    {real} gap = {zero}, d;
     int best = -1, k;
     if (out != out) return -1;
     for (k = 0; k < (int)(sizeof {prefix}singletons / sizeof {prefix}singletons[0]); ++k) {{
@@ -293,4 +399,15 @@ int {prefix}command(const {real} state[{macro}N_INPUTS])
         }}
     }}
     return best;
+}}
+
+int {prefix}command(const {real} state[{macro}N_INPUTS])
+{{
+    return {prefix}nearest({prefix}output(state));
+}}
+
+int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output)
+{{
+    *output = {prefix}output(state);
+    return {prefix}nearest(*output);
 }}""".splitlines()

@@ -18,6 +18,7 @@ import re
 from dataclasses import dataclass
 
 from flctool.errors import ExportError
+from flctool.export import shapes
 from flctool.export.base import (
     Exporter,
     Importer,
@@ -32,9 +33,8 @@ from flctool.export.imported import (
     ImportedSet,
     Method,
     build_behaviour,
-    check_term_arity,
     check_unique,
-    fuzzylite_quad,
+    fuzzylite_set,
     parse_number,
     quad_from_points,
     span,
@@ -43,6 +43,8 @@ from flctool.export.imported import (
 )
 from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
+from flctool.spec.models import FuzzySet
+from flctool.spec.shapes import ShapedSet
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.
@@ -97,6 +99,8 @@ class FclExporter(Exporter):
             raise ExportError(f"unknown FCL dialect '{dialect}'",
                               hint=f"use one of {', '.join(DIALECTS)}")
         fuzzylite = dialect == "fuzzylite"
+        if not fuzzylite:
+            _check_points_only(behaviour)
         output = behaviour.output
         about = header_lines(behaviour, self.options.provenance)
         # fuzzylite 6 skips lines starting with '//' (and refuses '(* ... *)')
@@ -137,16 +141,31 @@ class FclExporter(Exporter):
         return "\n".join(lines) + "\n"
 
 
-def _term(quad: tuple[float, float, float, float], span: tuple[float, float], *,
-          fuzzylite: bool) -> str:
+def _term(quad: FuzzySet, span: tuple[float, float], *, fuzzylite: bool) -> str:
     """A set as IEC points, or as fuzzylite's Trapezoid / Triangle with shoulders' feet
-    outside the range (fuzzylite does not clip FCL inputs; see sloped_quad)."""
+    outside the range (fuzzylite does not clip FCL inputs; see sloped_quad), or as
+    fuzzylite's term of its shape."""
+    if isinstance(quad, ShapedSet):
+        name, params = shapes.written(shapes.FUZZYLITE, quad.kind, quad.params)
+        return f"{name} {' '.join(fcl_number(v) for v in params)}"
     if not fuzzylite:
         return " ".join(f"({fcl_number(x)}, {mu})" for x, mu in set_points(quad, span))
     pa, pb, pc, pd = sloped_quad(quad, span, interior=False)
     if pb == pc:
         return f"Triangle {fcl_number(pa)} {fcl_number(pb)} {fcl_number(pd)}"
     return "Trapezoid " + " ".join(fcl_number(x) for x in (pa, pb, pc, pd))
+
+
+def _check_points_only(behaviour: Behaviour) -> None:
+    """IEC 61131-7 writes sets as point lists: a shape other than the trapezoid has none."""
+    for name, variable in behaviour.inputs.items():
+        for set_name, value in variable.sets.items():
+            if isinstance(value, ShapedSet):
+                raise ExportError(
+                    f"set '{set_name}' of input '{name}' is a {value.kind}, which IEC "
+                    "61131-7 FCL cannot write (its sets are point lists, piecewise linear)",
+                    hint="export with --dialect fuzzylite, which writes fuzzylite's "
+                    f"{shapes.FUZZYLITE[value.kind][0]} term, or use FLL or FIS")
 
 
 def _check_names(behaviour: Behaviour) -> None:
@@ -323,8 +342,7 @@ class _FclParser:
                 term = self.name()
                 self.expect(":=")
                 if self.peek().kind == "name":  # fuzzylite's syntax: Trapezoid a b c d
-                    quad = self.fuzzylite_term(term)
-                    variable.sets.append(ImportedSet(term.text, quad, term.line))
+                    variable.sets.append(self.fuzzylite_term(term))
                 else:
                     terms.append((term, self.points(term)))
                 self.expect(";")
@@ -340,8 +358,9 @@ class _FclParser:
             variable.sets.append(ImportedSet(term.text, quad, term.line))
         return token.text
 
-    def fuzzylite_term(self, term: Token) -> tuple[float, float, float, float]:
-        """fuzzylite's term syntax, ``Trapezoid a b c d`` (see FUZZYLITE_TERMS), to ';'."""
+    def fuzzylite_term(self, term: Token) -> ImportedSet:
+        """fuzzylite's term syntax, ``Trapezoid a b c d`` or ``Gaussian m s`` (see
+        fuzzylite_set), or jFuzzyLogic's (``trape a b c d``, ``gauss m s``), to ';'."""
         kind = self.take()
         values: list[float] = []
         while self.peek().word != ";":
@@ -355,10 +374,8 @@ class _FclParser:
                                 f"'{term.text}'", "write the term's numbers, then ';'")
             if len(values) > 5:
                 break
-        n = check_term_arity(kind.text, len(values), self.file, kind.line)
-        if len(values) > n and values[n] != 1.0:
-            raise self.fail(kind, f"a term of height {values[n]!r}: flctool's sets reach 1")
-        return fuzzylite_quad(kind.text, values[:n], self.file, kind.line)
+        name, values = shapes.from_jfuzzylogic(kind.text, values)  # gauss 0.2 0.1, ...
+        return fuzzylite_set(term.text, name, values, self.file, kind.line)
 
     def fuzzylite_output(self, term: Token) -> float:
         """fuzzylite's ``Constant c`` or zero-order ``Linear 0 ... 0 c`` output term."""

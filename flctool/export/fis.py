@@ -1,5 +1,7 @@
 """FIS, the text format of MATLAB's Fuzzy Logic Toolbox: a Sugeno system, constant outputs.
 
+Sets of the other shapes are MATLAB's ``gaussmf``, ``gauss2mf``, ``gbellmf``, ``sigmf``,
+``dsigmf``, ``psigmf``, ``smf``, ``zmf`` and ``pimf`` (:mod:`flctool.export.shapes`).
 Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``) with no vertical edge, as MATLAB and
 Octave require: a shoulder's plateau and foot lie outside the range, an edge inside it has its
 foot one ulp away (:func:`~flctool.export.base.sloped_quad`); commands are ``constant`` MFs,
@@ -13,6 +15,7 @@ from __future__ import annotations
 import itertools
 import re
 
+from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
     ImportedCommand,
@@ -26,10 +29,12 @@ from flctool.export.imported import (
     fuzzylite_quad,
     identifier,
     parse_number,
+    shaped_set,
     zero_order_constant,
 )
-from flctool.export.mamdani import centroid, measure
+from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, centroid, mamdani_report
 from flctool.spec import Behaviour, require_deployable
+from flctool.spec.shapes import ShapedSet, set_row
 
 
 def _vector(values: list[float]) -> str:
@@ -51,6 +56,10 @@ class FisExporter(Exporter):
             lines += ["", f"[Input{index}]", f"Name='{name}'",
                       f"Range={_vector(list(variable.range))}", f"NumMFs={len(variable.sets)}"]
             for k, (set_name, quad) in enumerate(variable.sets.items(), start=1):
+                if isinstance(quad, ShapedSet):
+                    kind, params = shapes.written(shapes.MATLAB, quad.kind, quad.params)
+                    lines.append(f"MF{k}='{set_name}':'{kind}',{_vector(params)}")
+                    continue
                 # MATLAB and Octave refuse trapmf with a == b and trimf with a == b or
                 # b == c: no vertical edges (exact under clipping, see sloped_quad)
                 pa, pb, pc, pd = sloped_quad(quad, variable.range)
@@ -86,10 +95,6 @@ MAX_DIGITS = 6
 
 #: The Mamdani centroid's resolution: fuzzylite 6's default for an imported FIS.
 CENTROID_RESOLUTION = 100
-#: The fix offered when a Mamdani system is imported without the conversion.
-MAMDANI_HINT = ("import with --mamdani-singletons to replace each output set by a singleton "
-                "at its centroid: an approximation, whose largest error the import measures "
-                "and reports")
 
 
 class FisImporter(Importer):
@@ -104,23 +109,95 @@ class FisImporter(Importer):
         self.report = ""
 
     def parse(self, text: str, file: str) -> Behaviour:
-        reader = _FisReader(file, self.mamdani_singletons)
-        behaviour = build_behaviour(reader.read(text))
-        self.report = ""
-        if reader.output_sets:
-            sets = {identifier(name): quad for name, quad in reader.output_sets.items()}
-            conversion = measure(behaviour, sets, reader.output_range,
-                                 CENTROID_RESOLUTION)
-            self.report = f"{file}: {conversion.report()}"
-        return behaviour
+        return self.from_string(text, file)
+
+    def parse_all(self, text: str, file: str) -> list[Behaviour]:
+        """One behaviour per output: each output's system (:func:`one_output`) read alone."""
+        outputs = output_count(text)
+        behaviours, notes = [], []
+        for k in range(1, outputs + 1):
+            reader = _FisReader(file, self.mamdani_singletons)
+            behaviour = build_behaviour(reader.read(one_output(text, k) if outputs > 1
+                                                   else text))
+            if outputs > 1:  # named after its output
+                behaviour = behaviour.model_copy(update={"name": behaviour.output.name})
+            if reader.output_sets:
+                notes.append(f"{file}: output '{behaviour.output.name}': "
+                             f"{mamdani_report(behaviour, reader.mamdani_output())}")
+            behaviours.append(behaviour)
+        if outputs > 1:
+            notes.insert(0, f"{file}: {outputs} outputs, imported as one behaviour each, named "
+                         "after its output (" + ", ".join(f"'{b.name}'" for b in behaviours)
+                         + "); each keeps the rules that conclude on its output, which "
+                         "computes it exactly as the file does")
+        self.report = "\n".join(notes)
+        return behaviours
+
+
+_SECTION = re.compile(r"\[\s*(Output)(\d{1,6})\s*\]")
+
+
+def output_count(text: str) -> int:
+    """How many ``[OutputK]`` sections the file has (1 if none: the reader says what is
+    missing)."""
+    return max(1, len({m.group(2) for m in _SECTION.finditer(text)}))
+
+
+def _is_zero(word: str) -> bool:
+    try:
+        return float(word) == 0.0
+    except ValueError:
+        return False  # for the reader to refuse
+
+
+def one_output(text: str, k: int) -> str:
+    """The file as the system of its ``k``-th output alone, line for line (so that every
+    message names the file's own line): the other output sections and the rules that give
+    output ``k`` no MF (index 0) become blank lines, ``[Outputk]`` becomes ``[Output1]``, each
+    rule keeps its ``k``-th output index, and NumOutputs / NumRules count what is left. A
+    line this cannot read is kept as it is, for the reader to refuse."""
+    lines = text.splitlines()
+    inputs = len({m.group(1) for m in re.finditer(r"\[\s*Input(\d{1,6})\s*\]", text)})
+    section, kept, counts = "", 0, {}
+    for at, raw in enumerate(lines):
+        line = raw.strip()
+        if line.startswith("[") and line.endswith("]"):
+            section = line[1:-1].strip()
+            if section == f"Output{k}":
+                lines[at] = "[Output1]"
+            elif section.startswith("Output"):
+                lines[at] = ""
+            continue
+        if section.startswith("Output") and section != f"Output{k}":
+            lines[at] = ""
+        elif section == "System" and line.replace(" ", "").startswith(("NumOutputs=",
+                                                                       "NumRules=")):
+            counts[line.partition("=")[0].strip()] = at
+        elif section == "Rules" and line and not line.startswith(("%", "#")):
+            head, paren, tail = line.partition("(")
+            indices, comma, outputs = head.partition(",")
+            words = outputs.split() if comma else indices.split()[inputs:]
+            ins = indices.split() if comma else indices.split()[:inputs]
+            if not paren or len(words) < k:
+                continue
+            if _is_zero(words[k - 1]):  # (fuzzylite writes 0.000)
+                lines[at] = ""
+                continue
+            lines[at] = f"{' '.join(ins)}, {words[k - 1]} ({tail}"
+            kept += 1
+    if "NumOutputs" in counts:
+        lines[counts["NumOutputs"]] = "NumOutputs=1"
+    if "NumRules" in counts:
+        lines[counts["NumRules"]] = f"NumRules={kept}"
+    return "\n".join(lines) + "\n"
 
 
 class _FisReader:
     def __init__(self, file: str, mamdani_singletons: bool = False) -> None:
         self.file = file
         self.mamdani_singletons = mamdani_singletons
-        #: Mamdani output sets (name -> quadruple) replaced by singletons at their centroids
-        self.output_sets: dict[str, tuple[float, float, float, float]] = {}
+        #: Mamdani output sets (name -> shape code and row) replaced by singletons
+        self.output_sets: dict[str, tuple[int, tuple[float, float, float, float]]] = {}
         self.output_range = (0.0, 1.0)
         self.result = ImportedController(file, omission="index 0")
         self.fail = self.result.error
@@ -219,9 +296,14 @@ class _FisReader:
             self.mf_key(key, len(variable.sets), line)
             name, kind, params = self.mf(value, line)
             arity = {"trapmf": 4, "trimf": 3, "rampmf": 2}
+            found = shapes.read(shapes.MATLAB, kind, params)
+            if found is not None:
+                variable.sets.append(shaped_set(name, found[0], found[1], self.file, line))
+                return
             if kind not in arity:
-                raise self.fail(line, f"membership function '{name}' is a {kind}: flctool's "
-                                "sets are trapezoids", "use trapmf or trimf")
+                known = ", ".join([*arity, *(n for n, _ in shapes.MATLAB.values())])
+                raise self.fail(line, f"membership function '{name}' is a {kind}, which "
+                                "flctool's sets do not include", f"use one of {known}")
             if len(params) != arity[kind]:
                 raise self.fail(line, f"a {kind} takes {arity[kind]} parameters",
                                 f"give it {arity[kind]} numbers")
@@ -256,7 +338,7 @@ class _FisReader:
         elif key.startswith("MF"):
             self.mf_key(key, len(self.result.commands), line)
             name, kind, params = self.mf(value, line)
-            if kind in ("trimf", "trapmf"):
+            if kind in ("trimf", "trapmf") or shapes.read(shapes.MATLAB, kind, params):
                 constant = self.mamdani_set(name, kind, params, line)
             else:
                 constant = zero_order_constant(kind, params, len(self.result.inputs),
@@ -288,14 +370,29 @@ class _FisReader:
         if not self.mamdani_singletons:
             raise self.fail(line, f"output term '{name}' is a {kind}, a Mamdani output set: "
                             "flctool's commands are singletons", MAMDANI_HINT)
+        found = shapes.read(shapes.MATLAB, kind, params)
+        if found is not None:
+            row = set_row(shaped_set(name, found[0], found[1], self.file, line).shape_value())
+            self.output_sets[name] = row
+            return 0.0  # the centroid, once the output range is known (mamdani_output)
         n = 3 if kind == "trimf" else 4
         if len(params) != n or any(b < a for a, b in itertools.pairwise(params)):
             raise self.fail(line, f"a {kind} takes {n} increasing parameters",
                             f"give it {n} numbers in increasing order")
         quad = ((params[0], params[1], params[1], params[2]) if n == 3
                 else (params[0], params[1], params[2], params[3]))
-        self.output_sets[name] = quad
+        self.output_sets[name] = (0, quad)
         return centroid(quad)
+
+    def mamdani_output(self) -> MamdaniOutput:
+        """The Mamdani output as read (its sets under their behaviour-file names)."""
+        implication = {"min": "Minimum", "prod": "AlgebraicProduct"}
+        aggregation = {"max": "Maximum", "probor": "AlgebraicSum"}
+        return MamdaniOutput(
+            {identifier(name): row for name, row in self.output_sets.items()},
+            self.output_range, CENTROID_RESOLUTION,
+            implication[self.system.get("ImpMethod", ("min", 1))[0].lower()],
+            aggregation[self.system.get("AggMethod", ("max", 1))[0].lower()])
 
     def mf(self, value: str, line: int) -> tuple[str, str, list[float]]:
         match = _MF.fullmatch(value)
@@ -332,17 +429,21 @@ class _FisReader:
 
     def check_mamdani(self, line: int) -> None:
         """The Mamdani settings that the conversion's measurement computes."""
-        expected = {"ImpMethod": "min", "AggMethod": "max", "DefuzzMethod": "centroid",
-                    "NumOutputs": "1"}
-        for key, want in expected.items():
-            value, at = self.system.get(key, (want, line))
-            if value.lower() != want:
+        expected = {"ImpMethod": ("min", "prod"), "AggMethod": ("max", "probor"),
+                    "DefuzzMethod": ("centroid",), "NumOutputs": ("1",)}
+        for key, allowed in expected.items():
+            value, at = self.system.get(key, (allowed[0], line))
+            if value.lower() not in allowed:
                 raise self.fail(at, f"{key}='{value}': the conversion of a Mamdani system "
-                                f"measures its error against {key}='{want}'",
-                                f"use {key}='{want}' (or convert the system by hand)")
+                                f"measures its error against {key}="
+                                f"{' or '.join(repr(a) for a in allowed)}",
+                                f"use {key}='{allowed[0]}' (or convert the system by hand)")
         if len(self.output_sets) != len(self.result.commands):
-            raise self.fail(line, "a Mamdani system with output MFs other than trimf / trapmf",
-                            "make every output MF a trimf or trapmf")
+            raise self.fail(line, "a Mamdani system with constant or linear output MFs",
+                            "make every output MF a set (trimf, trapmf, gaussmf, ...)")
+        # the singletons of other shapes are their centroids over the output range
+        for command in self.result.commands:
+            command.value = self.mamdani_output().singleton(identifier(command.name))
 
     def check_counts(self) -> None:
         """NumInputs, NumMFs and NumRules must count what the file holds."""

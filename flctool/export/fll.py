@@ -1,6 +1,8 @@
 """FLL, the FuzzyLite Language: a Takagi-Sugeno engine with constant output terms.
 
-The engine computes eq. 1-3 as flctool does: Trapezoid / Triangle input terms (eq. 1's sets),
+The engine computes eq. 1-3 as flctool does: Trapezoid / Triangle input terms (eq. 1's sets;
+the other shapes as fuzzylite's Gaussian, GaussianProduct, Bell, Sigmoid, SigmoidDifference,
+SigmoidProduct, SShape, ZShape and PiShape terms, :mod:`flctool.export.shapes`),
 conjunction Minimum (eq. 2), and the WeightedAverage of the constant terms over every fired
 rule (eq. 3). Inputs have ``lock-range: true`` so that fuzzylite clips them to their range as
 flctool does. The output has ``aggregation: none``: with an aggregation, pyfuzzylite 8's
@@ -10,26 +12,37 @@ Numbers are written with repr (full precision), never fuzzylite's default 3 deci
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import re
+from dataclasses import dataclass, field
 
 from flctool.errors import ExportError
+from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, header_lines, number
 from flctool.export.imported import (
     ImportedCommand,
     ImportedController,
     ImportedInput,
     ImportedRule,
-    ImportedSet,
     Method,
     build_behaviour,
-    check_term_arity,
     excerpt,
-    fuzzylite_quad,
+    fuzzylite_set,
     parse_number,
     zero_order_constant,
 )
+from flctool.export.mamdani import (
+    AGGREGATIONS,
+    IMPLICATIONS,
+    MAMDANI_HINT,
+    MamdaniOutput,
+    mamdani_report,
+)
 from flctool.spec import Behaviour, require_deployable
 from flctool.spec.base import identifier
+from flctool.spec.models import FuzzySet
+from flctool.spec.shapes import ShapedSet, set_row
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.
 RESERVED = frozenset({"if", "is", "then", "and", "or", "with", "not", "any", "extremely",
@@ -55,12 +68,8 @@ class FllExporter(Exporter):
             lines += [f"InputVariable: {name}", f"{INDENT}enabled: true",
                       f"{INDENT}range: {number(lo)} {number(hi)}",
                       f"{INDENT}lock-range: true"]
-            for set_name, (pa, pb, pc, pd) in variable.sets.items():
-                if pb == pc:
-                    shape = f"Triangle {number(pa)} {number(pb)} {number(pd)}"
-                else:
-                    shape = f"Trapezoid {number(pa)} {number(pb)} {number(pc)} {number(pd)}"
-                lines.append(f"{INDENT}term: {set_name} {shape}")
+            for set_name, value in variable.sets.items():
+                lines.append(f"{INDENT}term: {set_name} {fuzzylite_term(value)}")
         output = behaviour.output
         values = list(output.commands.values())
         lines += [f"OutputVariable: {output.name}", f"{INDENT}enabled: true",
@@ -79,6 +88,17 @@ class FllExporter(Exporter):
         return "\n".join(lines) + "\n"
 
 
+def fuzzylite_term(value: FuzzySet) -> str:
+    """A set as fuzzylite writes its term (FLL, and FCL in fuzzylite's dialect)."""
+    if isinstance(value, ShapedSet):
+        name, params = shapes.written(shapes.FUZZYLITE, value.kind, value.params)
+        return f"{name} {' '.join(number(v) for v in params)}"
+    pa, pb, pc, pd = value
+    if pb == pc:
+        return f"Triangle {number(pa)} {number(pb)} {number(pd)}"
+    return f"Trapezoid {number(pa)} {number(pb)} {number(pc)} {number(pd)}"
+
+
 def _check_names(behaviour: Behaviour) -> None:
     names = [("input", n) for n in behaviour.inputs]
     names += [(f"set of input '{n}'", s) for n, v in behaviour.inputs.items() for s in v.sets]
@@ -94,17 +114,66 @@ _KEY = re.compile(r"[A-Za-z-]+")
 
 
 class FllImporter(Importer):
-    """Reads a Takagi-Sugeno FLL engine with constant terms (the FllExporter's subset)."""
+    """Reads a Takagi-Sugeno FLL engine with constant terms (the FllExporter's subset), one
+    behaviour per output; with ``mamdani_singletons``, also Mamdani outputs (see
+    :mod:`flctool.export.mamdani`), and then ``report`` says how far that moved each."""
 
     format = "fll"
 
+    def __init__(self, mamdani_singletons: bool = False) -> None:
+        self.mamdani_singletons = mamdani_singletons
+        self.report = ""
+
     def parse(self, text: str, file: str) -> Behaviour:
-        return build_behaviour(_FllReader(file).read(text))
+        return self.from_string(text, file)
+
+    def parse_all(self, text: str, file: str) -> list[Behaviour]:
+        reader = _FllReader(file, self.mamdani_singletons)
+        controllers = reader.read_all(text)
+        behaviours = [build_behaviour(c) for c in controllers]
+        notes = []
+        if len(behaviours) > 1:
+            notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
+                         "named after its output ("
+                         + ", ".join(f"'{b.name}'" for b in behaviours)
+                         + "); each keeps the rules that conclude on its output, which "
+                         "computes it exactly as the file does")
+        for behaviour, output in zip(behaviours, reader.outputs, strict=True):
+            if output.sets:
+                notes.append(f"{file}: output '{output.name}': "
+                             + mamdani_report(behaviour, output.mamdani()))
+        self.report = "\n".join(notes)
+        return behaviours
+
+
+@dataclass
+class _Output:
+    """One OutputVariable as read."""
+
+    name: str
+    line: int
+    commands: list[ImportedCommand] = field(default_factory=list)
+    aggregation: tuple[str, int] = ("none", 0)
+    defuzzifier: tuple[str, int] = ("", 0)  # "weighted" or "centroid", and its line
+    resolution: int = 100  # fuzzylite 6's default for a Centroid
+    range: tuple[float, float] = (0.0, 1.0)
+    range_line: int = 0
+    #: Mamdani output sets: name -> (shape code, row), and the line of the first
+    sets: dict[str, tuple[int, tuple[float, float, float, float]]] = field(
+        default_factory=dict)
+    set_line: int = 0
+    implication: str = "Minimum"
+
+    def mamdani(self) -> MamdaniOutput:
+        return MamdaniOutput({identifier(n): row for n, row in self.sets.items()}, self.range,
+                             self.resolution, self.implication,
+                             "Maximum" if self.aggregation[0] == "Maximum" else "AlgebraicSum")
 
 
 class _FllReader:
-    def __init__(self, file: str) -> None:
+    def __init__(self, file: str, mamdani_singletons: bool = False) -> None:
         self.file = file
+        self.mamdani_singletons = mamdani_singletons
         self.result = ImportedController(file)
         self.fail = self.result.error
         self.section = ""
@@ -112,6 +181,78 @@ class _FllReader:
         # fuzzylite's default conjunction is none, which cannot combine two memberships
         self.result.conjunction = Method("conjunction none", 1, "use conjunction: Minimum")
         self.current: ImportedInput | None = None
+        self.outputs: list[_Output] = []
+        #: every rule as read: its antecedent, its conclusions (output, term), line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], int, str]] = []
+        self.implication = ("none", 0)
+
+    def read_all(self, text: str) -> list[ImportedController]:
+        """One controller per output, each with the rules that conclude on it."""
+        self.read(text)
+        controllers = []
+        for output in self.outputs:
+            self.check_output(output)
+            imported = dataclasses.replace(
+                self.result, output_name=output.name, output_line=output.line,
+                output_declared=True, commands=output.commands, rules=[
+                    ImportedRule(antecedent, term, line, text_)
+                    for antecedent, conclusions, line, text_ in self.rules
+                    for name, term in conclusions if name == output.name],
+                accumulation=None)
+            if len(self.outputs) > 1:
+                imported.name, imported.name_line = output.name, output.line
+            if not output.sets and output.aggregation[0].lower() != "none":
+                imported.accumulation = Method(f"aggregation {output.aggregation[0]}",
+                                               output.aggregation[1], "use aggregation: none")
+            controllers.append(imported)
+        return controllers
+
+    def check_output(self, output: _Output) -> None:
+        """An output's terms and methods fit together: constants and the weighted average,
+        or (converting) Mamdani sets and the centroid."""
+        kind, line = output.defuzzifier
+        if not output.sets:
+            if kind == "centroid":
+                raise self.fail(line, f"defuzzifier Centroid of output '{output.name}', whose "
+                                "terms are constants", "use defuzzifier: WeightedAverage")
+            return
+        if not self.mamdani_singletons:
+            raise self.fail(output.set_line, f"output '{output.name}' has Mamdani sets (a "
+                            f"{'centroid' if kind == 'centroid' else 'set'} output): flctool's "
+                            "commands are singletons (eq. 3)", MAMDANI_HINT)
+        if len(output.sets) != len(output.commands):
+            raise self.fail(output.set_line, f"output '{output.name}' mixes constant terms "
+                            "and sets", "make every term of a Mamdani output a set")
+        if kind != "centroid":
+            raise self.fail(line or output.line, f"the Mamdani output '{output.name}' is not "
+                            "defuzzified by Centroid, which the conversion measures against",
+                            "use defuzzifier: Centroid")
+        aggregation, at = output.aggregation
+        if aggregation not in AGGREGATIONS:
+            raise self.fail(at or output.line, f"aggregation {aggregation} of the Mamdani "
+                            f"output '{output.name}': the conversion measures "
+                            f"{' or '.join(AGGREGATIONS)}", "use aggregation: Maximum")
+        implication, at = self.implication
+        if implication not in IMPLICATIONS:
+            raise self.fail(at or output.line, f"implication {implication}: the conversion "
+                            f"of a Mamdani output measures {' or '.join(IMPLICATIONS)}",
+                            "use implication: Minimum")
+        output.implication = implication
+        lo, hi = output.range
+        if not lo < hi:  # the centroid integrates over the range
+            raise self.fail(output.range_line or output.line, f"the range [{lo!r}, {hi!r}] of "
+                            f"the Mamdani output '{output.name}' is not low then high",
+                            "write the range low end first, and make it wider than a point")
+        for name, (code, row) in output.sets.items():
+            # a shoulder's infinite foot (a Ramp): the centroid integrates over the output
+            # range only, where the shoulder ending at the range's end has the same membership
+            if code == 0:
+                pa, pb, pc, pd = (lo if v == -math.inf else hi if v == math.inf else v
+                                  for v in row)
+                output.sets[name] = (0, (pa, pb, pc, pd))
+        mamdani = output.mamdani()
+        for command in output.commands:
+            command.value = mamdani.singleton(identifier(command.name))
 
     def read(self, text: str) -> ImportedController:
         for number_, raw in enumerate(text.splitlines(), start=1):
@@ -124,7 +265,7 @@ class _FllReader:
                 raise self.fail(number_, f"'{excerpt(line.strip())}' is not a 'key: value' "
                                 "line")
             self.entry(key, value.strip(), number_)
-        if not self.result.output_declared:
+        if not self.outputs:
             raise self.fail(1, "the engine has no OutputVariable")
         if self.blocks == 0:
             raise self.fail(1, "the engine has no RuleBlock")
@@ -152,7 +293,7 @@ class _FllReader:
             self.current = ImportedInput(value, line)
             self.result.inputs.append(self.current)
         elif key == "OutputVariable":
-            self.result.declare_output(value, line)
+            self.outputs.append(_Output(value, line))
         else:
             self.blocks += 1
             if self.blocks > 1:
@@ -183,7 +324,8 @@ class _FllReader:
             self.current.range = self.pair(value, line)
         elif key == "term":
             name, kind, params = self.term(value, line)
-            self.current.sets.append(ImportedSet(name, self.quad(kind, params, line), line))
+            values = [self.point(p, line, kind) for p in params]
+            self.current.sets.append(fuzzylite_set(name, kind, values, self.file, line))
         else:
             raise self.fail(line, f"'{key}' in an InputVariable")
 
@@ -192,38 +334,59 @@ class _FllReader:
         # and eq. 3 lies between the commands), but they must still say something valid.
         if self.common_entry(key, value, line):
             return
+        output = self.outputs[-1]
         if key in ("lock-range", "lock-previous"):
             self.boolean(key, value, line)
         elif key == "range":
-            self.pair(value, line)
+            output.range = self.pair(value, line)
+            output.range_line = line
         elif key == "default":
             if value.lower() not in ("nan", "-nan"):
                 parse_number(value, self.file, line, "default")
         elif key == "aggregation":
-            self.result.accumulation = (None if value.lower() == "none" else
-                                        Method(f"aggregation {value}", line,
-                                               "use aggregation: none"))
+            output.aggregation = (value, line)
         elif key == "defuzzifier":
-            words = value.split()
-            if not words or words[0] != "WeightedAverage" or any(
-                    w not in ("TakagiSugeno", "Automatic") for w in words[1:]):
-                raise self.fail(line, f"defuzzifier {value}: flctool's output is the weighted "
-                                "average of constant terms (eq. 3)",
-                                "use defuzzifier: WeightedAverage TakagiSugeno")
+            output.defuzzifier = (self.defuzzifier(value, line, output), line)
         elif key == "term":
             name, kind, params = self.term(value, line)
-            if kind not in ("Constant", "Linear"):
-                zero_order_constant(kind, [], 0, self.file, line, name)  # refuses it
-            numbers = [parse_number(p, self.file, line, f"term '{name}'") for p in params]
-            constant = zero_order_constant(kind, numbers, len(self.result.inputs), self.file,
-                                           line, name)
-            self.result.commands.append(ImportedCommand(name, constant, line))
+            if kind in ("Constant", "Linear"):
+                numbers = [parse_number(p, self.file, line, f"term '{name}'") for p in params]
+                constant = zero_order_constant(kind, numbers, len(self.result.inputs),
+                                               self.file, line, name)
+            else:  # a Mamdani output set: a singleton at its centroid, if converting
+                values = [self.point(p, line, kind) for p in params]
+                item = fuzzylite_set(name, kind, values, self.file, line)
+                output.sets[name] = set_row(item.shape_value())
+                output.set_line = output.set_line or line
+                constant = 0.0  # set by check_output
+            output.commands.append(ImportedCommand(name, constant, line))
         else:
             raise self.fail(line, f"'{key}' in an OutputVariable")
 
+    def defuzzifier(self, value: str, line: int, output: _Output) -> str:
+        """``weighted`` or ``centroid`` (and its resolution into ``output``)."""
+        words = value.split()
+        if words and words[0] == "WeightedAverage" and all(
+                w in ("TakagiSugeno", "Automatic") for w in words[1:]):
+            return "weighted"
+        if words and words[0] == "Centroid" and len(words) <= 2:
+            if len(words) == 2:
+                resolution = parse_number(words[1], self.file, line, "resolution")
+                if resolution != int(resolution) or not 1 <= resolution <= 100_000:
+                    raise self.fail(line, f"a Centroid resolution of {words[1]}",
+                                    "give a whole number of at most 100,000")
+                output.resolution = int(resolution)
+            return "centroid"
+        raise self.fail(line, f"defuzzifier {value}: flctool's output is the weighted "
+                        "average of constant terms (eq. 3); a Mamdani output's Centroid is "
+                        "converted on request", "use defuzzifier: WeightedAverage TakagiSugeno")
+
     def rule_block_entry(self, key: str, value: str, line: int) -> None:
-        if self.common_entry(key, value, line) or key in ("disjunction", "implication"):
-            return  # OR rules are refused one by one; implication is unused by Takagi-Sugeno
+        if key == "implication":
+            self.implication = (value, line)
+            return
+        if self.common_entry(key, value, line) or key == "disjunction":
+            return  # OR rules are refused one by one
         if key == "conjunction":
             self.result.conjunction = (None if value == "Minimum" else Method(
                 f"conjunction {value}", line, "use conjunction: Minimum"))
@@ -232,7 +395,7 @@ class _FllReader:
                 raise self.fail(line, f"activation {value}: flctool fires every rule",
                                 "use activation: General")
         elif key == "rule":
-            self.result.rules.append(self.rule(value, line))
+            self.rule(value, line)
         else:
             raise self.fail(line, f"'{key}' in a RuleBlock")
 
@@ -254,20 +417,13 @@ class _FllReader:
             raise self.fail(line, f"term '{value}' is not 'name Kind parameters'")
         return parts[0], parts[1], parts[2:]
 
-    def quad(self, kind: str, params: list[str], line: int) -> tuple[float, float, float, float]:
-        n = check_term_arity(kind, len(params), self.file, line)
-        if len(params) > n and parse_number(params[n], self.file, line, "height") != 1.0:
-            raise self.fail(line, f"a term of height {params[n]}: flctool's sets reach 1")
-        values = [self.point(p, line, kind) for p in params[:n]]
-        return fuzzylite_quad(kind, values, self.file, line)
-
     def point(self, text: str, line: int, kind: str) -> float:
         """A term's point: a number, or -inf / inf for a shoulder's foot."""
         if text.lower() in ("inf", "+inf", "-inf"):
             return float(text)
         return parse_number(text, self.file, line, kind)
 
-    def rule(self, text: str, line: int) -> ImportedRule:
+    def rule(self, text: str, line: int) -> None:
         words = text.split()
         if not words or words[0] != "if" or "then" not in words:
             raise self.fail(line, f"rule '{text}' is not 'if ... then ...'")
@@ -290,14 +446,17 @@ class _FllReader:
                 raise self.fail(line, f"a rule weight of {conclusion[at + 1]}: flctool's "
                                 "rules all weigh 1")
             conclusion = conclusion[:at]
-        clauses = _split(conclusion, "and")
-        if len(clauses) != 1:
-            raise self.fail(line, "a rule with several conclusions")
-        output, command = self.proposition(clauses[0], line, "conclusion")
-        if output != self.result.output_name:
-            raise self.fail(line, f"the rule concludes on '{output}', not on the output "
-                            f"'{self.result.output_name}'")
-        return ImportedRule(antecedent, command, line, text.strip())
+        conclusions: list[tuple[str, str]] = []
+        names = [o.name for o in self.outputs]
+        for clause in _split(conclusion, "and"):
+            output, command = self.proposition(clause, line, "conclusion")
+            if output not in names:
+                raise self.fail(line, f"the rule concludes on '{output}', which is not an "
+                                f"output ({', '.join(names)})")
+            if output in [name for name, _ in conclusions]:
+                raise self.fail(line, f"the rule concludes on '{output}' twice")
+            conclusions.append((output, command))
+        self.rules.append((antecedent, conclusions, line, text.strip()))
 
     def proposition(self, words: list[str], line: int, part: str) -> tuple[str, str]:
         if len(words) == 3 and words[1] == "is":

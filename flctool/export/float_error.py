@@ -18,6 +18,7 @@ from flctool.compile.defuzzify import centre_of_area
 from flctool.compile.membership import trapezoid
 from flctool.errors import ExportError
 from flctool.spec import Behaviour
+from flctool.spec.shapes import trapezoids
 
 #: The float export's documented bound, relative to max(1, largest |command|).
 FLOAT_BOUND = 1e-5
@@ -78,8 +79,9 @@ def near_vertical_edges(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     near = np.zeros(len(states), dtype=bool)
     for i, variable in enumerate(behaviour.inputs.values()):
         lo, hi = variable.range
-        edges = [pa for pa, pb, _, _ in variable.sets.values() if pa == pb and pa > lo]
-        edges += [pd for _, _, pc, pd in variable.sets.values() if pc == pd and pd < hi]
+        quads = trapezoids(variable.sets.values())  # (the float export refuses other shapes)
+        edges = [pa for pa, pb, _, _ in quads if pa == pb and pa > lo]
+        edges += [pd for _, _, pc, pd in quads if pc == pd and pd < hi]
         for edge in edges:
             width = 2 * float(np.spacing(F32(abs(edge)))) + abs(float(F32(edge)) - edge)
             near |= np.abs(states[:, i] - edge) <= width

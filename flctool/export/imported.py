@@ -17,7 +17,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from flctool.errors import ExportError, PathPart
+from flctool.export import shapes
 from flctool.spec import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
+from flctool.spec.shapes import ShapedSet, shape_problem, shaped
 from flctool.spec.yaml_source import SourceMap
 
 Quad = tuple[float, float, float, float]
@@ -25,12 +27,13 @@ Quad = tuple[float, float, float, float]
 
 #: What each format's importer reads, for refusals that have no more specific fix.
 SUBSET = {
-    "fll": "a Takagi-Sugeno engine: Trapezoid/Triangle/Rectangle/Ramp inputs, Constant "
-           "outputs, WeightedAverage, conjunction Minimum, plain 'and' rules",
-    "fcl": "singleton output terms with METHOD : COGS, trapezoid point lists or "
-           "Trapezoid/Triangle terms, AND : MIN, plain AND rules",
-    "fis": "Type='sugeno' with constant outputs, trapmf/trimf inputs, AndMethod='min', "
-           "DefuzzMethod='wtaver', AND rules of weight 1",
+    "fll": "a Takagi-Sugeno engine: Trapezoid/Triangle/Rectangle/Ramp/Gaussian/Bell/Sigmoid/"
+           "... inputs, Constant outputs, WeightedAverage, conjunction Minimum, plain 'and' "
+           "rules",
+    "fcl": "singleton output terms with METHOD : COGS, trapezoid point lists or fuzzylite "
+           "terms (Trapezoid, Triangle, Gaussian, ...), AND : MIN, plain AND rules",
+    "fis": "Type='sugeno' with constant outputs, trapmf/trimf/gaussmf/gbellmf/sigmf/... "
+           "inputs, AndMethod='min', DefuzzMethod='wtaver', AND rules of weight 1",
 }
 
 
@@ -53,11 +56,29 @@ def span(xs: Iterable[float]) -> tuple[float, float]:
 @dataclass
 class ImportedSet:
     """A set as read; an infinite shoulder (pa = pb = -inf, pc = pd = inf) reaches the end of
-    the input's range, where :func:`build_behaviour` puts it."""
+    the input's range, where :func:`build_behaviour` puts it. A set of another shape
+    (:mod:`flctool.spec.shapes`) has ``shape`` (its name and parameters in flctool's order)
+    and no meaningful ``quad``."""
 
     name: str
     quad: Quad
     line: int
+    shape: tuple[str, tuple[float, ...]] | None = None
+
+    def shape_value(self) -> Quad | ShapedSet:
+        """The set as the model holds it (a trapezoid's quadruple as read)."""
+        return shaped(*self.shape) if self.shape else self.quad
+
+
+def shaped_set(name: str, kind: str, params: tuple[float, ...], file: str, line: int
+               ) -> ImportedSet:
+    """A set of shape ``kind`` as read at ``line`` of ``file``, or the error saying what is
+    wrong with its parameters (given in flctool's order)."""
+    problem = shape_problem(kind, params)
+    if problem is not None:
+        raise unsupported(file, line, f"set '{name}': {problem}",
+                          "correct the parameters (the formulas: docs/behaviour-files.md)")
+    return ImportedSet(name, (0.0, 0.0, 0.0, 0.0), line, (kind, params))
 
 
 @dataclass
@@ -71,16 +92,24 @@ class ImportedInput:
         """The declared range, or the span of the sets when the format declares none."""
         if self.range is not None:
             return self.range
-        return span(v for s in self.sets for v in (s.quad[0], s.quad[3]))
+        return span(v for s in self.sets for v in (s.shape[1] if s.shape else
+                                                    (s.quad[0], s.quad[3])))
+
+    def resolved_sets(self, file: str) -> dict[str, Any]:
+        """Every set as a behaviour file writes it: a trapezoid's quadruple inside the range
+        (see :func:`inside_range`), or a shape's ``{name: [parameters]}``."""
+        quads = self.resolved_quads(file)
+        return {s.name: ({s.shape[0]: list(s.shape[1])} if s.shape else list(quads[s.name]))
+                for s in self.sets}
 
     def resolved_quads(self, file: str) -> dict[str, Quad]:
-        """Every set's quadruple inside the range (see :func:`inside_range`)."""
+        """Every trapezoid's quadruple inside the range (see :func:`inside_range`)."""
         lo, hi = self.resolved_range()
         if not lo < hi:  # checked first: every set would seem to lie outside a backwards range
             raise unsupported(file, self.line, f"input '{self.name}' has the range "
                               f"[{lo!r}, {hi!r}], whose low end is not below its high end",
                               "write the range low end first, and make it wider than a point")
-        return {s.name: inside_range(s, (lo, hi), file) for s in self.sets}
+        return {s.name: inside_range(s, (lo, hi), file) for s in self.sets if not s.shape}
 
 
 def inside_range(item: ImportedSet, span: tuple[float, float], file: str) -> Quad:
@@ -262,14 +291,33 @@ FUZZYLITE_TERMS = {"Trapezoid": 4, "Triangle": 3, "Rectangle": 2, "Ramp": 2}
 def check_term_arity(kind: str, count: int, file: str, line: int) -> int:
     """How many points a fuzzylite term ``kind`` takes (it may add a height); refuses the
     kinds and counts flctool cannot read."""
-    if kind not in FUZZYLITE_TERMS:
-        raise unsupported(file, line, f"a {kind} term: flctool's sets are trapezoids",
-                          "use Trapezoid, Triangle, Rectangle or Ramp terms")
-    n = FUZZYLITE_TERMS[kind]
+    n = FUZZYLITE_TERMS.get(kind) or shapes.arity(shapes.FUZZYLITE, kind)
+    if n is None:
+        known = ", ".join([*FUZZYLITE_TERMS, *(name for name, _ in shapes.FUZZYLITE.values())])
+        raise unsupported(file, line, f"a {kind} term: flctool's sets do not include it",
+                          f"use one of the terms {known}")
     if count not in (n, n + 1):
         raise unsupported(file, line, f"a {kind} takes {n} numbers (and an optional height)",
                           f"write {kind} followed by {n} numbers")
     return n
+
+
+def fuzzylite_set(name: str, kind: str, values: list[float], file: str, line: int
+                  ) -> ImportedSet:
+    """The set of fuzzylite's term ``kind`` with ``values`` (an optional height after its
+    parameters, which must be 1): a trapezoid, or a set of another shape."""
+    n = check_term_arity(kind, len(values), file, line)
+    if len(values) > n and values[n] != 1.0:
+        raise unsupported(file, line, f"the term '{name}' has height {values[n]!r}: flctool's "
+                          "sets reach 1 (eq. 2 takes memberships as they are)",
+                          "remove the height, or write it as 1")
+    found = shapes.read(shapes.FUZZYLITE, kind, values[:n])
+    if found is not None:
+        if not all(math.isfinite(v) for v in values[:n]):
+            raise unsupported(file, line, f"the {kind} term '{name}' has a parameter that is "
+                              "not a finite number", "write finite numbers")
+        return shaped_set(name, found[0], found[1], file, line)
+    return ImportedSet(name, fuzzylite_quad(kind, values[:n], file, line), line)
 
 
 def fuzzylite_quad(kind: str, values: list[float], file: str, line: int) -> Quad:
@@ -378,8 +426,8 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         marks[("inputs", variable.name)] = (variable.line, 1)
         for item in variable.sets:
             marks[("inputs", variable.name, "sets", item.name)] = (item.line, 1)
-        sets = {name: list(quad) for name, quad in variable.resolved_quads(file).items()}
-        data["inputs"][variable.name] = {"range": list(variable.resolved_range()), "sets": sets}
+        data["inputs"][variable.name] = {"range": list(variable.resolved_range()),
+                                         "sets": variable.resolved_sets(file)}
     for command in imported.commands:
         marks[("output", "commands", command.name)] = (command.line, 1)
     data["output"] = {"name": imported.output_name,

@@ -1,11 +1,13 @@
 """Mamdani outputs as singletons: a conversion done only on request, with its error measured.
 
-A Mamdani controller's output sets (triangles, trapezoids) are clipped at each rule's
-activation (implication by minimum), merged by maximum, and defuzzified by the centroid.
-flctool's commands are singletons (eq. 3). ``flctool import FILE --mamdani-singletons``
-replaces each output set by a singleton at its centroid, and measures how far the converted
-controller's output is from the Mamdani one on a grid of states: the report gives the largest
-difference, so the user decides whether the approximation is good enough.
+A Mamdani controller's output sets are implied by each rule's activation (clipped by the
+minimum, or scaled by the product), aggregated by the maximum (or the algebraic sum), and
+defuzzified by the centroid over ``resolution`` midpoints of the output range, as fuzzylite
+computes it. flctool's commands are singletons (eq. 3). ``flctool import FILE
+--mamdani-singletons`` replaces each output set by a singleton at its centroid, and measures
+how far the converted controller's output is from the Mamdani one on a dense grid of states:
+the report gives the largest difference, so the user decides whether the approximation is
+good enough.
 """
 
 from __future__ import annotations
@@ -16,12 +18,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from flctool.compile import compile_behaviour
-from flctool.compile.membership import trapezoid
+from flctool.compile.membership import memberships
 from flctool.spec import Behaviour
+from flctool.spec.shapes import set_row
 
 Quad = tuple[float, float, float, float]
-#: How many states the deviation is measured on (besides every range's ends and corners).
+#: How many random states the deviation is measured on (besides every range's ends, every
+#: set parameter inside a range, and a grid of GRID_POINTS per input across the ranges).
 STATES = 4_000
+GRID_POINTS = 41
+#: The implications and aggregations the measurement computes (fuzzylite's names).
+IMPLICATIONS = ("Minimum", "AlgebraicProduct")
+AGGREGATIONS = ("Maximum", "AlgebraicSum")
 
 
 def centroid(quad: Quad) -> float:
@@ -31,6 +39,64 @@ def centroid(quad: Quad) -> float:
     if denominator == 0:
         return a
     return ((c * c + c * d + d * d) - (a * a + a * b + b * b)) / denominator
+
+
+@dataclass(frozen=True)
+class MamdaniOutput:
+    """A Mamdani output as read: each command's set (shape code and row, as
+    :func:`flctool.spec.shapes.set_row` gives them), the output range, the centroid's
+    resolution, the implication and the aggregation."""
+
+    sets: Mapping[str, tuple[int, Quad]]
+    range: tuple[float, float]
+    resolution: int
+    implication: str = "Minimum"
+    aggregation: str = "Maximum"
+
+    def midpoints(self) -> np.ndarray:
+        lo, hi = self.range
+        dx = (hi - lo) / self.resolution
+        return np.asarray(lo + (np.arange(self.resolution) + 0.5) * dx, dtype=np.float64)
+
+    def singleton(self, name: str) -> float:
+        """The singleton replacing set ``name``: a trapezoid's centroid, or, for another
+        shape, its centroid over the midpoints of the output range (as fuzzylite computes a
+        centroid); a set with no area there keeps its parameters' mean."""
+        code, row = self.sets[name]
+        if code == 0:
+            return centroid(row)
+        y = self.midpoints()
+        mu = memberships(y, np.array([row]), [code])[:, 0]
+        area = float(mu.sum())
+        return float(mu @ y) / area if area > 0 else float(np.mean(row))
+
+
+def mamdani_outputs(behaviour: Behaviour, output: MamdaniOutput, states: np.ndarray
+                    ) -> np.ndarray:
+    """(S,) the Mamdani output for (S, N) ``states``: each rule's activation (eq. 2) implies
+    its command's set, the implied sets aggregate, and the output is their centroid over
+    the midpoints of the output range (as fuzzylite computes it); NaN where no rule fires."""
+    controller = compile_behaviour(behaviour)
+    alpha = controller.activations(states)  # (S, M)
+    assert controller.consequents is not None  # measured for complete rule bases only
+    names = list(behaviour.output.commands)
+    y = output.midpoints()
+    rows = np.array([output.sets[n][1] for n in names], dtype=np.float64)
+    shapes = memberships(y, rows, [output.sets[n][0] for n in names])  # (Y, K)
+    result = np.empty(len(states))
+    chunk = max(1, 2_000_000 // max(1, len(y) * controller.n_rules))
+    for start in range(0, len(states), chunk):
+        a = alpha[start:start + chunk]
+        merged = np.zeros((len(a), len(y)))
+        for m in np.flatnonzero(a.any(axis=0)):  # rules in order; one that never fires adds 0
+            mu = shapes[:, controller.consequents[m]][None, :]
+            implied = (np.minimum(a[:, m, None], mu) if output.implication == "Minimum"
+                       else a[:, m, None] * mu)
+            merged = (np.maximum(merged, implied) if output.aggregation == "Maximum"
+                      else merged + implied - merged * implied)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            result[start:start + chunk] = (merged @ y) / merged.sum(axis=1)
+    return result
 
 
 @dataclass(frozen=True)
@@ -51,46 +117,45 @@ class Conversion:
                 f"measured on {self.states} states")
 
 
-def mamdani_outputs(behaviour: Behaviour, sets: Mapping[str, Quad], states: np.ndarray,
-                    output_range: tuple[float, float], resolution: int) -> np.ndarray:
-    """(S,) the Mamdani output for (S, N) ``states``: each rule's activation (eq. 2) clips
-    its command's set, the clipped sets merge by maximum, and the output is their centroid
-    over ``resolution`` midpoints of ``output_range`` (as fuzzylite computes it)."""
-    controller = compile_behaviour(behaviour)
-    alpha = controller.activations(states)  # (S, M)
-    assert controller.consequents is not None
-    names = list(behaviour.output.commands)
-    lo, hi = output_range
-    dx = (hi - lo) / resolution
-    y = np.asarray(lo + (np.arange(resolution) + 0.5) * dx, dtype=np.float64)
-    strength = np.zeros((len(states), len(names)))
-    for k in range(len(names)):  # the strongest rule of each command: max aggregation
-        rules = controller.consequents == k
-        if rules.any():
-            strength[:, k] = alpha[:, rules].max(axis=1)
-    shapes = trapezoid(y, np.array([sets[n] for n in names], dtype=np.float64))
-    shapes = np.asarray(shapes).reshape(len(y), len(names))  # (Y, K)
-    merged = np.max(np.minimum(strength[:, None, :], shapes[None, :, :]), axis=2)  # (S, Y)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        result: np.ndarray = (merged @ y) / merged.sum(axis=1)
-    return result
-
-
-def measure(behaviour: Behaviour, sets: Mapping[str, Quad], output_range: tuple[float, float],
-            resolution: int) -> Conversion:
-    """The converted controller against the Mamdani one, on random states in the ranges
-    (seed 0) and on every range end and set corner."""
+def measurement_states(behaviour: Behaviour) -> np.ndarray:
+    """The states the deviation is measured on: random ones in the ranges (seed 0), every
+    range end and set parameter inside a range, and a grid across the ranges."""
     rng = np.random.default_rng(0)
     columns = []
     for variable in behaviour.inputs.values():
         lo, hi = variable.range
-        corners = np.array([lo, hi, *(x for q in variable.sets.values() for x in q)])
+        special = [lo, hi, *(x for q in variable.sets.values() for x in set_row(q)[1]
+                             if lo <= x <= hi), *np.linspace(lo, hi, GRID_POINTS)]
         column = rng.uniform(lo, hi, STATES)
-        column[: len(corners)] = corners
+        picks = rng.random(STATES) < 0.25  # a quarter of each input's values on them
+        column[picks] = rng.choice(np.array(special), int(picks.sum()))
+        column[: len(special)] = special
         columns.append(column)
-    states = np.column_stack(columns)
-    want = mamdani_outputs(behaviour, sets, states, output_range, resolution)
+    return np.column_stack(columns)
+
+
+def measure(behaviour: Behaviour, output: MamdaniOutput) -> Conversion:
+    """The converted controller against the Mamdani one (:func:`measurement_states`)."""
+    states = measurement_states(behaviour)
+    want = mamdani_outputs(behaviour, output, states)
     got = compile_behaviour(behaviour).output(states)
     finite = np.isfinite(want)
     deviation = float(np.max(np.abs(got[finite] - want[finite]))) if finite.any() else 0.0
-    return Conversion(deviation, len(states), output_range[1] - output_range[0], resolution)
+    lo, hi = output.range
+    return Conversion(deviation, len(states), hi - lo, output.resolution)
+
+
+#: The fix offered when a Mamdani output is imported without the conversion.
+MAMDANI_HINT = ("import with --mamdani-singletons to replace each output set by a singleton "
+                "at its centroid: an approximation, whose largest error the import measures "
+                "and reports")
+
+
+def mamdani_report(behaviour: Behaviour, output: MamdaniOutput) -> str:
+    """What converting ``output`` changed: measured where the rules are complete (else the
+    converted controller has no output to compare everywhere)."""
+    if behaviour.is_deployable:
+        return measure(behaviour, output).report()
+    return ("Mamdani output sets replaced by singletons at their centroids; the difference "
+            "is not measured, since the rules do not give every combination of sets a "
+            "command")

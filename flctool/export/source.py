@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from flctool.errors import ExportError
+from flctool.inputs import no_such_file
 from flctool.spec import Behaviour, load_behaviour
 
 
@@ -20,8 +21,7 @@ def load_source(path: str | Path, generation: int | None = None,
     if path.is_dir():
         return _from_run(path, generation, individual)
     if not path.exists():
-        raise ExportError(f"{path}: no such file or directory",
-                          hint="give a behaviour file or a run directory")
+        raise no_such_file(path, "behaviour file or run directory")
     if generation is not None or individual is not None:
         raise ExportError(f"{path} is a behaviour file; --generation and --individual pick a "
                           "controller of a run directory", hint="leave them out")

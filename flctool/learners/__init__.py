@@ -11,7 +11,7 @@ from flctool.envs.base import BatchEnv
 from flctool.learners.base import GenerationResult, Learner, train
 from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback, StopAtFitness
 from flctool.learners.metrics import GenerationMetrics
-from flctool.plugins import registry
+from flctool.plugins import blamed, registry
 from flctool.registry import Registry
 from flctool.rollout import TRAIN_SEED_LOW
 from flctool.spec.located import located
@@ -31,7 +31,8 @@ def make_learner(behaviour: Behaviour, env: BatchEnv | None = None) -> Learner:
 
         env = make_env(behaviour, 1)
     try:
-        with located(behaviour):  # the learner's checks name fields; this adds file and line
+        # the learner's checks name fields; located adds file and line
+        with located(behaviour), blamed("learner", behaviour.learning.learner):
             return learner_class(behaviour, env)
     except BaseException:
         if built:

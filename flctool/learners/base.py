@@ -20,6 +20,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -27,14 +28,17 @@ from numpy.typing import NDArray
 
 from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
-from flctool.errors import LearnError
+from flctool.errors import LearnError, Problem, SpecError
+from flctool.learners.baselines import BaselineCheck
 from flctool.learners.budget import Budget, Usage
 from flctool.learners.callbacks import Callback, CallbackList, RunCallback
 from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
+from flctool.learners.confirmation import Confirmation
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate, ModelSelection
 from flctool.learners.trial import SparseRules
 from flctool.rollout import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
+from flctool.sets.codec import SetCodec
 from flctool.spec.learning import LearningConfig
 from flctool.spec.models import Behaviour
 from flctool.spec.rule_order import rule_index
@@ -102,17 +106,43 @@ class Learner(ABC):
         self.population: IntArray = np.zeros((1, self.controller.n_rules), dtype=np.intp)
         self.fitness: FloatArray = np.zeros(1)
         self.fixed_rules, self.fixed_commands = fixed_consequents(behaviour)
+        #: The set codec when the run learns the sets too (``learning.sets``), and each
+        #: controller's set genome (P, G) beside ``population``; None otherwise.
+        self.codec = SetCodec(behaviour) if learning.sets is not None else None
+        self.set_genes: FloatArray | None = None
+        self._set_rules: dict[bytes, SparseRules] = {}
         #: Episodes and steps the run has spent, training and selection apart.
         self.usage = Usage()
-        self.selection = ModelSelection(self.config.selection, self.config.seed, self.usage,
-                                        self.config.stop.episodes, self.rank_by)
-        self.budget = Budget(self.config.stop, self.selection, self.usage)
+        config = self.config
+        limit = config.stop.episodes
+        self.confirmation = Confirmation(config.selection.confirmation, config.seed,
+                                         self.usage, limit)
+        #: The end-of-run comparison with baselines; hand-made tables go in its ``given``.
+        self.baseline_check = BaselineCheck(self.confirmation, self.usage, config.seed)
+        self.confirmation.after = partial(self.baseline_check.episodes_needed,
+                                          self.controller.n_commands)
+        # selection leaves room, within stop.episodes, for what the end of the run needs
+        self.selection = ModelSelection(config.selection, config.seed, self.usage, limit,
+                                        self.rank_by, reserve=self.episodes_at_end)
+        self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
+                             reserve=self.episodes_at_end)
+        check_target(behaviour, env)
+
+    def episodes_at_end(self) -> int:
+        """The episodes the end of the run takes after selection: the confirmation and the
+        comparison with baselines."""
+        confirming = self.confirmation.episodes
+        if confirming < 2:
+            return confirming
+        return confirming + self.baseline_check.episodes_needed(self.controller.n_commands,
+                                                                 confirming)
 
     @property
     def run_callbacks(self) -> list[RunCallback]:
         """The parts of the run that act between generations, in order: model selection,
-        then the budget (which looks at what selection chose)."""
-        return [self.selection, self.budget]
+        the budget (which looks at what selection chose, and may have it confirmed), the
+        confirmation of the controller the run returns, and its comparison with baselines."""
+        return [self.selection, self.budget, self.confirmation, self.baseline_check]
 
     @property
     def stop_reason(self) -> str | None:
@@ -179,6 +209,41 @@ class Learner(ABC):
             self.fuzzy_q.load_state_dict({"q": table.tolist(),
                                           "traces": np.zeros_like(table).tolist()})
 
+    # -- learned sets ----------------------------------------------------------------------
+    def rules_for(self, genes: FloatArray | None) -> SparseRules:
+        """The rule base with the sets of the set genome ``genes (G,)`` (decoded and
+        validated as a file is), or the file's sets for None."""
+        if genes is None or self.codec is None:
+            return self.rules
+        key = np.asarray(genes, dtype=np.float64).tobytes()
+        rules = self._set_rules.get(key)
+        if rules is None:
+            if len(self._set_rules) >= _SET_RULES_KEPT:
+                self._set_rules.clear()
+            rules = SparseRules.from_behaviour(self.codec.decode(np.asarray(genes).tolist()))
+            self._set_rules[key] = rules
+        return rules
+
+    def rules_of(self, candidate: Candidate) -> SparseRules:
+        """The rule base a candidate acts with: its own sets, if the run learns them."""
+        return self.rules_for(candidate.sets)
+
+    def population_rules(self) -> list[SparseRules]:
+        """The rule base of each controller of the population (P,)."""
+        if self.set_genes is None:
+            return [self.rules] * self.population.shape[0]
+        return [self.rules_for(genes) for genes in self.set_genes]
+
+    def selected_sets(self) -> FloatArray | None:
+        """The set genome (G,) of the controller :meth:`selected` returns (None: the file's
+        sets)."""
+        best = self.selection.best
+        if best is not None:
+            return best.sets
+        if self.set_genes is None:
+            return None
+        return np.array(self.set_genes[int(np.argmax(self.fitness))])
+
     # -- shared helpers ------------------------------------------------------------------
     def keep_fixed(self, population: IntArray) -> IntArray:
         """``population (P, M)`` with the rules the file gives set to their commands (in
@@ -216,7 +281,9 @@ class Learner(ABC):
         """The last generation's elites (at least its best) as hall-of-fame candidates."""
         count = self.elite_count() if self.population.shape[0] > 1 else 1
         order = np.argsort(-self.fitness, kind="stable")[:count]
-        found = [self.selection.candidate_for(self.population[i]) for i in order]
+        found = [self.selection.candidate_for(
+            self.population[i], None if self.set_genes is None else self.set_genes[i])
+            for i in order]
         return [c for c in found if c is not None]
 
     def best(self) -> tuple[int, IntArray, float]:
@@ -251,6 +318,7 @@ class Learner(ABC):
             "rng": {name: rng.bit_generator.state for name, rng in self.rngs.items()},
             "selection": self.run_callbacks_state(),
             **self.extra_state(),
+            **({} if self.set_genes is None else {"set_genes": self.set_genes.tolist()}),
         }
 
     def run_callbacks_state(self) -> dict[str, Any]:
@@ -263,8 +331,32 @@ class Learner(ABC):
     def selection_record(self) -> dict[str, Any]:
         """What run.json shows of selection and spending: the validated candidates, the
         best, the episodes and steps of training and of selection, why the run stopped."""
-        return {**self.selection.record(), "usage": self.usage.to_dict(),
-                "stop_reason": self.stop_reason}
+        record = {**self.selection.record(), "usage": self.usage.to_dict(),
+                  "stop_reason": self.stop_reason,
+                  "confirmation": self.confirmation.record(),
+                  "baseline": self.baseline_check.record()}
+        genes = self.selected_sets()
+        if self.codec is not None and genes is not None:
+            record["sets"] = self.sets_record(genes)
+        return record
+
+    @property
+    def learned(self) -> bool | None:
+        """Whether the run's controller is clearly better than every baseline (None: the
+        run has not ended, or had nothing confirmed to compare)."""
+        verdict = self.baseline_check.verdict
+        return None if verdict is None else verdict.learned
+
+    def sets_record(self, genes: FloatArray) -> dict[str, Any]:
+        """What run.json shows of the returned controller's learned sets: the interpretability
+        measures of each learned input (coverage, neighbour overlap, each set's movement)."""
+        from flctool.sets.measures import interpretability
+
+        assert self.codec is not None
+        learned = self.codec.decode(np.asarray(genes).tolist())
+        return {"genes": np.asarray(genes).tolist(),
+                "inputs": interpretability(self.behaviour, learned,
+                                           [c.name for c in self.codec.inputs])}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`state_dict` saved; :class:`LearnError` (and the learner left
@@ -273,15 +365,45 @@ class Learner(ABC):
         controller = self.controller
         checkpoint = read_checkpoint(state, Expected(
             controller.n_rules, controller.n_commands, learner=self.name,
-            max_population=self.config.population, strengths=self.uses_strengths))
+            max_population=self.config.population, strengths=self.uses_strengths,
+            set_genes=0 if self.codec is None else self.codec.size))
         for name, generator in self.rngs.items():
             generator.bit_generator.state = checkpoint.rng[name]
         if checkpoint.selection is not None:  # None: a checkpoint of a run without one
             self.selection.restore(checkpoint.selection)
             self.budget.restore(checkpoint.selection)
+            self.confirmation.restore(checkpoint.selection.confirmations)
+            self.baseline_check.restore(checkpoint.selection.baselines,
+                                        checkpoint.selection.verdict)
         self.generation, self.elapsed = checkpoint.generation, checkpoint.elapsed
         self.population, self.fitness = checkpoint.population, checkpoint.fitness
+        self.set_genes = checkpoint.set_genes
         self.load_extra_state(state)
+
+
+def check_target(behaviour: Behaviour, env: BatchEnv) -> None:
+    """A ``stop.target`` the run can reach: a fitness within the environment's possible
+    range, a success rate only where the environment defines success; a located error
+    otherwise."""
+    target = behaviour.learning.stop.target_in_units()
+    if target is None:
+        return
+    path = ("learning", "stop", "target")
+    low, high = env.fitness_range
+    if target.unit == "fitness" and not low <= target.value <= high:
+        raise SpecError([Problem(path, f"a target mean fitness of {target.value:g} is outside "
+                                 f"the fitness this environment can give, [{low:g}, {high:g}]",
+                                 "give a fitness within it, or the target in the units you "
+                                 "mean: {success: 0.95} or {return: 475}")])
+    if target.unit == "success" and getattr(behaviour.environment, "success",
+                                            "terminated") == "never":
+        raise SpecError([Problem(path, "a success target, but the environment defines no "
+                                 "success (success: never)",
+                                 "give the target as {return: ...} or {fitness: ...}")])
+
+
+#: Rule bases of set genomes kept decoded (a generation's and its elites' fit many times).
+_SET_RULES_KEPT = 1024
 
 
 def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:
@@ -326,7 +448,8 @@ def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[Generati
 
         generation = learner.generation + 1
         while not learner.finished:
-            selection_before = usage.selection_episodes, usage.selection_steps
+            spent = (usage.selection_episodes, usage.selection_steps,
+                     usage.confirmation_episodes, usage.confirmation_steps)
             if generation > 0:
                 learner.advance()
             result = learner.evaluate(generation)
@@ -343,9 +466,9 @@ def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[Generati
             best = learner.selection.best
             metrics = GenerationMetrics.from_fitness(
                 generation, result.fitness, result.episodes, result.steps, learner.elapsed,
-                usage.selection_episodes - selection_before[0],
-                usage.selection_steps - selection_before[1],
-                best.validation_value() if best else float("nan"))
+                usage.selection_episodes - spent[0], usage.selection_steps - spent[1],
+                best.validation_value() if best else float("nan"),
+                usage.confirmation_episodes - spent[2], usage.confirmation_steps - spent[3])
             history.append(metrics)
             generation += 1
             if not callback.on_generation(metrics):

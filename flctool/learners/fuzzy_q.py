@@ -32,6 +32,9 @@ from numpy.typing import NDArray
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.base import GenerationResult, Learner
+from flctool.learners.checkpoint import damaged
+from flctool.learners.ga import GeneticAlgorithm
+from flctool.learners.set_genes import SetOperators, initial_set_genes
 from flctool.learners.trial import add_in_order, run_trial
 from flctool.spec.learning import FuzzyQConfig, QConfig
 from flctool.spec.models import Behaviour
@@ -222,6 +225,14 @@ class FuzzyQLearner(Learner):
     generation's mean episode fitness, measured while exploring, so the hall of fame ranks
     the greedy controllers by recency and model selection validates them. Rules the file
     gives always fire their given command: they are never explored.
+
+    With ``learning.sets`` the q table is paired with an outer search over the sets, because
+    q values belong to rules, not to positions: a generation is ``population`` set genomes,
+    each acting in ``trials`` exploring episodes that all teach the one shared q table; a
+    set genome's fitness is the mean of its episodes, and between generations the genomes
+    are bred by the genetic learners' GA (one elite, crossover probability 0.2, the set
+    operators of :mod:`flctool.learners.set_genes`). The learned controller is the greedy one
+    with the generation's best set genome. A generation costs what it does without sets.
     """
 
     name: ClassVar[str] = "fuzzy_q"
@@ -236,6 +247,18 @@ class FuzzyQLearner(Learner):
         self.fixed = dict(zip(self.fixed_rules.tolist(), self.fixed_commands.tolist(),
                               strict=True))
         self.population = self.greedy()
+        # Learning the sets too: a GA over set genomes whose every trial is a fuzzy
+        # Q-learning episode (see the class docstring).
+        self.set_operators: SetOperators | None = None
+        self.set_population: FloatArray | None = None
+        self.set_fitness: FloatArray | None = None
+        sets = self.config.sets
+        if self.codec is not None and sets is not None:
+            self.set_operators = SetOperators(self.codec.slices, sets.mutation, sets.sigma)
+            self.set_population = initial_set_genes(self.rngs["ga"], self.config.population,
+                                                    self.codec.size, sets.sigma)
+            self.set_fitness = np.zeros(self.config.population)
+            self.set_genes = self.set_population[:1].copy()
 
     def start_from(self, population: NDArray[np.intp] | None = None,
                    strengths: FloatArray | None = None) -> None:
@@ -276,13 +299,69 @@ class FuzzyQLearner(Learner):
         returns = np.empty(episodes)
         lengths = np.empty(episodes, dtype=np.int64)
         success = np.empty(episodes, dtype=np.bool_)
+        trials = self.config.trials
         for i, seed in enumerate(seeds):
-            trial = run_trial(self.env, self.rules, seed, None, chooser=chooser, td=self.fuzzy_q)
+            # with learned sets, set genome i // trials acts in its trials
+            rules = (self.rules if self.set_population is None
+                     else self.rules_for(self.set_population[i // trials]))
+            trial = run_trial(self.env, rules, seed, None, chooser=chooser, td=self.fuzzy_q)
             returns[i], lengths[i], success[i] = trial.ret, trial.length, trial.success
         fitness = self.env.episode_fitness(returns, lengths, success)
         self.population = self.greedy()
         self.fitness = np.array([float(np.mean(fitness))])
+        if self.set_population is not None:
+            self.set_fitness = fitness.reshape(-1, trials).mean(axis=1)
+            best = int(np.argmax(self.set_fitness))
+            self.set_genes = self.set_population[best : best + 1].copy()
         return GenerationResult(fitness, episodes, int(lengths.sum()))
 
     def advance(self) -> None:
-        """Nothing to breed; the exploration schedule follows the generation number."""
+        """Breed the set genomes, if the run learns the sets; the exploration schedule
+        follows the generation number."""
+        if self.set_population is None or self.set_fitness is None:
+            return
+        # The GA of the genetic learners on set genomes alone (no consequents to breed).
+        none = np.zeros((self.set_population.shape[0], 0), dtype=np.intp)
+        _, genes = GeneticAlgorithm(SET_CROSSOVER, SET_ELITES).breed_genomes(
+            self.rngs["ga"], none, self.set_fitness, _unchanged, _unchanged_child,
+            self.set_population, self.set_operators)
+        assert genes is not None
+        self.set_population = genes
+
+    def extra_state(self) -> dict[str, Any]:
+        state = super().extra_state()
+        if self.set_population is not None and self.set_fitness is not None:
+            state["set_population"] = self.set_population.tolist()
+            state["set_fitness"] = self.set_fitness.tolist()
+        return state
+
+    def load_extra_state(self, state: dict[str, Any]) -> None:
+        super().load_extra_state(state)
+        if self.set_population is None:
+            return
+        shape = self.set_population.shape
+        try:
+            genes = np.array(state["set_population"], dtype=np.float64)
+            fitness = np.array(state["set_fitness"], dtype=np.float64)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise damaged(f"has no readable set population ({exc!r})") from None
+        if genes.shape != shape or fitness.shape != shape[:1] or not (
+                np.isfinite(genes).all() and np.isfinite(fitness).all()) or (
+                genes.size and not (genes.min() >= -1.0 and genes.max() <= 1.0)):
+            raise damaged(f"is damaged: its set population is not {shape[0]} x {shape[1]} "
+                          "genes in [-1, 1] with a finite fitness each")
+        self.set_population, self.set_fitness = genes, fitness
+
+
+#: The set genomes' GA under fuzzy_q (paper Sec. IV's crossover probability and one elite).
+SET_CROSSOVER = 0.2
+SET_ELITES = 1
+
+
+def _unchanged(rng: np.random.Generator, a: NDArray[np.intp], b: NDArray[np.intp],
+               ) -> NDArray[np.intp]:
+    return a
+
+
+def _unchanged_child(rng: np.random.Generator, child: NDArray[np.intp]) -> NDArray[np.intp]:
+    return child

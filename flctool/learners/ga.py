@@ -22,13 +22,14 @@ Choices the paper leaves open, made here:
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.envs.base import BatchEnv
+from flctool.learners.set_genes import SetOperators
 from flctool.learners.trial import SparseRules, TemporalDifference, run_trial
 
 FloatArray = NDArray[np.float64]
@@ -137,6 +138,15 @@ class GeneticAlgorithm:
     def breed(self, rng: np.random.Generator, population: IntArray, fitness: FloatArray,
               crossover: Crossover, mutation: Mutation) -> IntArray:
         """The next population (P, M) from this one and its fitness (P,)."""
+        return self.breed_genomes(rng, population, fitness, crossover, mutation)[0]
+
+    def breed_genomes(self, rng: np.random.Generator, population: IntArray,
+                      fitness: FloatArray, crossover: Crossover, mutation: Mutation,
+                      set_genes: FloatArray | None = None, set_operators: SetOperators | None
+                      = None) -> tuple[IntArray, FloatArray | None]:
+        """The next population (P, M), and with ``set_genes (P, G)`` the next set genomes:
+        a child's set genes come from the same parents as its consequents, crossed when they
+        cross, mutated after them (:mod:`flctool.learners.set_genes`)."""
         size = population.shape[0]
         elites = elite_indices(fitness, min(self.elites, size))
         children = size - len(elites)
@@ -145,22 +155,33 @@ class GeneticAlgorithm:
         crossing = rng.random(children) < self.crossover_rate
         nxt = np.empty_like(population)
         nxt[: len(elites)] = population[elites]
+        genes = None if set_genes is None or set_operators is None else set_genes
+        nxt_genes = None if genes is None else np.empty_like(genes)
+        if nxt_genes is not None and genes is not None:
+            nxt_genes[: len(elites)] = genes[elites]
         for slot in range(children):
             child = population[parents[slot]]
             if crossing[slot]:
                 child = crossover(rng, child, population[mates[slot]])
             nxt[len(elites) + slot] = mutation(rng, child)
-        return nxt
+            if nxt_genes is not None and genes is not None and set_operators is not None:
+                child_genes = genes[parents[slot]]
+                if crossing[slot]:
+                    child_genes = set_operators.crossover(rng, child_genes, genes[mates[slot]])
+                nxt_genes[len(elites) + slot] = set_operators.mutation(rng, child_genes)
+        return nxt, nxt_genes
 
 
-def evaluate_population(env: BatchEnv, rules: SparseRules, population: IntArray,
-                        seeds: NDArray[np.int64], td: TemporalDifference | None = None,
-                        ) -> tuple[FloatArray, int]:
+def evaluate_population(env: BatchEnv, rules: SparseRules | Sequence[SparseRules],
+                        population: IntArray, seeds: NDArray[np.int64],
+                        td: TemporalDifference | None = None) -> tuple[FloatArray, int]:
     """Fitness (P,) of each individual, the mean over its trials, and the steps taken.
 
     ``seeds (P, T)`` start individual p's trial t. Trials run one after the other -- with
-    ``td`` (the hybrid) the q table learns from each before the next begins.
+    ``td`` (the hybrid) the q table learns from each before the next begins. ``rules`` is
+    the rule base of all, or each individual's (P,) when the run learns the sets.
     """
+    each = [rules] * population.shape[0] if isinstance(rules, SparseRules) else rules
     size, trials = seeds.shape
     returns = np.empty(size * trials)
     lengths = np.empty(size * trials, dtype=np.int64)
@@ -168,7 +189,7 @@ def evaluate_population(env: BatchEnv, rules: SparseRules, population: IntArray,
     for p in range(size):
         consequents = population[p].tolist()
         for t in range(trials):
-            trial = run_trial(env, rules, int(seeds[p, t]), consequents, td=td)
+            trial = run_trial(env, each[p], int(seeds[p, t]), consequents, td=td)
             i = p * trials + t
             returns[i], lengths[i], success[i] = trial.ret, trial.length, trial.success
     fitness = env.episode_fitness(returns, lengths, success).reshape(size, trials)

@@ -35,6 +35,7 @@ training ones.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -45,7 +46,7 @@ from flctool.envs.base import BatchEnv
 from flctool.learners.budget import Usage
 from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import SparseRules, Trial, run_trial
-from flctool.rollout import Estimate, mean_interval
+from flctool.rollout import Estimate, clip_estimate, mean_interval
 from flctool.spec.learning import SelectionConfig
 
 if TYPE_CHECKING:
@@ -54,6 +55,8 @@ if TYPE_CHECKING:
 
 IntArray = NDArray[np.intp]
 FloatArray = NDArray[np.float64]
+#: A rule base, or what gives each candidate's (its own sets when a run learns them).
+RulesOf = SparseRules | Callable[["Candidate"], SparseRules]
 
 VALIDATION_SEED_LOW = 2**62
 VALIDATION_SEED_HIGH = 2**63 - 1
@@ -91,6 +94,12 @@ class Candidate:
     trials: int = 0
     validation: Estimate | None = None  # mean fitness over the validation episodes
     validated_at: int = -1  # generation after which it was validated
+    #: Its set genome (G,) when the run learns the sets too (``learning.sets``), else None.
+    sets: FloatArray | None = None
+    #: Its success rate and mean return on the validation episodes (None: not validated, or
+    #: by a version that did not record them).
+    validation_success: float | None = None
+    validation_return: float | None = None
 
     @property
     def fitness(self) -> float:
@@ -98,7 +107,7 @@ class Candidate:
         return self.fitness_sum / self.trials if self.trials else math.nan
 
     def key(self) -> bytes:
-        return _key(self.consequents)
+        return _key(self.consequents, self.sets)
 
     def validation_value(self) -> float:
         """The validated mean fitness; -inf before validation."""
@@ -109,26 +118,44 @@ class Candidate:
                 "individual": self.individual, "fitness_sum": self.fitness_sum,
                 "trials": self.trials, "validated_at": self.validated_at,
                 "validation": None if self.validation is None else _estimate_dict(
-                    self.validation)}
+                    self.validation),
+                "validation_success": self.validation_success,
+                "validation_return": self.validation_return,
+                **({} if self.sets is None else {"sets": self.sets.tolist()})}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Candidate:
         validation = data["validation"]
+        success, mean_return = data.get("validation_success"), data.get("validation_return")
         return cls(np.array(data["consequents"], dtype=np.intp), int(data["generation"]),
                    int(data["individual"]), float(data["fitness_sum"]), int(data["trials"]),
                    None if validation is None else _estimate(validation),
-                   int(data["validated_at"]))
+                   int(data["validated_at"]),
+                   None if data.get("sets") is None else np.array(data["sets"],
+                                                                  dtype=np.float64),
+                   None if success is None else float(success),
+                   None if mean_return is None else float(mean_return))
+
+    def validation_in(self, unit: str) -> float:
+        """The validated figure in ``unit`` (``fitness``, ``success`` or ``return``); -inf
+        if it was not measured."""
+        value = {"fitness": None if self.validation is None else self.validation.value,
+                 "success": self.validation_success, "return": self.validation_return}[unit]
+        return -math.inf if value is None else value
 
     def record(self) -> dict[str, Any]:
         """What run.json shows of a candidate: where it came from, training and validation."""
         return {"generation": self.generation, "individual": self.individual,
                 "training_fitness": self.fitness, "training_trials": self.trials,
                 "validation": None if self.validation is None
-                else self.validation.to_dict()}
+                else self.validation.to_dict(),
+                "validation_success": self.validation_success,
+                "validation_return": self.validation_return}
 
 
-def _key(consequents: IntArray) -> bytes:
-    return np.asarray(consequents, dtype=np.int64).tobytes()
+def _key(consequents: IntArray, sets: FloatArray | None = None) -> bytes:
+    key = np.asarray(consequents, dtype=np.int64).tobytes()
+    return key if sets is None else key + np.asarray(sets, dtype=np.float64).tobytes()
 
 
 def _estimate_dict(estimate: Estimate) -> list[float | int]:
@@ -158,12 +185,15 @@ class ModelSelection(RunCallback):
     ``rank_by`` is ``"fitness"`` (GAs: mean training fitness) or ``"recency"`` (fuzzy_q: the
     latest greedy controllers first, because its training fitness is measured while
     exploring and says little about the greedy controller). Validation episodes are added to
-    ``usage``, and never taken beyond ``episode_limit`` (``stop.episodes``).
+    ``usage``, and never taken beyond ``episode_limit`` (``stop.episodes``) less ``reserve()``,
+    what the end of the run needs after selection (confirmation, baselines).
     """
 
     def __init__(self, config: SelectionConfig, run_seed: int, usage: Usage,
-                 episode_limit: int | None = None, rank_by: str = "fitness") -> None:
+                 episode_limit: int | None = None, rank_by: str = "fitness",
+                 reserve: Callable[[], int] = lambda: 0) -> None:
         self.config = config
+        self.reserve = reserve  # episodes the end of the run needs after selection
         self.run_seed = run_seed
         self.usage = usage
         self.episode_limit = episode_limit
@@ -173,7 +203,8 @@ class ModelSelection(RunCallback):
         self.finalized = False
         self.validated: list[dict[str, Any]] = []  # every validation, in order
         self.seeds = validation_seeds(run_seed, config.episodes)
-        self._known: dict[int, list[_KnownEpisode]] = {}  # by validation seed
+        # by validation seed and set genome (other sets: other episodes)
+        self._known: dict[tuple[int, bytes], list[_KnownEpisode]] = {}
 
     @property
     def enabled(self) -> bool:
@@ -183,13 +214,13 @@ class ModelSelection(RunCallback):
     def on_trials(self, learner: Learner, result: GenerationResult) -> None:
         """Offer the generation to the hall of fame, and validate its leader."""
         del result
-        self.offer(learner.population, learner.fitness, learner.generation)
-        self.validate_leader(learner.rules, learner.env, learner.generation)
+        self.offer(learner.population, learner.fitness, learner.generation, learner.set_genes)
+        self.validate_leader(learner.rules_of, learner.env, learner.generation)
 
     def on_finish(self, learner: Learner) -> None:
         """Validate the remaining candidates, unless a target ended the run."""
         if learner.stop_reason != "target":
-            self.finalize(learner.rules, learner.env, learner.generation,
+            self.finalize(learner.rules_of, learner.env, learner.generation,
                           learner.elite_candidates())
 
     def most_episodes_after_generation(self) -> int:
@@ -198,19 +229,22 @@ class ModelSelection(RunCallback):
         return (1 + self.config.candidates) * self.config.episodes if self.enabled else 0
 
     # -- the hall of fame ------------------------------------------------------------------
-    def offer(self, population: IntArray, fitness: FloatArray, generation: int) -> None:
+    def offer(self, population: IntArray, fitness: FloatArray, generation: int,
+              sets: FloatArray | None = None) -> None:
         """Add a generation's controllers ``population (P, M)`` with their trial fitness
-        ``(P,)`` (an individual met before adds to its mean), then keep the top candidates."""
+        ``(P,)`` (an individual met before adds to its mean), then keep the top candidates;
+        ``sets (P, G)`` are their set genomes when the run learns the sets."""
         if not self.enabled:
             return
         self.finalized = False
         for individual, (consequents, value) in enumerate(zip(population, fitness,
                                                               strict=True)):
-            key = _key(consequents)
+            genes = None if sets is None else np.array(sets[individual], dtype=np.float64)
+            key = _key(consequents, genes)
             candidate = self.hall.get(key)
             if candidate is None:
                 candidate = Candidate(np.array(consequents, dtype=np.intp), generation,
-                                      individual)
+                                      individual, sets=genes)
                 self.hall[key] = candidate
             candidate.generation, candidate.individual = generation, individual
             candidate.fitness_sum += float(value)
@@ -228,36 +262,44 @@ class ModelSelection(RunCallback):
         return sorted(candidates, key=lambda c: -c.fitness)
 
     # -- validation ------------------------------------------------------------------------
-    def validate(self, candidate: Candidate, rules: SparseRules, env: BatchEnv,
+    def validate(self, candidate: Candidate, rules: RulesOf, env: BatchEnv,
                  generation: int) -> None:
         """Run ``candidate`` on the validation episodes and record the result.
 
         Episodes run one after another on the learner's batch-of-one ``env`` through the
         training loop's own inference (the same bits as the deployed controller, and no
-        compiled kernels to load for a small job)."""
+        compiled kernels to load for a small job). ``rules`` is the rule base, or what gives
+        a candidate's (its own sets, when the run learns them)."""
         consequents = candidate.consequents.tolist()
+        if not isinstance(rules, SparseRules):
+            rules = rules(candidate)
         if env.replayable:
-            trials = [self._episode(env, rules, seed, consequents)
+            sets = b"" if candidate.sets is None else candidate.sets.tobytes()
+            trials = [self._episode(env, rules, (seed, sets), consequents)
                       for seed in self.seeds.tolist()]
         else:
             trials = [run_trial(env, rules, int(seed), consequents) for seed in self.seeds]
         lengths = np.array([t.length for t in trials], dtype=np.int64)
         fitness = env.episode_fitness(np.array([t.ret for t in trials], dtype=np.float64),
                                       lengths, np.array([t.success for t in trials]))
-        candidate.validation = mean_interval(fitness)
+        candidate.validation = clip_estimate(mean_interval(fitness), env.fitness_range)
         candidate.validated_at = generation
+        candidate.validation_success = float(np.mean([t.success for t in trials]))
+        candidate.validation_return = float(np.mean([t.ret for t in trials]))
         self.usage.selection_episodes += len(trials)
         self.usage.selection_steps += int(lengths.sum())
         self.validated.append(candidate.record())
         if self.best is None or candidate.validation.value > self.best.validation_value():
             self.best = candidate
 
-    def _episode(self, env: BatchEnv, rules: SparseRules, seed: int,
+    def _episode(self, env: BatchEnv, rules: SparseRules, episode_key: tuple[int, bytes],
                  consequents: list[int]) -> Trial:
-        """Validation episode ``seed`` of the controller ``consequents (M,)``: an earlier
-        candidate's if this one commands alike every rule that fired where that one acted
-        (see the module docstring), else run and remembered."""
-        known = self._known.setdefault(seed, [])
+        """Validation episode ``seed`` of the controller ``consequents (M,)`` (with the set
+        genome of ``episode_key``, which is (seed, genome bytes)): an earlier candidate's if
+        this one commands alike every rule that fired where that one acted (see the module
+        docstring), else run and remembered."""
+        seed = episode_key[0]
+        known = self._known.setdefault(episode_key, [])
         for episode in known:
             if all(consequents[m] == k for m, k in zip(episode.rules, episode.commands,
                                                         strict=True)):
@@ -268,13 +310,13 @@ class ModelSelection(RunCallback):
         known.append(_KnownEpisode(order, tuple(consequents[m] for m in order), trial))
         return trial
 
-    def validate_leader(self, rules: SparseRules, env: BatchEnv, generation: int) -> None:
+    def validate_leader(self, rules: RulesOf, env: BatchEnv, generation: int) -> None:
         """Validate the hall's leader if it has not been (every generation)."""
         ranked = self.ranked()
         if ranked and ranked[0].validation is None and self.fits(1):
             self.validate(ranked[0], rules, env, generation)
 
-    def finalize(self, rules: SparseRules, env: BatchEnv, generation: int,
+    def finalize(self, rules: RulesOf, env: BatchEnv, generation: int,
                  elites: list[Candidate]) -> None:
         """Validate the remaining candidates (the hall's top and ``elites``) the budget
         allows, best ranked first: the run is ending."""
@@ -290,14 +332,15 @@ class ModelSelection(RunCallback):
             self.validate(candidate, rules, env, generation)
         self.finalized = True
 
-    def candidate_for(self, consequents: IntArray) -> Candidate | None:
-        return self.hall.get(_key(consequents))
+    def candidate_for(self, consequents: IntArray,
+                      sets: FloatArray | None = None) -> Candidate | None:
+        return self.hall.get(_key(consequents, sets))
 
     def fits(self, validations: int) -> bool:
         """Whether ``validations`` more validations stay within the episode limit."""
         limit = self.episode_limit
         return limit is None or (self.usage.episodes + validations * self.config.episodes
-                                 <= limit)
+                                 + self.reserve() <= limit)
 
     # -- checkpoints -----------------------------------------------------------------------
     def state_dict(self) -> dict[str, Any]:

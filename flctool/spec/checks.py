@@ -14,8 +14,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from flctool.errors import PathPart, Problem
+from flctool.plugins import blamed
 from flctool.registry import did_you_mean
 from flctool.spec.environment import AdapterConfig
+from flctool.spec.magnitudes import magnitude_problems
+from flctool.spec.set_learning import set_learning_problems
+from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
 if TYPE_CHECKING:
     from flctool.spec.models import Behaviour, InputVariable, Rule
@@ -73,8 +77,9 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
                               behaviour.learning.population, behaviour.learning.trials,
                               behaviour.learning.generations,
                               getattr(behaviour.environment, "max_steps", None))
-    for name, variable in behaviour.inputs.items():
-        problems += check_input(name, variable)
+    sets_problems = [p for name, variable in behaviour.inputs.items()
+                     for p in check_input(name, variable)]
+    problems += sets_problems
     if behaviour.output.name in behaviour.inputs:
         problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
                                 ", like an input", "give the output a name of its own"))
@@ -82,8 +87,12 @@ def find_problems(behaviour: Behaviour) -> list[Problem]:
                             behaviour.output.commands, enumerate(behaviour.rules))
     environment = behaviour.environment
     if isinstance(environment, AdapterConfig):
-        problems += environment.fit_problems(behaviour.input_names,
-                                             tuple(behaviour.output.commands))
+        with blamed("environment", environment.adapter):
+            problems += magnitude_problems(environment)
+            problems += environment.fit_problems(behaviour.input_names,
+                                                 tuple(behaviour.output.commands))
+    if not sets_problems:  # learning the sets starts from valid ones
+        problems += set_learning_problems(behaviour)
     return problems
 
 
@@ -145,7 +154,10 @@ def command_warnings(commands: Mapping[str, float]) -> list[Problem]:
 def check_input(name: str, variable: InputVariable) -> list[Problem]:
     lo, hi = variable.range
     problems = []
-    for set_name, (pa, _, _, pd) in variable.sets.items():
+    for set_name, value in variable.sets.items():
+        if not is_trapezoid(value):
+            continue  # the other shapes reach across the whole line
+        pa, _, _, pd = value
         if pa < lo or pd > hi:
             problems.append(Problem(
                 ("inputs", name, "sets", set_name),
@@ -158,23 +170,68 @@ def check_input(name: str, variable: InputVariable) -> list[Problem]:
         if gap is not None:
             a, b = gap
             where = f"the point {a:g}" if a == b else f"the values between {a:g} and {b:g}"
+            if all(is_trapezoid(v) for v in variable.sets.values()):
+                what = (f"{'belongs' if a == b else 'belong'} to no set (membership 0 "
+                        "everywhere), so eq. 3 would divide by zero there")
+            else:
+                what = (f"{'has' if a == b else 'have'} a membership below {COVERS_FROM:g} in "
+                        "every set (an input with a shape other than the trapezoid must "
+                        "reach that in some set "
+                        "everywhere, so that eq. 3's denominator stays well above 0)")
             problems.append(Problem(
-                ("inputs", name, "sets"),
-                f"{where} belong to no set (membership 0 everywhere), so eq. 3 would divide "
-                "by zero there",
+                ("inputs", name, "sets"), f"{where} {what}",
                 "widen or add a set so that the sets overlap across the whole range"))
     return problems
+
+
+#: For an input with a set of another shape than the trapezoid, where a set covers a point:
+#: its membership there is at least this (Gaussians, bells and sigmoids never reach 0).
+COVERS_FROM = 1e-6
+#: The points of a range (besides its ends and the sets' parameters) where that is checked.
+COVERAGE_POINTS = 1025
+
+
+def _shaped_gap(variable: InputVariable) -> tuple[float, float] | None:
+    """:func:`uncovered_gap` for an input with a set of another shape than the trapezoid.
+
+    Every point of the range must lie where some set's membership is at least
+    :data:`COVERS_FROM`. Checked on a grid (the range's ends, :data:`COVERAGE_POINTS` points
+    across it and every set parameter inside it): each two neighbouring grid points need one
+    set at least that high at both. Each shape rises and then falls (is quasi-concave), so
+    that set is at least that high between them too, and the check holds for the whole range.
+    """
+    from flctool.compile.membership import firing_sets
+
+    lo, hi = variable.range
+    rows = [set_row(v) for v in variable.sets.values()]
+    kinds = [code for code, _ in rows]
+    params = [p for _, p in rows]
+    inside = [x for p in params for x in p if lo < x < hi]
+    step = (hi - lo) / (COVERAGE_POINTS - 1)
+    grid = sorted({lo, hi, *inside, *(lo + k * step for k in range(1, COVERAGE_POINTS - 1))})
+    previous: set[int] | None = None
+    for k, x in enumerate(grid):
+        high = {j for j, mu in firing_sets(x, params, kinds) if mu >= COVERS_FROM}
+        if not high:
+            return x, x
+        if previous is not None and not previous & high:
+            return grid[k - 1], x
+        previous = high
+    return None
 
 
 def uncovered_gap(variable: InputVariable) -> tuple[float, float] | None:
     """The first stretch of the range where every set has membership 0, or None.
 
     A set is non-zero on the open interval (pa, pd), and also on pa itself when pa == pb
-    (vertical left edge) and on pd itself when pc == pd (vertical right edge).
+    (vertical left edge) and on pd itself when pc == pd (vertical right edge). An input with
+    a set of another shape is checked by :func:`_shaped_gap` instead.
     """
+    if not all(is_trapezoid(v) for v in variable.sets.values()):
+        return _shaped_gap(variable)
     lo, hi = variable.range
     supports = sorted(
-        ((pa, pa == pb, pd, pc == pd) for pa, pb, pc, pd in variable.sets.values()),
+        ((pa, pa == pb, pd, pc == pd) for pa, pb, pc, pd in trapezoids(variable.sets.values())),
         key=lambda s: (s[0], not s[1]),
     )
     reach, reach_closed = lo, False  # [lo, reach) is covered, and reach too if reach_closed
@@ -195,6 +252,8 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
     """Rule references against ``inputs`` (input name -> its set names) and ``commands``."""
     problems: list[Problem] = []
     seen: dict[tuple[str, ...], int] = {}
+    known = {name: frozenset(sets) for name, sets in inputs.items()}  # O(1) look-ups
+    commands_known = frozenset(commands)
     for index, rule in rules:
         if len(problems) >= MAX_RULE_PROBLEMS:  # a whole broken table need not be listed
             problems.append(rule_problem(
@@ -211,7 +270,7 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
                     (*path, "if", input_name), f"rule names an unknown input '{input_name}'."
                     f"{did_you_mean(input_name, tuple(inputs))}",
                     f"use one of the inputs: {', '.join(inputs)}"))
-            elif set_name not in inputs[input_name]:
+            elif set_name not in known[input_name]:
                 complete = False
                 sets = tuple(inputs[input_name])
                 problems.append(Problem(
@@ -223,7 +282,7 @@ def check_rules(inputs: Mapping[str, Collection[str]], commands: Collection[str]
             problems.append(Problem(
                 (*path, "if"), f"rule gives no set for input(s) {', '.join(missing)}",
                 "name every input once in each rule (the rule grid is complete, eq. 1)"))
-        if rule.then not in commands:
+        if rule.then not in commands_known:
             problems.append(Problem(
                 (*path, "then"), f"unknown command '{rule.then}'."
                 f"{did_you_mean(rule.then, tuple(commands))}",

@@ -10,7 +10,9 @@ from typing import Any
 
 import yaml
 
+from flctool.spec.bounded import no_collection
 from flctool.spec.models import Behaviour
+from flctool.spec.shapes import SHAPES
 
 
 def behaviour_to_data(behaviour: Behaviour, *, defaults: bool = True) -> dict[str, Any]:
@@ -51,7 +53,8 @@ _Dumper.add_representer(_FlowMap, lambda d, v: d.represent_mapping(
 
 def _styled(value: Any, key: str = "") -> Any:
     if isinstance(value, dict):
-        if key == "rule":
+        if key == "rule" or (len(value) == 1 and next(iter(value)) in SHAPES):
+            # a rule, or a set of a shape: {gauss: [0.5, 0.1]}
             return _FlowMap({k: _styled(v) for k, v in value.items()})
         return {k: _styled(v, k) for k, v in value.items()}
     if isinstance(value, list):
@@ -66,10 +69,34 @@ def behaviour_to_yaml(behaviour: Behaviour, header: str = "", *, defaults: bool 
     return data_to_yaml(behaviour_to_data(behaviour, defaults=defaults), header)
 
 
+#: Rules written by one call of PyYAML's dumper (see data_to_yaml).
+_RULES_AT_ONCE = 2000
+
+
+def _dump(value: Any) -> str:
+    with no_collection():  # see flctool.spec.bounded: twice as fast for a large table
+        return str(yaml.dump(value if isinstance(value, list) else _styled(value),
+                             Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
+
+
 def data_to_yaml(data: dict[str, Any], header: str = "") -> str:
     """A behaviour given as data (:func:`behaviour_to_data`'s form) written as
     :func:`behaviour_to_yaml` writes it."""
-    body = yaml.dump(_styled(data), Dumper=_Dumper, sort_keys=False, allow_unicode=True,
-                     width=100)
+    rules = data.get("rules")
+    if isinstance(rules, list) and len(rules) > _RULES_AT_ONCE and "rules" in data:
+        # PyYAML composes a node per value before it writes any: a table of 100,000 rules
+        # would take hundreds of MB at once. The rules are written a block at a time into
+        # the place the rest of the file leaves for them (a block list writes the same lines
+        # at the top level as under a key: '- {if: ...}').
+        placeholder = "rules: []\n"
+        head = _dump({**data, "rules": []})
+        if head.count(placeholder) == 1:
+            blocks = [_dump([_styled(rule, "rule") for rule in rules[i:i + _RULES_AT_ONCE]])
+                      for i in range(0, len(rules), _RULES_AT_ONCE)]
+            body = head.replace(placeholder, "rules:\n" + "".join(blocks))
+        else:
+            body = _dump(data)
+    else:
+        body = _dump(data)
     comment = "".join(f"# {line}".rstrip() + "\n" for line in header.splitlines())
     return comment + body

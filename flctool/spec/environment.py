@@ -15,6 +15,16 @@ from pydantic import AfterValidator, Field, ValidationInfo, field_validator, mod
 from flctool.errors import FlcError, PathPart, Problem
 from flctool.registry import did_you_mean
 from flctool.spec.base import Name, Section
+from flctool.spec.compose import MAX_PARTS
+from flctool.spec.pitch_vocabulary import (
+    BallVelocity,
+    DerivedChannel,
+    FixedPoint,
+    Opponent,
+    Outcome,
+    StepReward,
+    vocabulary_problems,
+)
 
 #: What the ballchase simulator observes; a behaviour's inputs are named after these.
 BALLCHASE_OBSERVATIONS = ("ball_size", "pan")
@@ -332,12 +342,11 @@ class ObservationFeature(Section):
 PITCH_CHANNELS = (
     "ball_size", "pan", "ball_distance", "goal_bearing", "goal_distance", "obstacle_bearing",
     "obstacle_distance", "home_bearing", "home_distance", "heading", "x", "y", "ball_x",
-    "ball_y")
+    "ball_y", "own_goal_bearing", "own_goal_distance", "ball_vx", "ball_vy",
+    "opponent_bearing", "opponent_distance")
 #: Channels whose noise is relative (reading * (1 + std * z)); the others add std * z.
 RELATIVE_CHANNELS = ("ball_size", "ball_distance", "goal_distance", "obstacle_distance",
-                     "home_distance")
-OUTCOME_KINDS = ("ball_reached", "ball_in_goal", "ball_in_own_goal", "ball_off_pitch",
-                 "threshold", "collision", "off_pitch", "ball_lost")
+                     "home_distance", "own_goal_distance", "opponent_distance")
 
 
 def _box(bounds: tuple[float, float]) -> tuple[float, float]:
@@ -408,6 +417,8 @@ class PitchStart(Section):
     robot: RobotStart = RobotStart()
     ball: Annotated[BallStart, AfterValidator(_ball_start)] = BallStart(
         x=(-1000.0, 1000.0), y=(-800.0, 800.0))
+    ball_velocity: BallVelocity | None = Field(None, description=(
+        "the ball rolls from the start (default: it lies still)"))
 
 
 class Obstacle(Section):
@@ -442,48 +453,12 @@ class PitchSensorNoise(Section):
     y: float = Field(50.0, ge=0, description="mm")
     ball_x: float = Field(50.0, ge=0, description="mm")
     ball_y: float = Field(50.0, ge=0, description="mm")
-
-
-class Outcome(Section):
-    """One way an episode ends: the first outcome (in file order) that holds ends it."""
-
-    when: Literal["ball_reached", "ball_in_goal", "ball_in_own_goal", "ball_off_pitch",
-                  "threshold", "collision", "off_pitch", "ball_lost", "timeout"] = Field(
-        description="the event; see docs/environments.md")
-    reward: float = Field(0.0, description="given once, at the step the episode ends")
-    success: bool = Field(False, description="whether this ending counts as success")
-    distance: float | None = Field(None, gt=0, description=(
-        "ball_reached: mm from the camera to the ball (default 120)"))
-    bearing: float | None = Field(None, gt=0, le=180, description=(
-        "ball_reached: the ball within +-bearing deg of the camera axis (default 20)"))
-    facing_goal: float | None = Field(None, gt=0, le=180, description=(
-        "ball_reached: also the target goal within +-facing_goal deg of the heading"))
-    channel: str | None = Field(None, description="threshold: the channel (its true value)")
-    min: float | None = Field(None, description="threshold: holds when channel >= min")
-    max: float | None = Field(None, description="threshold: holds when channel <= max")
-
-    @field_validator("channel")
-    @classmethod
-    def _known_channel(cls, channel: str | None) -> str | None:
-        if channel is not None and channel not in PITCH_CHANNELS:
-            raise ValueError(f"unknown channel '{channel}'.{did_you_mean(channel, PITCH_CHANNELS)}"
-                             f" The channels: {', '.join(PITCH_CHANNELS)}")
-        return channel
-
-    def fields_problem(self) -> str | None:
-        """A key that does not belong to this kind of outcome, or a missing one."""
-        reach = ("distance", "bearing", "facing_goal")
-        threshold = ("channel", "min", "max")
-        given = {k for k in (*reach, *threshold) if getattr(self, k) is not None}
-        allowed = set(reach if self.when == "ball_reached" else
-                      threshold if self.when == "threshold" else ())
-        extra = sorted(given - allowed)
-        if extra:
-            return f"'{extra[0]}' does not apply to a '{self.when}' outcome"
-        if self.when == "threshold" and (self.channel is None or
-                                         (self.min is None and self.max is None)):
-            return "a threshold outcome needs 'channel' and 'min' and/or 'max'"
-        return None
+    own_goal_bearing: float = Field(3.0, ge=0, description="deg")
+    own_goal_distance: float = Field(0.05, ge=0, description="relative")
+    ball_vx: float = Field(10.0, ge=0, description="mm per step")
+    ball_vy: float = Field(10.0, ge=0, description="mm per step")
+    opponent_bearing: float = Field(3.0, ge=0, description="deg")
+    opponent_distance: float = Field(0.05, ge=0, description="relative")
 
 
 def _default_outcomes() -> list[Outcome]:
@@ -510,6 +485,22 @@ class PitchConfig(AdapterConfig):
     start: PitchStart = PitchStart()
     obstacles: list[Obstacle] = Field(default_factory=list, max_length=16, description=(
         "round obstacles; the obstacle_* channels read the nearest one"))
+    opponents: list[Opponent] = Field(default_factory=list, max_length=4, description=(
+        "scripted players that move and block the ball; the opponent_* channels read the "
+        "nearest one"))
+    points: dict[Name, FixedPoint] = Field(default_factory=dict, max_length=16, description=(
+        "named fixed points (mm) for derived channels, besides robot, ball, goal, own_goal, "
+        "home and opponent"))
+    channels: dict[Name, DerivedChannel] = Field(default_factory=dict, max_length=32,
+                                                 description=(
+        "derived channels: name -> one geometric quantity between points (bearing, "
+        "distance, offset, angle, velocity)"))
+    rewards: list[StepReward] = Field(default_factory=list, max_length=16, description=(
+        "rewards given after every step: scale times a channel's true value"))
+    compose: dict[Name, str | dict[str, Any]] = Field(
+        default_factory=dict, max_length=MAX_PARTS, description=(
+            "a composed behaviour: each output command -> the behaviour (file, relative to "
+            "this one) that runs while the command is chosen; loading inlines the parts"))
     sensors: dict[Name, str] = Field(default_factory=dict, description=(
         "behaviour input name -> channel it reads; an input not listed reads the channel of "
         "its own name"))
@@ -537,19 +528,24 @@ class PitchConfig(AdapterConfig):
     def channel_of(self, input_name: str) -> str:
         return self.sensors.get(input_name, input_name)
 
+    @property
+    def known_channels(self) -> tuple[str, ...]:
+        """The built-in channels, then the derived ones in file order."""
+        return (*PITCH_CHANNELS, *self.channels)
+
     def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
         """What keeps the pitch world from running a behaviour; checked by validate."""
         problems = []
         for name in inputs:
             channel = self.channel_of(name)
-            if channel not in PITCH_CHANNELS:
+            if channel not in self.known_channels:
                 where = ("environment", "sensors", name) if name in self.sensors else \
                     ("inputs", name)
                 problems.append(Problem(
                     where, f"the pitch world has no channel '{channel}'."
-                    f"{did_you_mean(channel, PITCH_CHANNELS)}",
+                    f"{did_you_mean(channel, self.known_channels)}",
                     "name the input after a channel or map it in environment.sensors; the "
-                    "channels: " + ", ".join(PITCH_CHANNELS)))
+                    "channels: " + ", ".join(self.known_channels)))
         problems += [Problem(("environment", "sensors", name), f"'{name}' is not an input."
                              f"{did_you_mean(name, inputs)}", "map behaviour inputs only")
                      for name in self.sensors if name not in inputs]
@@ -557,23 +553,73 @@ class PitchConfig(AdapterConfig):
         if len(set(read)) != len(read):
             problems.append(Problem(("inputs",), "two inputs read the same channel",
                                     "give each input a channel of its own"))
-        uses_obstacles = any(c.startswith("obstacle_") for c in read) or any(
-            o.when == "collision" or (o.channel or "").startswith("obstacle_")
-            for o in self.outcomes)
+        leaves = [leaf for i, outcome in enumerate(self.outcomes)
+                  for _, leaf in outcome.leaves(("environment", "outcomes", i))]
+        thresholds = [leaf.channel or "" for leaf in leaves] + [r.channel for r in self.rewards]
+        uses_obstacles = any(c.startswith("obstacle_") for c in (*read, *thresholds)) or (
+            any(leaf.when == "collision" for leaf in leaves) and not self.opponents)
         if uses_obstacles and not self.obstacles:
             problems.append(Problem(("environment", "obstacles"),
                                     "obstacle channels or a collision outcome, but no obstacles",
                                     "add e.g. 'obstacles: [{x: [-200, 200], y: [-200, 200]}]'"))
+        if any(c.startswith("opponent_") for c in (*read, *thresholds)) and not self.opponents:
+            problems.append(Problem(("environment", "opponents"),
+                                    "opponent channels, but no opponents",
+                                    "add e.g. 'opponents: [{x: [1900, 1900], y: [-300, 300], "
+                                    "behaviour: track}]'"))
+        problems += vocabulary_problems(self.points, self.channels, PITCH_CHANNELS,
+                                        self.outcomes, self.rewards, self.start.ball_velocity,
+                                        len(self.opponents))
+        if self.compose:
+            problems += self._compose_problems(commands)
+        if self.start.ball_velocity is not None and not self.ball.movable:
+            problems.append(Problem(("environment", "start", "ball_velocity"),
+                                    "the ball is not movable (ball.movable: false)",
+                                    "remove start.ball_velocity or let the ball move"))
         for i, outcome in enumerate(self.outcomes):
-            problem = outcome.fields_problem()
-            if problem:
-                problems.append(Problem(("environment", "outcomes", i), problem,
-                                        "see the outcome vocabulary in docs/environments.md"))
+            if outcome.when == "timeout" and outcome.held != 1:
+                problems.append(Problem(("environment", "outcomes", i, "held"),
+                                        "'held' does not apply to a 'timeout' outcome",
+                                        "remove it: a time-out happens once"))
         if not any(o.success for o in self.outcomes):
             problems.append(Problem(("environment", "outcomes"), "no outcome is a success",
                                     "mark the outcome the behaviour aims at with success: true"))
         return problems + self._start_problems() + command_table_problems(
-            self.motion, self.noise, commands)
+            self.motion, self.noise, self.walked_commands(commands))
+
+    def _compose_problems(self, commands: tuple[str, ...]) -> list[Problem]:
+        """Each command names a part, each part is a command; the parts' commands walk."""
+        where = ("environment", "compose")
+        problems = [Problem((*where,), f"the command '{name}' has no part", "give every "
+                            f"output command a behaviour: '{name}: {name}.yaml'")
+                    for name in commands if name not in self.compose]
+        problems += [Problem((*where, name), f"'{name}' is not an output command."
+                             f"{did_you_mean(name, commands)}", "name one output command per "
+                             "part") for name in self.compose if name not in commands]
+        for name, part in self.compose.items():
+            inputs = part.get("inputs") if isinstance(part, dict) else None
+            part_env = part.get("environment") if isinstance(part, dict) else None
+            sensors = part_env.get("sensors") if isinstance(part_env, dict) else None
+            sensors = sensors if isinstance(sensors, dict) else {}
+            for input_name in inputs if isinstance(inputs, dict) else ():
+                channel = sensors.get(input_name, input_name)
+                if channel not in self.known_channels:
+                    problems.append(Problem(
+                        (*where, name), f"the part's input '{input_name}' reads '{channel}', "
+                        "which this world does not have", "declare it under "
+                        "environment.channels here: the parts read the composing world"))
+        return problems
+
+    def walked_commands(self, commands: tuple[str, ...]) -> tuple[str, ...]:
+        """The commands the robot executes: the output's, or for a composition its parts'."""
+        if not self.compose:
+            return commands
+        walked: dict[str, None] = {}
+        for part in self.compose.values():
+            output = part.get("output") if isinstance(part, dict) else None
+            table = output.get("commands") if isinstance(output, dict) else None
+            walked.update(dict.fromkeys(table if isinstance(table, dict) else ()))
+        return tuple(walked)
 
     def _start_problems(self) -> list[Problem]:
         """Start boxes that reach off the pitch, or leave no room for a ball ahead."""
@@ -590,6 +636,9 @@ class PitchConfig(AdapterConfig):
             for i, obstacle in enumerate(self.obstacles):
                 boxes.append((("environment", "obstacles", i, axis), "the obstacle",
                               getattr(obstacle, axis), obstacle.radius))
+            for i, opponent in enumerate(self.opponents):
+                boxes.append((("environment", "opponents", i, axis), "the opponent",
+                              getattr(opponent, axis), opponent.radius))
         problems = []
         for path, what, (low, high), radius in boxes:
             limit = half[str(path[-1])] - radius
@@ -597,19 +646,52 @@ class PitchConfig(AdapterConfig):
                 problems.append(Problem(path, f"[{low:g}, {high:g}] puts {what} off the pitch: "
                                         f"its centre must stay within +-{limit:g} mm",
                                         "shrink the interval or enlarge the pitch"))
-        distance = self.start.ball.distance
-        if distance is not None:
-            # the farthest ball ahead, in any direction, must fit beside some robot position
-            reach = distance[1] + self.robot.neck_offset + self.ball.diameter / 2.0
-            for axis in ("x", "y"):
-                low, high = getattr(self.start.robot, axis)
-                if low > half[axis] - reach or high < -half[axis] + reach:
-                    problems.append(Problem(
-                        (*start, "robot", axis), f"no room for the ball ahead: with the robot "
-                        f"in [{low:g}, {high:g}] a ball {distance[1]:g} mm ahead can be off the "
-                        "pitch", f"let the robot start within {reach:g} mm of the pitch's "
-                        "middle along this axis, or shorten start.ball.distance"))
+        problems += self._ball_ahead_problems(half)
         return problems
+
+    def _ball_ahead_problems(self, half: dict[str, float]) -> list[Problem]:
+        """A robot box that leaves no room for the ball ahead, for the headings and bearings
+        the start draws (the robot is placed where the drawn ball lands on the pitch)."""
+        ball = self.start.ball
+        if ball.distance is None or ball.bearing is None:
+            return []
+        heading = self.start.robot.heading
+        directions = (heading[0] - ball.bearing, heading[1] + ball.bearing)
+        offset = self.robot.neck_offset
+        problems = []
+        for axis, shift in (("x", 0.0), ("y", 90.0)):
+            # the ball's offset from the body centre along the axis: the camera's, over the
+            # headings, plus the ball's from the camera, over the directions and distances
+            low_c, high_c = _cos_extent(heading[0] - shift, heading[1] - shift)
+            low_d, high_d = _cos_extent(directions[0] - shift, directions[1] - shift)
+            near, far = ball.distance
+            most = offset * high_c + (far if high_d > 0 else near) * high_d
+            least = offset * low_c + (far if low_d < 0 else near) * low_d
+            room = half[axis] - self.ball.diameter / 2.0
+            low, high = getattr(self.start.robot, axis)
+            if low + most > room or high + least < -room:
+                problems.append(Problem(
+                    ("environment", "start", "robot", axis), f"no room for the ball ahead: "
+                    f"with the robot in [{low:g}, {high:g}] and headings in [{heading[0]:g}, "
+                    f"{heading[1]:g}] deg, a ball up to {far:g} mm ahead within +-"
+                    f"{ball.bearing:g} deg can be off the pitch",
+                    f"let the robot start where the ball ahead fits (the ball lies "
+                    f"{least:g} to {most:g} mm from it along {axis}), narrow the headings, or "
+                    "shorten start.ball.distance"))
+        return problems
+
+
+def _cos_extent(low: float, high: float) -> tuple[float, float]:
+    """The least and greatest cosine over the angles [low, high] deg."""
+    if high - low >= 360.0:
+        return -1.0, 1.0
+    values = [math.cos(math.radians(low)), math.cos(math.radians(high))]
+    turns = math.floor(low / 360.0)
+    greatest = 1.0 if any(low <= 360.0 * k <= high for k in (turns, turns + 1)) \
+        else max(values)
+    least = -1.0 if any(low <= 180.0 + 360.0 * k <= high for k in (turns - 1, turns, turns + 1)) \
+        else min(values)
+    return least, greatest
 
 
 class GymnasiumConfig(AdapterConfig):

@@ -14,8 +14,10 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from flctool.errors import PathPart, Problem, SpecError
-from flctool.plugins import names
+from flctool.inputs import read_input
+from flctool.plugins import blamed, names
 from flctool.registry import did_you_mean
+from flctool.spec.bounded import no_collection
 from flctool.spec.checks import (
     RuleNamer,
     RuleProblem,
@@ -24,13 +26,16 @@ from flctool.spec.checks import (
     limit_problems,
     rule_path,
 )
+from flctool.spec.compose import inline_parts
+from flctool.spec.dump import behaviour_to_data
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import foreign_key_message
 from flctool.spec.located import attach_source
+from flctool.spec.magnitudes import magnitude_problems
 from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
 from flctool.spec.rules import expand_dont_care
 from flctool.spec.sections import CHOSEN, section_model
-from flctool.spec.yaml_source import SourceMap, read_yaml
+from flctool.spec.yaml_source import MAX_FILE_CHARS, SourceMap, read_yaml
 
 
 def load_behaviour(path: str | Path) -> Behaviour:
@@ -40,21 +45,16 @@ def load_behaviour(path: str | Path) -> Behaviour:
 
 def read_behaviour_text(path: str | Path) -> str:
     """The text of a behaviour file; a missing or unreadable one is a :class:`SpecError`."""
-    path = Path(path)
-    try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpecError([Problem((), "no such file", "check the path", file=str(path))],
-                        str(path)) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SpecError([Problem((), f"cannot read the file: {exc}", file=str(path))],
-                        str(path)) from None
+    # read no further than the limit read_yaml refuses a file past (a 10 GB file costs no
+    # more than a 50 MB one)
+    return read_input(path, "behaviour file", MAX_FILE_CHARS)
 
 
 def parse_behaviour(text: str, file: str = "<string>") -> Behaviour:
     """Validate behaviour YAML given as text (``file`` names it in messages)."""
-    data, source = read_yaml(text, file)
-    return behaviour_from_data(data, source)
+    with no_collection():  # see flctool.spec.bounded
+        data, source = read_yaml(text, file)
+        return behaviour_from_data(data, source)
 
 
 def behaviour_from_data(data: Any, source: SourceMap | None = None,
@@ -71,6 +71,8 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None,
     if version_problem is not None:  # other errors in a file of another version are noise
         raise SpecError([version_problem], source.file)
     data, source, problems = expand_dont_care(data, source)  # rules leaving out inputs
+    data, part_problems = inline_parts(data, source, load_behaviour, behaviour_to_data)
+    problems += part_problems
     # Numbers first: pydantic would quietly turn `true` into 1 and "1.5" into 1.5.
     problems += _number_problems(data, source)
     semantic: list[Problem] = []
@@ -146,6 +148,8 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
         value if isinstance(value, int) and not isinstance(value, bool) else None
         for value in (learning.get("population"), learning.get("trials"),
                       learning.get("generations"), max_steps)))
+    if isinstance(environment, dict):  # the numbers as written, whatever else is wrong
+        problems += magnitude_problems(environment)
     if isinstance(environment, dict) and isinstance(inputs, dict) and \
             isinstance(commands, dict):
         model = section_model("environment", environment)
@@ -154,7 +158,8 @@ def _partial_problems(data: dict[str, Any]) -> list[Problem]:
         except ValidationError:
             return problems
         if isinstance(config, AdapterConfig):
-            problems += config.fit_problems(tuple(inputs), tuple(commands))
+            with blamed("environment", config.adapter):
+                problems += config.fit_problems(tuple(inputs), tuple(commands))
     return problems
 
 
@@ -163,22 +168,46 @@ def _number_problems(data: Any, source: SourceMap) -> list[Problem]:
     (``true`` -> 1, ``"2"`` -> 2.0) without a word."""
     problems: list[Problem] = []
 
+    # The annotation of a part depends on the part and the annotation holding it (and, for a
+    # section chosen by 'adapter', on that): looked up once each, not once per value.
+    steps: dict[tuple[Any, Any], Any] = {}
+    numeric: dict[Any, bool] = {}
+
+    def step(annotation: Any, part: PathPart, container: Any) -> Any:
+        if isinstance(container, dict) and "adapter" in container:
+            return _step(annotation, part, container)
+        key = (id(annotation), part if isinstance(part, str) or _positional(annotation)
+               else int)
+        if key not in steps:
+            steps[key] = (_step(annotation, part, container), annotation)
+        return steps[key][0]
+
     def walk(value: Any, annotation: Any, path: tuple[PathPart, ...]) -> None:
         if isinstance(value, dict):
             for key, item in value.items():
-                inner = _step(annotation, key, value)
+                inner = step(annotation, key, value)
                 if inner is not None:
                     walk(item, inner, (*path, key))
         elif isinstance(value, list):
             for index, item in enumerate(value):
-                inner = _step(annotation, index, value)
+                inner = step(annotation, index, value)
                 if inner is not None:
                     walk(item, inner, (*path, index))
-        elif isinstance(value, (bool, str)) and _numeric(annotation):
-            problems.append(_not_a_number(value, source.raw.get(path), source, path))
+        elif isinstance(value, (bool, str)):
+            if id(annotation) not in numeric:
+                numeric[id(annotation)] = _numeric(annotation)
+            if numeric[id(annotation)]:
+                problems.append(_not_a_number(value, source.raw.get(path), source, path))
 
     walk(data, Behaviour, ())
     return problems
+
+
+def _positional(annotation: Any) -> bool:
+    """Whether the items of a list at ``annotation`` may differ in type by position (a
+    fixed-length tuple), so an index cannot stand for all."""
+    return any(typing.get_origin(m) is tuple and Ellipsis not in typing.get_args(m)
+               for m in _members(annotation))
 
 
 def _numeric(annotation: Any) -> bool:
@@ -224,6 +253,8 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
     hint = ""
     # The plugin whose model read the section the error is in, if it is a chosen one.
     chosen = CHOSEN[loc[0]].chosen(data.get(loc[0])) if loc and loc[0] in CHOSEN else None
+    if len(loc) >= 5 and loc[0] == "inputs" and loc[2] == "sets" and loc[4] in _SET_FORMS:
+        loc.pop(4)  # the form of a set (models.FuzzySet), chosen by how it is written
     raw = source.raw.get(tuple(loc))
     if loc and loc[-1] == "[key]":
         loc.pop()
@@ -281,6 +312,10 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
         if not isinstance(got, (dict, list)):
             message = f"{message[0].lower()}{message[1:]}, got {got!r}"
     return source.problem(tuple(loc), message, hint)
+
+
+#: The tags of models.FuzzySet's forms.
+_SET_FORMS = ("trapezoid", "shape")
 
 
 def _is_tuple_item(loc: list[PathPart], kind: str) -> bool:

@@ -9,14 +9,16 @@ consequents. Structure and types are checked here; the checks that relate fields
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, Union
 
 from pydantic import (
     AfterValidator,
     ConfigDict,
+    Discriminator,
     Field,
     PrivateAttr,
     SerializeAsAny,
+    Tag,
     ValidationInfo,
     field_validator,
     model_validator,
@@ -35,6 +37,7 @@ from flctool.spec.learning import (
 from flctool.spec.located import SourceRef
 from flctool.spec.rule_order import rule_grid
 from flctool.spec.sections import CHOSEN
+from flctool.spec.shapes import ShapedSet
 
 FORMAT_VERSION = 1
 
@@ -49,6 +52,17 @@ def _ordered(quad: tuple[float, float, float, float]) -> tuple[float, float, flo
 
 
 Quadruple = Annotated[tuple[float, float, float, float], AfterValidator(_ordered)]
+
+
+def _set_form(value: Any) -> str:
+    return "shape" if isinstance(value, (dict, ShapedSet)) else "trapezoid"
+
+
+#: A set: a trapezoid quadruple (the default, and the paper's), or a shape written as a
+#: one-key mapping (flctool.spec.shapes). The form of the value chooses, so an error
+#: concerns the form written.
+FuzzySet = Annotated[Union[Annotated[Quadruple, Tag("trapezoid")],  # noqa: UP007
+                           Annotated[ShapedSet, Tag("shape")]], Discriminator(_set_form)]
 
 
 def _increasing(bounds: tuple[float, float]) -> tuple[float, float]:
@@ -74,9 +88,12 @@ class InputVariable(Section):
         "for a gymnasium input whose observation bounds are finite: it defaults to them "
         "(docs/environments.md)")
     unit: str | None = None
-    sets: dict[Name, Quadruple] = Field(min_length=1, description=(
-        "set name -> [pa, pb, pc, pd]; pb == pc is a triangle, pa == pb or pc == pd a "
-        "vertical edge"))
+    sets: dict[Name, FuzzySet] = Field(min_length=1, description=(
+        "set name -> [pa, pb, pc, pd] (a trapezoid; pb == pc is a triangle, pa == pb or "
+        "pc == pd a vertical edge), or a shape {gauss: [mean, sigma]}, {gauss2: [...]}, "
+        "{bell: [width, slope, centre]}, {sigmoid: [centre, slope]}, {sigmoid_difference: "
+        "[...]}, {sigmoid_product: [...]}, {s_shape: [foot, shoulder]}, {z_shape: "
+        "[shoulder, foot]} or {pi_shape: [...]} (docs/behaviour-files.md)"))
 
 
 class Output(Section):

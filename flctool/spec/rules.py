@@ -23,7 +23,7 @@ from typing import Any, SupportsInt
 from flctool.errors import FlcError, PathPart, Problem
 from flctool.spec.checks import MAX_RULES
 from flctool.spec.models import Behaviour, Rule
-from flctool.spec.yaml_source import SourceMap
+from flctool.spec.yaml_source import Mark, SourceMap
 
 
 def expand_dont_care(data: Any, source: SourceMap) -> tuple[Any, SourceMap, list[Problem]]:
@@ -110,7 +110,7 @@ def _renumbered(source: SourceMap, origin: list[int]) -> SourceMap:
              if not (len(path) >= 2 and path[0] == "rules")}
     raw = {path: text for path, text in source.raw.items()
            if not (len(path) >= 2 and path[0] == "rules")}
-    by_rule: dict[int, list[tuple[tuple[PathPart, ...], tuple[int, int]]]] = {}
+    by_rule: dict[int, list[tuple[tuple[PathPart, ...], Mark]]] = {}
     for path, mark in source.marks.items():
         if len(path) >= 2 and path[0] == "rules" and isinstance(path[1], int):
             by_rule.setdefault(path[1], []).append((path[2:], mark))
@@ -118,7 +118,12 @@ def _renumbered(source: SourceMap, origin: list[int]) -> SourceMap:
         for rest, mark in by_rule.get(index, []):
             renumbered: tuple[PathPart, ...] = ("rules", k, *rest)
             marks[renumbered] = mark
-    return SourceMap(source.file, marks, raw, source.parsed, source.overrides)
+    items = dict(source.items)
+    rule_items = items.pop(("rules",), None)
+    for k, index in enumerate(origin):
+        if rule_items is not None and index < len(rule_items):
+            marks[("rules", k)] = rule_items[index]
+    return SourceMap(source.file, marks, raw, source.parsed, source.overrides, items)
 
 
 def with_rules(behaviour: Behaviour, consequents: Iterable[SupportsInt]) -> Behaviour:

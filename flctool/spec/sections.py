@@ -18,7 +18,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationInfo
 from pydantic_core import PydanticKnownError
 
-from flctool.plugins import names, plugin
+from flctool.plugins import blamed, names, plugin
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import DEFAULT_LEARNER, LearningConfig
 
@@ -73,7 +73,8 @@ class ChosenSection:
             raise PydanticKnownError("union_tag_invalid", {
                 "discriminator": repr(self.key), "tag": str(name),
                 "expected_tags": ", ".join(repr(known) for known in names(self.kind))})
-        return model.model_validate(value, context=info.context)
+        with blamed(self.kind, name):  # the model's own validators are the plugin's code
+            return model.model_validate(value, context=info.context)
 
 
 LEARNING = ChosenSection("learning", "learner", "learner", LearningConfig, DEFAULT_LEARNER)

@@ -72,7 +72,7 @@ def _takes_a_path(command: str) -> bool:
     """Whether the command runs with nothing but one path given (its only required value is
     a path argument)."""
     required = [p for p in _commands()[command].params if p.required]
-    return bool(required) and all(
+    return len(required) == 1 and all(
         p.param_type_name == "argument" and "Path" in str(getattr(p, "bare_type", str)())
         for p in required)
 

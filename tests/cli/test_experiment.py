@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import yaml
@@ -24,6 +25,12 @@ def test_experiment_writes_a_report_and_continues(tmp_path: Path) -> None:
     result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output
     assert "mean fitness rises sooner than Pitt's" in result.output
+    # the spread across seeds is named: a bracket would read as a confidence interval
+    assert re.search(r"pitt: held-out success median [0-9.]+, interquartile range [0-9.]+ to "
+                     r"[0-9.]+ across 2 seeds", result.output), result.output
+    # each progress line once, though output goes to a file (not a terminal)
+    progress = [line for line in result.output.splitlines() if line.startswith("runs ")]
+    assert len(progress) == len(set(progress))
     report = (out / "report.md").read_text()
     assert report.startswith("# Experiment: ballchase")
     # run again: nothing is redone, the report is the same
@@ -84,7 +91,8 @@ def test_one_file_carries_the_settings_of_every_compared_learner(tmp_path: Path)
         for seed in (0, 1):
             path = out / "runs" / f"{learner}-seed{seed}" / "behaviour.yaml"
             written = yaml.safe_load(path.read_text())["learning"]
-            assert tuple(written) == learner_keys(model), learner
+            # every key of its learner but 'sets', not written when no sets are learned
+            assert tuple(written) == tuple(k for k in learner_keys(model) if k != "sets"), learner
             learning = load_behaviour(path).learning  # a valid file of its learner
             assert (learning.learner, learning.seed, learning.generations) == (learner, seed, 2)
             assert len(open_run(path.parent).metrics()) == 2

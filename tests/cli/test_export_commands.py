@@ -93,3 +93,16 @@ def test_import_reports_the_construct_and_line(tmp_path: Path) -> None:
     result = runner.invoke(app, ["import", str(exported)])
     assert result.exit_code == 1
     assert f"ctl.fll:{line}: the hedge 'very'" in result.output.replace("\n", "")
+
+
+def test_import_writes_one_file_per_output(tmp_path: Path) -> None:
+    from ..export.test_fis import TWO_OUTPUTS
+
+    source = tmp_path / "two.fis"
+    source.write_text(TWO_OUTPUTS, encoding="utf-8")
+    result = CliRunner().invoke(app, ["import", str(source), "-o", str(tmp_path / "two.yaml")])
+    assert result.exit_code == 0, result.output
+    assert "2 outputs, imported as one behaviour each" in result.output
+    assert (tmp_path / "two_u.yaml").is_file() and (tmp_path / "two_v.yaml").is_file()
+    to_stdout = CliRunner().invoke(app, ["import", str(source)])
+    assert to_stdout.exit_code != 0 and "give -o NAME.yaml" in to_stdout.output

@@ -15,7 +15,17 @@ def test_plain_lines_when_not_a_terminal(capsys: pytest.CaptureFixture[str]) -> 
     lines = capsys.readouterr().err.splitlines()
     assert lines[0].startswith("hybrid generation 1/3  best 0.100  (")
     assert lines[-1].startswith("hybrid generation 3/3  best 0.300  (")
-    assert len(lines) == 4  # one per update, and the end
+    assert len(lines) == 3  # one per update; the end was the last of them: not again
+
+
+def test_the_end_is_printed_when_the_last_line_is_behind(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    with Progress("runs", 3, log_every=0.0) as bar:
+        bar.update(1)
+        bar._log_every = 1e9  # the next line is not due before the end
+        bar.update(2)
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split("  (")[0] for line in lines] == ["runs 1/3", "runs 2/3"]
 
 
 def test_short_work_prints_nothing_and_disabled_prints_nothing(

@@ -194,9 +194,9 @@ def test_infer_file_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:
     binary = tmp_path / "states.csv"
     binary.write_bytes(b"ball_size,pan\n\xff,1\n")
     cases = [
-        (["-i", str(binary)], "the CSV is not UTF-8 text (byte 0xff)"),
-        (["-i", str(tmp_path / "none.csv")], "cannot read the states CSV"),
-        (["-i", str(tmp_path)], "cannot read the states CSV"),
+        (["-i", str(binary)], "states.csv:2:1: the CSV is not UTF-8 text (byte 0xff;"),
+        (["-i", str(tmp_path / "none.csv")], "none.csv: no such file or directory"),
+        (["-i", str(tmp_path)], "is a folder, not a states CSV"),
         (["-o", str(tmp_path)], "the output CSV " + str(tmp_path) + " is a folder"),
     ]
     for options, message in cases:
@@ -228,3 +228,32 @@ def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
     assert kept.exit_code == 1 and "--force" in kept.output
     assert runner.invoke(app, ["schema", "--path", str(stale), "--force"]).exit_code == 0
     assert runner.invoke(app, ["schema", "--check", "--path", str(stale)]).exit_code == 0
+
+
+def test_show_compare_lists_each_sets_movement(tmp_path: Path) -> None:
+    from flctool.sets.codec import SetCodec
+    from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
+    from flctool.spec.load import behaviour_from_data
+
+    data = behaviour_to_data(load_behaviour(BEHAVIOURS / "ballchase.yaml"))
+    data["learning"]["sets"] = {"inputs": ["pan"]}
+    original = behaviour_from_data(data)
+    genes = [0.0] * SetCodec(original).size
+    genes[0] = 1.0  # the gap from -90 to far_right's shoulder grows
+    learned = tmp_path / "learned.yaml"
+    learned.write_text(behaviour_to_yaml(SetCodec(original).decode(genes)))
+    result = runner.invoke(app, ["show", str(learned), "--compare",
+                                 str(BEHAVIOURS / "ballchase.yaml")], terminal_width=200)
+    assert result.exit_code == 0, result.output
+    lines = {line.split("│")[2].strip(): line for line in result.output.splitlines()
+             if line.count("│") > 5 and line.split("│")[2].strip()}
+    assert "0 %" in lines["small"] and "0.0 %" in lines["small"]
+    assert "deg" in lines["far_right"] and "0.0 %" not in lines["far_right"]
+    assert "pan: coverage 0.5" in result.output
+
+
+def test_show_compare_refuses_another_behaviour() -> None:
+    result = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase.yaml"), "--compare",
+                                 str(BEHAVIOURS / "cartpole.yaml")])
+    assert result.exit_code == 1
+    assert "other inputs, ranges or set names" in result.output

@@ -136,7 +136,7 @@ def test_a_conforming_adapter_passes_and_is_closed() -> None:
     assert len(made) == 3 and all(env.closed == 1 for env in made)
     single = Drift()
     check_env(single)  # one instance, reset for every run
-    assert single.closed == 1
+    assert single.closed == 0  # given, not opened, by the check: its opener closes it
 
 
 @pytest.mark.parametrize(("adapter", "message"), [

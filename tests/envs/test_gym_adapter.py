@@ -142,7 +142,7 @@ def test_an_environment_that_does_not_fit_is_closed() -> None:
     ("{adapter: gymnasium, id: MountainCar-v0, actions: {push_left: 0, push_right: 2}}",
      r"inputs: the behaviour has 4 inputs but 'MountainCar-v0' observes only 2"),
     ("{adapter: gymnasium, id: CartPole-v1, options: {colour: red}}",
-     r"environment\.options: 'CartPole-v1' does not accept these options"),
+     r"environment\.options\.colour: 'CartPole-v1' takes no option 'colour'"),
 ])
 def test_a_space_that_does_not_fit_names_the_field(environment: str, message: str) -> None:
     behaviour = parse_behaviour(_cartpole_env(f"environment: {environment}\n"))
@@ -283,3 +283,34 @@ def test_acrobot_reads_each_angle_as_one_input() -> None:
     consequents = np.array([push[int(v)] for v in controller.rule_grid[:, 1]], dtype=np.intp)
     result = evaluate(controller, make_env(behaviour, 20), np.arange(20), consequents)
     assert result.success_rate.value >= 0.9
+
+
+def test_options_are_checked_against_the_registered_environment() -> None:
+    """render_mode against the environment's metadata, other keys against its constructor,
+    each at its line, before Gymnasium makes it (and warns in its own words)."""
+    import tempfile
+
+    from typer.testing import CliRunner
+
+    from flctool.cli import app as cli_app
+
+    text = (BEHAVIOURS / "cartpole.yaml").read_text().replace(
+        "  id: CartPole-v1\n",
+        "  id: CartPole-v1\n  options: {render_mode: rgb_arary, sutton_barto: true}\n")
+    with pytest.raises(SpecError) as info:
+        make_env(parse_behaviour(text, "cartpole.yaml"))
+    messages = {p.path[-1]: (p.message, p.hint) for p in info.value.problems}
+    assert messages["render_mode"][0] == ("'rgb_arary' is not a render mode of 'CartPole-v1'. "
+                                          "Did you mean 'rgb_array'?")
+    assert "Did you mean 'sutton_barto_reward'?" in messages["sutton_barto"][0]
+    assert all(p.line is not None for p in info.value.problems)
+    good = text.replace("render_mode: rgb_arary, sutton_barto: true",
+                        "render_mode: rgb_array, sutton_barto_reward: true")
+    make_env(parse_behaviour(good, "cartpole.yaml")).close()
+    with tempfile.TemporaryDirectory() as folder:
+        path = f"{folder}/cartpole.yaml"
+        with open(path, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        result = CliRunner().invoke(cli_app, ["validate", path])
+    assert result.exit_code == 1 and "not a render mode" in result.output
+    assert "WARN" not in result.output  # Gymnasium's own warning never shows

@@ -14,10 +14,12 @@ from flctool.registry import UnknownNameError
 from flctool.spec import behaviour_from_data, behaviour_to_data
 
 from ..conftest import BEHAVIOURS, MINIMAL
+from ..ros2_support import robot_behaviour, sim_robot
 
 # One shipped behaviour per registered adapter.
 EXAMPLES = {"ballchase-sim": "ballchase.yaml", "gymnasium": "cartpole.yaml",
-            "robot-link": "ballchase-robot.yaml", "pitch": "face-goal.yaml"}
+            "robot-link": "ballchase-robot.yaml", "pitch": "face-goal.yaml",
+            "ros2": "ballchase-ros2.yaml"}
 
 
 def test_every_adapter_has_a_config_and_an_example() -> None:
@@ -29,6 +31,10 @@ def test_every_registered_adapter_passes_the_checker(adapter: str) -> None:
     behaviour = load_behaviour(BEHAVIOURS / EXAMPLES[adapter])
     assert behaviour.environment is not None
     assert behaviour.environment.adapter == adapter
+    if adapter == "ros2":  # a ROS 2 robot, one episode at a time: the reference robot
+        with sim_robot("/checked"):
+            check_env(lambda: make_env(robot_behaviour("/checked"), 1), batch_size=1)
+        return
     if adapter != "robot-link":
         check_env(lambda: make_env(behaviour, 3), batch_size=3)
         return

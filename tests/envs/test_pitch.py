@@ -274,7 +274,7 @@ def test_moving_obstacles_stay_on_the_pitch() -> None:
     assert isinstance(env, PitchSim)
     for _ in range(400):
         env.step(np.zeros(8))
-        for ob in env._state.obstacles:
+        for ob in env._engine.state.obstacles:
             assert np.all(np.abs(ob[0]) <= 2100 + 80) and np.all(np.abs(ob[1]) <= 1350 + 80)
 
 

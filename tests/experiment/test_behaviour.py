@@ -18,6 +18,7 @@ from flctool.experiment import (
 )
 from flctool.runs import resolve_behaviour
 from flctool.spec import behaviour_to_data, behaviour_to_yaml
+from flctool.spec.overrides import Override
 
 from ..conftest import BEHAVIOURS
 from .helpers import MIXED_LEARNING, line_of, write_mixed
@@ -66,11 +67,10 @@ def test_keys_no_compared_learner_reads_are_located_errors(tmp_path: Path) -> No
         problem.message
     assert "add fuzzy_q to --learners" in problem.hint
 
-    labels = {"crossover": "command line (--set crossover)",
-              "exploration.decay": "command line (--set exploration.decay)"}
     with pytest.raises(SpecError) as info:
-        read_experiment_behaviour(file, ("fuzzy_q",), {"crossover": 0.5,
-                                                       "exploration.decay": 0.9}, labels)
+        read_experiment_behaviour(file, ("fuzzy_q",), [
+            Override("crossover", 0.5, "command line (--set crossover)"),
+            Override("exploration.decay", 0.9, "command line (--set exploration.decay)")])
     [problem] = info.value.problems  # exploration is fuzzy_q's: applied, not refused
     assert problem.file == "command line (--set crossover)"
     assert "read by the pitt and hybrid learners, none of which this experiment compares" \

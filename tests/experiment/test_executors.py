@@ -26,6 +26,7 @@ def _report(tmp_path: Path, name: str, executor: Any) -> tuple[str, str]:
             (experiment.path / SUMMARY_FILE).read_text())
 
 
+@pytest.mark.slow
 def test_one_and_two_local_workers_give_identical_reports(tmp_path: Path) -> None:
     one = _report(tmp_path, "one", LocalExecutor(1))
     two = _report(tmp_path, "two", LocalExecutor(2))
@@ -46,6 +47,7 @@ def local_ray() -> Iterator[None]:
         ray.shutdown()
 
 
+@pytest.mark.slow
 def test_ray_gives_the_report_of_the_local_executor(tmp_path: Path, local_ray: None) -> None:
     local = _report(tmp_path, "local", LocalExecutor(1))
     remote = _report(tmp_path, "ray", RayExecutor())
@@ -98,6 +100,7 @@ def test_unpacking_refuses_files_outside_the_run(tmp_path: Path) -> None:
     assert (tmp_path / "run" / "checkpoints" / "gen-00000.json").read_bytes() == b"{}"
 
 
+@pytest.mark.slow
 def test_a_flctool_error_in_a_ray_worker_reads_as_locally(tmp_path: Path,
                                                           local_ray: None) -> None:
     experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("pitt",))

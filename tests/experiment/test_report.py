@@ -46,8 +46,8 @@ def test_summary_matches_the_runs(finished: Path) -> None:
     # model selection's validation episodes are counted, as each run recorded them
     from flctool.runs import open_run
 
-    usage = [open_run(experiment.runs_dir / f"hybrid-seed{s}").summary().usage
-             for s in range(3)]
+    usage = [open_run(experiment.runs_dir / f"hybrid-seed{s}").summary().usage.to_dict()
+             for s in range(3)]  # type: ignore[union-attr]
     assert cost["selection_episodes"] == sum(u["selection_episodes"] for u in usage) > 0
     assert cost["episodes_per_run_max"] == max(
         u["training_episodes"] + u["selection_episodes"] for u in usage)

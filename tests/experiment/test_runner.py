@@ -13,7 +13,7 @@ from flctool.experiment import ExperimentPlan, open_experiment, parse_learners, 
 from flctool.experiment.executors import LocalExecutor
 from flctool.experiment.runner import HELDOUT_FILE, JobOutcome, prepare_experiment, run_job
 from flctool.rollout import evaluation_seeds
-from flctool.runs import open_run
+from flctool.runs import ENDED, open_run
 
 from .helpers import tiny_experiment
 
@@ -27,7 +27,7 @@ def test_every_learner_on_every_seed(tmp_path: Path) -> None:
     for learner, seed, directory in experiment.run_dirs():
         run = open_run(directory)
         assert (run.learner, run.seed) == (learner, seed)
-        assert run.info()["status"] == "finished"
+        assert run.info()["status"] in ENDED
         assert len(run.metrics()) == 3
         heldout = json.loads((directory / HELDOUT_FILE).read_text())
         assert heldout["episodes"] == 20
@@ -144,6 +144,7 @@ def test_a_run_killed_while_being_created_starts_over(tmp_path: Path) -> None:
     assert open_run(directory).info()["status"] == "finished"
 
 
+@pytest.mark.slow
 def test_a_killed_command_continues_where_it_stopped(tmp_path: Path) -> None:
     """SIGKILL the command mid-way (no chance to clean up), then run it again."""
     import os
@@ -180,3 +181,34 @@ def test_a_killed_command_continues_where_it_stopped(tmp_path: Path) -> None:
     whole.run(LocalExecutor(1))
     write_report(whole)
     assert (out / "report.md").read_text() == (whole.path / "report.md").read_text()
+
+
+def test_a_second_process_on_the_same_experiment_is_refused(tmp_path: Path) -> None:
+    """Like a run, an experiment is run by one process at a time: the second would run the
+    same unfinished jobs."""
+    from flctool.dirlock import DirectoryLock
+    from flctool.experiment.runner import LOCK_FILE
+
+    experiment = tiny_experiment(tmp_path / "exp")
+    holder = DirectoryLock(experiment.path / LOCK_FILE)
+    assert holder.acquire()  # another process, as flock sees it: another open file
+    try:
+        with pytest.raises(RunDirError, match=r"being run by another flctool process "
+                           r"\(pid \d+\)") as info:
+            experiment.run(LocalExecutor(1))
+        assert "run the same command again" in info.value.hint
+        assert not (experiment.path / "runs").exists()  # nothing was started
+    finally:
+        holder.release()
+
+
+def test_an_experiment_lock_planted_as_a_link_is_refused(tmp_path: Path) -> None:
+    from flctool.experiment.runner import LOCK_FILE
+
+    experiment = tiny_experiment(tmp_path / "exp")
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious\n")
+    (experiment.path / LOCK_FILE).symlink_to(victim)
+    with pytest.raises(RunDirError, match="cannot lock"):
+        experiment.run(LocalExecutor(1))
+    assert victim.read_text() == "precious\n"

@@ -9,6 +9,7 @@ import numpy as np
 
 from flctool import with_rules
 from flctool.spec import Behaviour, behaviour_from_data
+from flctool.spec.shapes import set_row
 
 
 def _partition(rng: np.random.Generator, lo: float, hi: float, count: int
@@ -75,7 +76,8 @@ def random_states(behaviour: Behaviour, count: int, seed: int, margin: float = 0
         lo, hi = variable.range
         width = hi - lo
         column = rng.uniform(lo - margin * width, hi + margin * width, count)
-        corners = np.array([lo, hi, *(x for q in variable.sets.values() for x in q)])
+        corners = np.array([lo, hi, *(x for q in variable.sets.values() for x in set_row(q)[1]
+                                      if lo <= x <= hi)])
         pick = rng.random(count) < 0.1
         column[pick] = rng.choice(corners, int(pick.sum()))
         columns.append(column)

@@ -72,6 +72,7 @@ def run(program: Path, which: int, states: np.ndarray) -> np.ndarray:
     return np.array([float(v) for v in result.stdout.split()])
 
 
+@pytest.mark.slow
 @needs_cc
 def test_c_matches_python_on_10000_states(tmp_path: Path) -> None:
     shipped = [load_behaviour(p) for p in SHIPPED]
@@ -192,11 +193,13 @@ def test_command_is_the_nearest_singleton_and_the_header_gives_the_range(tmp_pat
 #include "ctl.h"
 int main(void)
 {{
-    double s[{n}];
-    int i;
+    double s[{n}], out;
+    int i, command;
     for (;;) {{
         for (i = 0; i < {n}; ++i) if (scanf("%lf", &s[i]) != 1) return 0;
-        printf("%d\\n", r_command(s));
+        command = r_decide(s, &out);  /* one inference: the output and its command */
+        if (command != r_command(s) || !(out == r_output(s) || out != out)) return 9;
+        printf("%d %.17g\\n", command, out);
     }}
 }}
 """)
@@ -207,8 +210,10 @@ int main(void)
     result = subprocess.run([str(tmp_path / "main")], check=True, capture_output=True,
                             text=True, input="\n".join(" ".join(map(repr, row))
                                                        for row in states.tolist()))
-    got = np.array([int(v) for v in result.stdout.split()])
+    rows = [line.split() for line in result.stdout.splitlines()]
+    got = np.array([int(command) for command, _ in rows])
     outputs = compile_behaviour(behaviour).output(states)
+    assert np.array_equal(np.array([float(out) for _, out in rows]), outputs)
     order = np.argsort(values, kind="stable")  # a tie goes to the smaller singleton
     nearest = np.argmin(np.abs(np.array(values)[order][None, :] - outputs[:, None]), axis=1)
     assert np.array_equal(got, order[nearest])

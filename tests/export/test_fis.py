@@ -70,8 +70,10 @@ def test_import_reads_the_subset() -> None:
     ("Type='sugeno'", "Type='mamdani'", r"tiny.fis:3: Type='mamdani'.*Mamdani output sets"),
     ("MF2='up':'constant',[1]", "MF2='up':'linear',[1 0]",
      r"tiny.fis:21: output term 'up' is first-order Takagi-Sugeno"),
-    ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'gaussmf',[0.1 1]",
-     r"tiny.fis:14: membership function 'high' is a gaussmf"),
+    ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'discretemf',[0.1 1]",
+     r"tiny.fis:14: membership function 'high' is a discretemf"),
+    ("MF2='high':'trimf',[0.2 1 1]", "MF2='high':'gaussmf',[0 1]",
+     r"tiny.fis:14: .*sigma is 0.0; it must be above 0"),
     ("1, 2 (1) : 1", "1, 2 (0.5) : 1", r"tiny.fis:24: a rule weight of 0.5"),
     ("1, 2 (1) : 1", "-1, 2 (1) : 1", r"tiny.fis:24: NOT"),
     ("NumOutputs=1", "NumOutputs=2", r"tiny.fis:5: NumOutputs=2"),
@@ -194,6 +196,7 @@ def _fis_quads(behaviour: Behaviour) -> list[list[tuple[float, ...]]]:
 
 @pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
                          ids=lambda s: getattr(s, "name", str(s)))
+@pytest.mark.slow
 def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
     """fuzzylite 6 reads the export and agrees within 1e-12 apart from its 1e-6 tolerance,
     20 % past the range's ends too: shoulders' feet lie a range width outside it."""
@@ -213,6 +216,7 @@ def test_no_mf_has_a_vertical_edge() -> None:
                     len(values) == 4 and values[0] < values[1] <= values[2] < values[3])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("source", [*SHIPPED, 12], ids=str)
 def test_octave_reads_and_agrees(source: object, tmp_path: Path) -> None:
     """Optional: Octave's fuzzy-logic-toolkit (readfis / evalfis) reads the export and agrees
@@ -253,3 +257,43 @@ def test_refusals_of_other_toolchains_files_say_what_to_do(old: str, new: str,
                                                            message: str) -> None:
     with pytest.raises(ExportError, match=message):
         FisImporter().from_string(SYSTEM.replace(old, new), "tiny.fis")
+
+
+TWO_OUTPUTS = (SYSTEM.replace("NumOutputs=1", "NumOutputs=2")
+               .replace("[Rules]", "[Output2]\nName='v'\nRange=[0 2]\nNumMFs=2\n"
+                        "MF1='slow':'constant',[0.5]\nMF2='fast':'constant',[2]\n\n[Rules]")
+               .replace("1, 2 (1) : 1\n2, 1 (1) : 1", "1, 2 2 (1) : 1\n2, 1 0 (1) : 1\n"
+                        "2, 0 1 (1) : 1"))
+
+
+def test_several_outputs_import_as_one_behaviour_each(tmp_path: Path) -> None:
+    """Each output keeps the rules that give it an MF (index 0 gives none), and fuzzylite 6
+    computes each output of the file as the behaviour of that output does."""
+    importer = FisImporter()
+    with pytest.raises(ExportError, match=r"tiny.fis:1: the controller has 2 outputs"):
+        importer.from_string(TWO_OUTPUTS, "tiny.fis")
+    u, v = importer.from_string_all(TWO_OUTPUTS, "tiny.fis")
+    assert (u.name, v.name) == ("u", "v")
+    assert [(r.if_["x"], r.then) for r in u.rules] == [("low", "up"), ("high", "down")]
+    assert [(r.if_["x"], r.then) for r in v.rules] == [("low", "fast"), ("high", "slow")]
+    assert "2 outputs, imported as one behaviour each" in importer.report
+    with pytest.raises(ExportError, match=r"tiny.fis:33: a rule weight of 0.5"):
+        importer.from_string_all(TWO_OUTPUTS.replace("2, 0 1 (1)", "2, 0 1 (0.5)"), "tiny.fis")
+    states = np.linspace(0.0, 1.0, 101)[:, None]
+    got = fuzzylite_outputs_all(TWO_OUTPUTS, states, tmp_path)
+    for k, behaviour in enumerate((u, v)):
+        assert np.max(np.abs(got[:, k] - compile_behaviour(behaviour).output(states))) <= 1e-12
+
+
+def fuzzylite_outputs_all(text: str, states: np.ndarray, folder: Path) -> np.ndarray:
+    import subprocess
+
+    from .engines import fuzzylite_binary
+
+    (folder / "e.fis").write_text(text, encoding="utf-8")
+    (folder / "s.fld").write_text("\n".join(repr(float(x)) for x in states[:, 0]) + "\n")
+    result = subprocess.run([fuzzylite_binary(), "-i", str(folder / "e.fis"), "-if", "fis",
+                             "-of", "fld", "-d", str(folder / "s.fld"), "-dheader", "false",
+                             "-dinputs", "false", "-decimals", "17"],
+                            capture_output=True, text=True, timeout=60, check=True)
+    return np.array([[float(v) for v in line.split()] for line in result.stdout.splitlines()])

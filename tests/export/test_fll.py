@@ -42,6 +42,7 @@ def fuzzylite_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     return result
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("exact_fuzzylite")
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
 def test_pyfuzzylite_matches_on_10000_states(path: object) -> None:
@@ -52,6 +53,7 @@ def test_pyfuzzylite_matches_on_10000_states(path: object) -> None:
     assert np.max(np.abs(got - compile_behaviour(behaviour).output(states))) <= 1e-9
 
 
+@pytest.mark.slow
 @pytest.mark.usefixtures("exact_fuzzylite")
 @pytest.mark.parametrize("seed", [3, 11, 12])
 def test_pyfuzzylite_matches_random_controllers(seed: int) -> None:
@@ -117,10 +119,12 @@ def test_import_reads_the_subset() -> None:
 
 
 @pytest.mark.parametrize(("old", "new", "message"), [
-    ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1",
-     r"tiny.fll:7: a Gaussian term"),
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Cosine 0.8 0.1",
+     r"tiny.fll:7: a Cosine term"),
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1 0.5",
+     r"tiny.fll:7: the term 'high' has height 0.5"),
     ("term: up Constant 1.0", "term: up Triangle 0.0 0.5 1.0",
-     r"tiny.fll:14: output term 'up' is a Triangle.*Mamdani"),
+     r"tiny.fll:14: output 'u' has Mamdani sets.*\(fix: import with --mamdani-singletons"),
     ("rule: if x is low then u is up", "rule: if x is low or x is high then u is up",
      r"tiny.fll:19: an 'or' rule"),
     ("rule: if x is low then u is up", "rule: if x is very low then u is up",
@@ -130,10 +134,9 @@ def test_import_reads_the_subset() -> None:
     ("rule: if x is low then u is up", "rule: if x is low then u is up with 0.5",
      r"tiny.fll:19: a rule weight of 0.5"),
     ("term: low Trapezoid 0.0 0.0 0.2 0.8", "term: low Trapezoid 0.0 0.0 0.2 0.8 0.5",
-     r"tiny.fll:6: a term of height 0.5"),
+     r"tiny.fll:6: the term 'low' has height 0.5"),
     ("  defuzzifier: WeightedAverage TakagiSugeno", "  defuzzifier: Centroid 100",
      r"tiny.fll:12: defuzzifier Centroid"),
-    ("RuleBlock: rules", "OutputVariable: v\nRuleBlock: rules", r"tiny.fll:15: a second output"),
     ("rule: if x is high then u is down", "rule: if x is high then u is up",
      None),  # two rules may share a term without aggregation
     ("  activation: General", "  activation: Highest 1", r"tiny.fll:18: activation Highest"),
@@ -251,6 +254,7 @@ def test_an_infinite_point_inside_a_term_is_refused() -> None:
 
 @pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
                          ids=lambda s: getattr(s, "name", str(s)))
+@pytest.mark.slow
 def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
     """The fuzzylite 6 command line reads the export and agrees within 1e-12, apart from its
     1e-6 tolerance; the states include set corners and states 20 % out of range."""
@@ -278,3 +282,21 @@ def test_the_outputs_settings_must_be_valid(line: str) -> None:
     text = ENGINE.replace("  range: -1.0 1.0", line)
     with pytest.raises(ExportError, match=r"tiny.fll:\d+: "):
         FllImporter().from_string(text, "tiny.fll")
+
+
+def test_several_outputs_import_as_one_behaviour_each() -> None:
+    """Each output keeps the rules that conclude on it: fuzzylite computes the outputs
+    independently, so each behaviour is exact."""
+    text = (ENGINE.replace("RuleBlock: rules", "OutputVariable: v\n  enabled: true\n"
+                           "  defuzzifier: WeightedAverage\n  term: slow Constant 0.5\n"
+                           "  term: fast Constant 2.0\nRuleBlock: rules")
+            .replace("then u is up", "then u is up and v is fast")
+            .replace("then u is down", "then v is slow and u is down"))
+    importer = FllImporter()
+    with pytest.raises(ExportError, match=r"tiny.fll:1: the controller has 2 outputs"):
+        importer.from_string(text, "tiny.fll")
+    u, v = importer.from_string_all(text, "tiny.fll")
+    assert (u.name, u.output.name, v.name, v.output.name) == ("u", "u", "v", "v")
+    assert [(r.if_["x"], r.then) for r in u.rules] == [("low", "up"), ("high", "down")]
+    assert [(r.if_["x"], r.then) for r in v.rules] == [("low", "fast"), ("high", "slow")]
+    assert "2 outputs, imported as one behaviour each" in importer.report

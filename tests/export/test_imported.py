@@ -97,7 +97,8 @@ def test_hostile_lines_are_refused_quickly_with_a_line(format: str, text: str) -
 def test_a_file_too_large_is_refused_before_it_is_read(format: str, tmp_path: Path) -> None:
     path = tmp_path / f"big.{format}"
     path.write_text("#" * (MAX_IMPORT_CHARS + 1), encoding="utf-8")
-    with pytest.raises(ExportError, match=r"big\.\w+:1: the file holds 8,000,001 characters"):
+    with pytest.raises(ExportError, match=rf"big\.\w+:1: the file holds {MAX_IMPORT_CHARS + 1:,} "
+                       "characters"):
         IMPORTERS.get(format)().from_file(path)
 
 
@@ -142,3 +143,17 @@ def test_mutated_exports_import_or_fail_with_a_location(case: tuple[str, str]) -
         IMPORTERS.get(format)().from_string(text, file)
     except FlcError as error:
         assert _located(error, file), str(error)
+
+
+@pytest.mark.parametrize("format", ["fll", "fis", "fcl"])
+def test_a_byte_order_mark_is_read_as_nothing(format: str, tmp_path: Path) -> None:
+    from flctool import load_behaviour
+    from flctool.export import EXPORTERS, IMPORTERS
+
+    from .roundtrip import SHIPPED
+
+    behaviour = load_behaviour(SHIPPED[0])
+    path = tmp_path / f"bom.{format}"
+    path.write_text("\ufeff" + EXPORTERS.get(format)().to_string(behaviour), encoding="utf-8")
+    imported = IMPORTERS.get(format)().from_file(path)
+    assert [v.sets for v in imported.inputs.values()] == [v.sets for v in behaviour.inputs.values()]

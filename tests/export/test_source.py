@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from flctool import load_behaviour
-from flctool.errors import ExportError, RunDirError
+from flctool.errors import ExportError, FlcError, RunDirError
 from flctool.export import load_source
 
 from .roundtrip import SHIPPED
@@ -26,7 +26,7 @@ def test_generation_needs_a_run_directory() -> None:
 
 
 def test_a_missing_source_is_named(tmp_path: Path) -> None:
-    with pytest.raises(ExportError, match=r"nope\.yaml: no such file or directory"):
+    with pytest.raises(FlcError, match=r"nope\.yaml: no such file or directory"):
         load_source(tmp_path / "nope.yaml")
 
 

@@ -81,7 +81,7 @@ BAD = [
     ("uncovered gap", GOOD.replace("[0, 0, 0.2, 0.6]", "[0, 0, 0.2, 0.3]"), 6,
      "inputs.size.sets", "the values between 0.3 and 0.4 belong to no set"),
     ("uncovered point", GOOD.replace("[0, 0, 0.2, 0.6]", "[0, 0, 0.2, 0.4]"), 6,
-     "inputs.size.sets", "the point 0.4 belong to no set"),
+     "inputs.size.sets", "the point 0.4 belongs to no set"),
     ("unknown set in a rule", GOOD.replace("{size: small, pan: left}", "{size: small, pan: lefft}"),
      20, "rules.1.if.pan", "input 'pan' has no set 'lefft'. Did you mean 'left'?"),
     ("unknown command", GOOD.replace("then: left}", "then: leftt}"), 20,

@@ -14,9 +14,9 @@ from flctool.envs.robot_server import RobotServer
 from flctool.errors import Problem
 from flctool.learners import LEARNERS, make_learner
 from flctool.learners.genetic import PittLearner
-from flctool.runs import resolve_behaviour
 from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
 from flctool.spec.located import locate, locate_error, located, source_of
+from flctool.spec.overrides import Override, resolve_behaviour
 
 from ..conftest import BEHAVIOURS
 
@@ -42,9 +42,8 @@ def test_an_adapters_complaint_is_located_in_the_file(tmp_path: Path) -> None:
 
 
 def test_an_overridden_field_is_placed_where_the_override_was_given() -> None:
-    behaviour = resolve_behaviour(load_behaviour(CARTPOLE),
-                                  {"environment.observations.pole_angle": 9},
-                                  {"environment.observations.pole_angle": "my script"})
+    behaviour = resolve_behaviour(load_behaviour(CARTPOLE), [
+        Override("environment.observations.pole_angle", 9, "my script")])
     with pytest.raises(SpecError) as caught:
         make_env(behaviour, 1)
     assert caught.value.problems[0].location() == "my script"

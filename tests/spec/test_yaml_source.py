@@ -101,9 +101,67 @@ def test_a_large_file_reads_like_a_small_one() -> None:
     assert len(body) > yaml_source._LIBYAML_FROM  # read by libyaml, where installed
     data, source = read_yaml(body, "big.yaml")
     assert data["k2999"] == [2999, "yes", 10, "1:00", None, True, 16]
-    assert source.marks[("k2999", 1)] == (3000, 15)
+    assert source.locate(("k2999", 1)) == (3000, 15)
     for bad, message in (("x: " + "[" * 100 + "]" * 100, f"nested more than {MAX_DEPTH} deep"),
                          ("x: &a [1, *a]", "refers to the list or map that contains it"),
                          ("x: !!int abc", "'abc' is not an integer")):
         line, got = _refusal(body + bad + "\n")
         assert line == 3001 and message in got
+
+
+def test_both_parsers_read_the_same_values_marks_and_raw_texts() -> None:
+    """Files above _LIBYAML_FROM are read by libyaml, smaller ones by PyYAML's parser: the
+    same events, so the same values, positions and remembered spellings."""
+    from flctool.spec import yaml_source
+
+    body = ("a: &x [1, yes, 010, {b: ~, c: 'q'}]\nd: *x\ne: [off, 1:00, !!str 2]\n"
+            "f:\n  - {g: true}\n  - [h, [i]]\n")
+    padding = "#" + " " * yaml_source._LIBYAML_FROM + "\n"
+    small_data, small = read_yaml(body, "f.yaml")
+    large_data, large = read_yaml(padding + body, "f.yaml")
+    assert small_data == large_data
+    paths = [("a",), ("a", 1), ("a", 3, "b"), ("d", 2), ("d", 3, "c"), ("e", 1), ("f", 1, 1, 0)]
+    for path in paths:
+        line, column = small.locate(path)
+        assert large.locate(path) == (line + 1 if line else line, column)
+    assert small.raw == large.raw
+    assert small.raw[("e", 0)] == "off" and small.raw[("d", 3, "b")] == "~"
+    assert small.locate(("d", 3, "c")) == (1, 28)  # inside an alias: where the anchor has it
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("a: &x 1\nb: &x 2\n", "found duplicate anchor 'x'"),
+    ("a: *nowhere\n", "found undefined alias 'nowhere'"),
+    ("a: 1\n---\nb: 2\n", "found another document"),
+    ("? [a, b]\n: 1\n", "a key must be a plain name"),
+])
+def test_a_broken_document_is_refused_with_its_line(text: str, message: str) -> None:
+    line, got = _refusal(text)
+    assert line is not None and message in got
+
+
+def test_a_value_after_a_refused_key_is_skipped_and_the_map_goes_on() -> None:
+    with pytest.raises(SpecError) as info:
+        read_yaml("m:\n  ? {k: 1}\n  : [1, 2]\n  n: 3\n", "f.yaml")
+    assert [p.message for p in info.value.problems] == ["a key must be a plain name"]
+    data, _ = read_yaml("m:\n  n: 3\n", "f.yaml")
+    assert data == {"m": {"n": 3}}
+
+
+def test_the_garbage_collector_runs_again_after_a_read_however_it_ends() -> None:
+    import gc
+
+    from flctool.spec import parse_behaviour
+
+    assert gc.isenabled()
+    read_yaml("a: [1, 2]\n", "f.yaml")
+    assert gc.isenabled()
+    with pytest.raises(SpecError):
+        parse_behaviour("flctool: 1\na: [\n", "f.yaml")
+    assert gc.isenabled()
+    gc.disable()
+    try:  # a caller that paused it keeps it paused
+        read_yaml("a: 1\n", "f.yaml")
+        assert not gc.isenabled()
+    finally:
+        gc.enable()

@@ -1,13 +1,14 @@
-"""A plugin package as a third party would write it: one learner and one environment.
+"""flctool-demo: a random-search learner and a one-dimensional line world for flctool.
 
-Its dist-info folder beside it is what ``pip install`` leaves, so putting this folder on the
-path installs it as far as importlib.metadata (and so flctool) can tell.
+The entries (named by the package's entry points) and the models of the behaviour-file
+sections they read; the implementations are imported only when a file names them.
 """
 
 from typing import Literal
 
 from pydantic import Field
 
+from flctool.errors import Problem
 from flctool.plugins import Plugin
 from flctool.spec.environment import AdapterConfig
 from flctool.spec.learning import LearningConfig
@@ -26,6 +27,13 @@ class LineConfig(AdapterConfig):
     adapter: Literal["line"]
     max_steps: int = Field(20, ge=1)
     goal: float = Field(9.0, description="x at which an episode succeeds")
+
+    def fit_problems(self, inputs: tuple[str, ...], commands: tuple[str, ...]) -> list[Problem]:
+        # The world observes one thing, x: a behaviour must read exactly that.
+        if inputs == ("x",):
+            return []
+        return [Problem(("inputs",), f"the line world observes x only, not {', '.join(inputs)}",
+                        "give the behaviour one input, named x")]
 
 
 LEARNER = Plugin("random_search", "flctool_demo.learner:RandomSearchLearner", RandomSearchConfig)

@@ -1,0 +1,131 @@
+"""Learning the consequents only, or the consequents and the fuzzy sets, at equal budgets.
+
+For each task (a shipped behaviour file) and each training seed, ``flctool learn`` runs twice
+with the file's own settings: as the file is (consequents only), and with ``learning.sets``
+added (mode ``partition`` for inputs whose sets are a strong partition, ``lateral`` for the
+others, every other setting of the section at its default). Both runs have the same
+population, generations and trials, so the same training episodes; validation episodes are
+counted too (every episode a run used is in its usage). Each run's ``best.yaml`` is then
+evaluated on ``--episodes`` held-out episodes (seeds below 2^31, as ``flctool evaluate --seed
+0`` draws them; training and selection never use them).
+
+Reported per task and variant: the median and the worst seed of the held-out score (mean
+return for Gymnasium tasks, success rate for the pitch and ballchase tasks), the episodes
+used, CPU seconds, and the two-sided Mann-Whitney U p-value of sets against consequents only.
+
+    nice -n 10 python benchmarks/sets_vs_consequents.py --seeds 10 --json sets_vs_consequents.json
+    python benchmarks/sets_vs_consequents.py --tasks ballchase,pendulum --seeds 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from scipy.stats import mannwhitneyu
+
+from flctool import compile_behaviour, load_behaviour
+from flctool.envs import make_env
+from flctool.rollout import evaluate, evaluation_seeds
+from flctool.runs import BEST_FILE, create_run, resolve_behaviour
+from flctool.spec.models import Behaviour
+from flctool.spec.set_learning import strong_partition_problems
+
+ROOT = Path(__file__).resolve().parents[1]
+#: task -> (behaviour file, score: "return" (mean return) or "success" (success rate))
+TASKS = {"ballchase": ("ballchase", "success"), "avoid-obstacle": ("avoid-obstacle", "success"),
+         "cartpole": ("cartpole", "return"), "mountaincar": ("mountaincar", "return"),
+         "acrobot": ("acrobot", "return"), "pendulum": ("pendulum", "return")}
+
+
+def sets_section(behaviour: Behaviour) -> dict[str, Any]:
+    """``learning.sets`` for every input: partition where the file's sets are a strong
+    partition, lateral elsewhere (a rule that needs no tuning per file)."""
+    inputs = {name: {"mode": "partition" if not strong_partition_problems(name, variable)
+                     else "lateral"} for name, variable in behaviour.inputs.items()}
+    return {"inputs": inputs}
+
+
+def run_one(task: str, seed: int, with_sets: bool, episodes: int,
+            workdir: Path) -> dict[str, Any]:
+    file, score = TASKS[task]
+    behaviour = load_behaviour(ROOT / "behaviours" / f"{file}.yaml")
+    overrides: dict[str, Any] = {"seed": seed}
+    if with_sets:
+        overrides["sets"] = sets_section(behaviour)
+    behaviour = resolve_behaviour(behaviour, overrides)
+    run = create_run(behaviour, workdir / f"{task}-{seed}-{'sets' if with_sets else 'cons'}")
+    started = time.process_time()
+    summary = run.train()
+    cpu = time.process_time() - started
+    best = load_behaviour(run.path / BEST_FILE)
+    env = make_env(best, episodes)
+    try:
+        result = evaluate(compile_behaviour(best), env, evaluation_seeds(0, episodes))
+    finally:
+        env.close()
+    usage = summary.to_dict()["usage"]
+    value = (float(result.mean_return.value) if score == "return"
+             else float(result.success_rate.value))
+    return {"task": task, "seed": seed, "sets": with_sets, "score": value,
+            "mean_return": float(result.mean_return.value),
+            "success_rate": float(result.success_rate.value),
+            "episodes": usage["training_episodes"] + usage["selection_episodes"],
+            "training_episodes": usage["training_episodes"],
+            "selection_episodes": usage["selection_episodes"], "train_cpu_seconds": cpu}
+
+
+def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for variant, flag in (("consequents", False), ("sets", True)):
+        scores = [r["score"] for r in rows if r["sets"] is flag]
+        used = [r["episodes"] for r in rows if r["sets"] is flag]
+        cpu = [r["train_cpu_seconds"] for r in rows if r["sets"] is flag]
+        out[variant] = {"median": statistics.median(scores), "worst": min(scores),
+                        "seeds": len(scores), "median_episodes": statistics.median(used),
+                        "median_cpu_seconds": statistics.median(cpu)}
+    a = [r["score"] for r in rows if r["sets"]]
+    b = [r["score"] for r in rows if not r["sets"]]
+    out["mann_whitney_p"] = (float(mannwhitneyu(a, b, alternative="two-sided").pvalue)
+                             if a and b and len(set(a + b)) > 1 else 1.0)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--tasks", default=",".join(TASKS))
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--json", type=Path, default=Path("sets_vs_consequents.json"))
+    args = parser.parse_args()
+    results: list[dict[str, Any]] = []
+    summary: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for task in args.tasks.split(","):
+            rows = []
+            for seed in range(args.seeds):
+                for with_sets in (False, True):
+                    row = run_one(task, seed, with_sets, args.episodes, Path(tmp))
+                    rows.append(row)
+                    print(f"{task:15} seed {seed:2d} {'sets' if with_sets else 'cons':4} "
+                          f"score {row['score']:9.3f} episodes {row['episodes']:6d} "
+                          f"cpu {row['train_cpu_seconds']:6.1f} s", flush=True)
+            results += rows
+            summary[task] = s = summarise(rows)
+            c, t = s["consequents"], s["sets"]
+            print(f"{task}: consequents median {c['median']:.3f} worst {c['worst']:.3f} | "
+                  f"+sets median {t['median']:.3f} worst {t['worst']:.3f} | "
+                  f"Mann-Whitney p {s['mann_whitney_p']:.3g}", flush=True)
+            args.json.write_text(json.dumps({"episodes": args.episodes, "seeds": args.seeds,
+                                             "summary": summary, "runs": results},
+                                            indent=2) + "\n")
+    print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()

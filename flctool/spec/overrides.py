@@ -1,0 +1,103 @@
+"""Overrides: changes to a behaviour's ``learning:`` or ``environment:`` section, each carrying
+where it was given, validated like the file itself.
+
+    resolve_behaviour(behaviour, {"seed": 3, "q.alpha": 0.2})        # given "in overrides"
+    resolve_behaviour(behaviour, [Override("seed", 3, "my sweep (seed)")])
+
+An error about an overridden field is placed where the override was given (its
+:attr:`Override.origin`: ``overrides (q.alpha)`` by default; the command line says
+``command line (--set q.alpha)``), any other at its line in the behaviour's file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from flctool.errors import PathPart, Problem, SpecError
+from flctool.spec.dump import behaviour_to_data
+from flctool.spec.learning import keep_keys_read_by
+from flctool.spec.load import behaviour_from_data
+from flctool.spec.located import source_of
+from flctool.spec.models import Behaviour
+
+
+def override_path(key: str) -> tuple[str, ...]:
+    """The field path an override key names: ``q.alpha`` is ``learning.q.alpha``; keys may
+    also start with ``learning.`` or ``environment.``."""
+    path = tuple(key.split("."))
+    return path if path[0] in ("learning", "environment") else ("learning", *path)
+
+
+@dataclass(frozen=True)
+class Override:
+    """One override: a dotted ``key`` under ``learning:`` (``seed``, ``q.temperature``) or
+    starting with ``learning.`` / ``environment.``, its ``value``, and where it was given."""
+
+    key: str
+    value: Any
+    #: Where it was given, as errors name it; by default ``overrides (KEY)``.
+    origin: str = ""
+
+    @property
+    def path(self) -> tuple[str, ...]:
+        """The field it sets (:func:`override_path`)."""
+        return override_path(self.key)
+
+    @property
+    def where(self) -> str:
+        """Where it was given: its origin, or ``overrides (KEY)``."""
+        return self.origin or f"overrides ({self.key})"
+
+
+#: Overrides as a library call takes them: a mapping key -> value, or :class:`Override`\\ s.
+Overrides = Mapping[str, Any] | Iterable[Override]
+
+
+def as_overrides(overrides: Overrides | None) -> list[Override]:
+    """``overrides`` as a list of :class:`Override` (a mapping's given "in overrides")."""
+    if overrides is None:
+        return []
+    if isinstance(overrides, Mapping):
+        return [Override(key, value) for key, value in overrides.items()]
+    return list(overrides)
+
+
+def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
+    """The behaviour with ``overrides`` applied and validated like the file itself.
+
+    Errors name the field, e.g. ``learning.crossover``; one about an overridden field is
+    placed where the override was given, any other at its line in the behaviour's file.
+    Overriding ``learner`` drops the keys of the behaviour's learner that the new one does
+    not read; keys the overrides give must be the new learner's.
+    """
+    given = as_overrides(overrides)
+    data = behaviour_to_data(behaviour)
+    learner = next((o.value for o in given if o.path == ("learning", "learner")), None)
+    if isinstance(learner, str):  # switching learner: the old one's keys were not for it
+        data["learning"] = keep_keys_read_by(data["learning"], learner)
+    places = apply_overrides(data, given)
+    return behaviour_from_data(data, source_of(behaviour).with_overrides(places))
+
+
+def apply_overrides(data: dict[str, Any], overrides: Overrides,
+                    ) -> dict[tuple[PathPart, ...], str]:
+    """Set each override in ``data`` (a behaviour as data, changed in place); returns where
+    each overridden field was given, for :meth:`SourceMap.with_overrides
+    <flctool.spec.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
+    given: dict[tuple[PathPart, ...], str] = {}
+    for override in as_overrides(overrides):
+        path = list(override.path)
+        node = data
+        for depth, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise SpecError([Problem(
+                    tuple(path[: depth + 1]), f"'{'.'.join(path[: depth + 1])}' is a value, "
+                    f"not a section, so '{override.key}' cannot be set", "set the value itself",
+                    file=override.where)], override.where)
+            node = child
+        node[path[-1]] = override.value
+        given[tuple(path)] = override.where
+    return given

@@ -1,0 +1,163 @@
+"""Composed behaviours: an arbiter whose commands are fixed behaviours (its parts) -- loading
+as a trust boundary, the parts inlined, one dynamics for both paths, learning the arbiter."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flctool import compile_behaviour, load_behaviour, parse_behaviour
+from flctool.envs import check_env, make_env
+from flctool.errors import SpecError
+from flctool.rollout import evaluate
+from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
+
+from ..conftest import BEHAVIOURS
+
+ARBITER = """flctool: 1
+name: arbiter
+inputs:
+  behind:
+    range: [0, 180]
+    sets: {{front: [0, 0, 90, 160], behind: [90, 160, 180, 180]}}
+output:
+  name: part
+  commands: {{chase: 0, dribble: 1}}
+rules: {rules}
+environment:
+  adapter: pitch
+  max_steps: 300
+  start:
+    robot: {{x: [-1500, 0], y: [-800, 800], heading: [-180, 180]}}
+    ball: {{x: [-500, 500], y: [-500, 500]}}
+  channels:
+    behind: {{angle: [robot, ball, goal]}}
+  compose:
+    chase: {chase}
+    dribble: {dribble}
+  outcomes:
+    - {{when: ball_in_goal, reward: 1, success: true}}
+    - {{when: off_pitch, reward: -1}}
+"""
+LEARNED_RULES = """
+  - {if: {behind: front}, then: chase}
+  - {if: {behind: behind}, then: dribble}"""
+
+
+def _write(folder: Path, rules: str = LEARNED_RULES, chase: str = "chase.yaml",
+           dribble: str = "dribble.yaml") -> Path:
+    shutil.copy(BEHAVIOURS / "dribble-handmade.yaml", folder / "dribble.yaml")
+    chase_text = (BEHAVIOURS / "dribble-handmade.yaml").read_text().replace(
+        "name: dribble_handmade", "name: chase")
+    (folder / "chase.yaml").write_text(chase_text)
+    path = folder / "arbiter.yaml"
+    path.write_text(ARBITER.format(rules=rules, chase=chase, dribble=dribble))
+    return path
+
+
+def test_parts_are_inlined_and_a_written_composition_reads_back(tmp_path: Path) -> None:
+    behaviour = load_behaviour(_write(tmp_path))
+    parts = behaviour.environment.compose  # type: ignore[union-attr]
+    assert set(parts) == {"chase", "dribble"} and parts["dribble"]["name"] == "dribble_handmade"
+    # a run directory elsewhere holds the parts: nothing refers to the files any more
+    text = behaviour_to_yaml(behaviour)
+    again = parse_behaviour(text, "elsewhere/best.yaml")
+    assert behaviour_to_data(again) == behaviour_to_data(behaviour)
+
+
+def test_both_paths_agree_bit_for_bit(tmp_path: Path) -> None:
+    behaviour = load_behaviour(_write(tmp_path))
+    check_env(lambda: make_env(behaviour, 4), batch_size=4)
+    controller = compile_behaviour(behaviour)
+    seeds = np.arange(24)
+    batch = evaluate(controller, make_env(behaviour, 24), seeds)
+    singles = [evaluate(controller, make_env(behaviour), seeds[i : i + 1]) for i in range(24)]
+    assert np.array_equal(batch.lengths, np.concatenate([s.lengths for s in singles]))
+    assert np.array_equal(batch.returns, np.concatenate([s.returns for s in singles]))
+    assert batch.success.any()
+
+
+def test_the_arbiter_chooses_the_part(tmp_path: Path) -> None:
+    # one part that turns on the spot, one that walks: the arbiter's rules decide which runs
+    spin = (BEHAVIOURS / "dribble-handmade.yaml").read_text()
+    spin = spin[: spin.index("rules:")] + "rules:\n" + "".join(
+        f"  - {{if: {{pan: {p}, goal_bearing: {g}}}, then: turn_left}}\n"
+        for p in ("far_right", "right", "ahead", "left", "far_left")
+        for g in ("behind_right", "right", "ahead", "left", "behind_left")) + \
+        spin[spin.index("learning:"):]
+    (tmp_path / "spin.yaml").write_text(spin.replace("name: dribble_handmade", "name: spin"))
+    always = """
+  - {if: {behind: front}, then: chase}
+  - {if: {behind: behind}, then: chase}"""
+    path = _write(tmp_path, rules=always, chase="spin.yaml")
+    env = make_env(load_behaviour(path))
+    env.reset_one(0)
+    heading, x = float(env.heading[0]), float(env.x[0])
+    env.step_one(0.0)  # the arbiter's output 0 is 'chase', i.e. spin
+    assert np.degrees(float(env.heading[0]) - heading) > 8 and abs(float(env.x[0]) - x) < 40
+
+
+def test_learning_the_arbiter_keeps_the_parts_fixed(tmp_path: Path) -> None:
+    from flctool.training import start_run
+
+    path = _write(tmp_path, rules="[]")
+    training = start_run(str(path), {"seed": 1, "generations": 2, "population": 4,
+                                     "selection": {"candidates": 2, "episodes": 4}},
+                         out=str(tmp_path / "run"))
+    summary = training.train()
+    best = load_behaviour(tmp_path / "run" / "best.yaml")
+    assert best.is_deployable and summary is not None
+    assert best.environment.compose == load_behaviour(path).environment.compose  # type: ignore[union-attr]
+
+
+BAD = [
+    ({"chase": "../outside.yaml"}, "environment.compose.chase", "outside the composing file"),
+    ({"chase": "/etc/passwd.yaml"}, "environment.compose.chase", "absolute path"),
+    ({"chase": "chase.txt"}, "environment.compose.chase", "not a .yaml"),
+    ({"chase": "nothere.yaml"}, "environment.compose.chase", "no such file"),
+    ({"chase": "arbiter.yaml"}, "environment.compose.chase", "cycle"),
+]
+
+
+@pytest.mark.parametrize(("parts", "path", "message"), BAD)
+def test_part_files_are_a_trust_boundary(tmp_path: Path, parts: dict[str, str], path: str,
+                                         message: str) -> None:
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "outside.yaml").write_text((BEHAVIOURS / "dribble-handmade.yaml").read_text())
+    target = _write(tmp_path / "sub", **parts)
+    with pytest.raises(SpecError) as caught:
+        load_behaviour(target)
+    text = str(caught.value)
+    assert f": {path}:" in text and message in text, text
+
+
+def test_composition_mistakes_are_located(tmp_path: Path) -> None:
+    path = _write(tmp_path)
+    text = path.read_text()
+    cases = [
+        (text.replace("commands: {chase: 0, dribble: 1}",
+                      "commands: {chase: 0, dribble: 1, shoot: 2}"),
+         "environment.compose:", "the command 'shoot' has no part"),
+        (text.replace("    dribble: dribble.yaml", "    dribbel: dribble.yaml"),
+         "environment.compose.dribbel:", "Did you mean 'dribble'"),
+        (text.replace("dribble: dribble.yaml", "dribble: learnable.yaml"),
+         "environment.compose.dribble:", "rules without consequents"),
+    ]
+    shutil.copy(BEHAVIOURS / "dribble.yaml", tmp_path / "learnable.yaml")
+    for written, where, message in cases:
+        path.write_text(written)
+        with pytest.raises(SpecError) as caught:
+            make_env(load_behaviour(path))
+        assert where in str(caught.value) and message in str(caught.value), str(caught.value)
+    # a part reading a channel the composing world lacks
+    chase = (tmp_path / "chase.yaml").read_text().replace("goal_bearing", "guard").replace(
+        "  adapter: pitch\n", "  adapter: pitch\n  channels: {guard: {bearing: [ball, goal]}}\n")
+    (tmp_path / "chase.yaml").write_text(chase)
+    path.write_text(text)
+    with pytest.raises(SpecError) as caught:
+        load_behaviour(path)
+    assert "environment.compose.chase:" in str(caught.value)
+    assert "reads 'guard'" in str(caught.value)

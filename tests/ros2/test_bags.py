@@ -1,0 +1,206 @@
+"""Logged data over real rclpy: sessions recorded as MCAP bags, replayed exactly, and the
+simulator's motion and noise tables recovered from 1,000 recorded steps."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from flctool import compile_behaviour
+from flctool.cli import app
+from flctool.envs import make_env
+from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml, load_behaviour
+from flctool.spec.ros2 import Ros2Config
+
+from ..conftest import BEHAVIOURS
+from ..ros2_support import handmade_rules, require_ros2, robot_behaviour, wait_until
+
+runner = CliRunner()
+
+#: A robot that walks unlike the default table: faster, drifting, noisier, one-sided turns.
+MOTION = {"turn_right": {"forward": 12.0, "sideways": -3.0, "rotation": -20.0},
+          "forward_right": {"forward": 70.0, "sideways": -6.0, "rotation": -9.0},
+          "forward": {"forward": 85.0, "sideways": 4.0, "rotation": 1.5},
+          "forward_left": {"forward": 65.0, "sideways": 5.0, "rotation": 11.0},
+          "turn_left": {"forward": 8.0, "sideways": 2.0, "rotation": 18.0}}
+NOISE = {"turn_right": {"forward": 5.0, "sideways": 3.0, "rotation": 2.5},
+         "forward_right": {"forward": 10.0, "sideways": 6.0, "rotation": 2.0},
+         "forward": {"forward": 12.0, "sideways": 7.0, "rotation": 1.0},
+         "forward_left": {"forward": 9.0, "sideways": 5.0, "rotation": 2.0},
+         "turn_left": {"forward": 4.0, "sideways": 2.0, "rotation": 3.0}}
+
+
+@pytest.fixture(autouse=True)
+def _ros() -> None:
+    require_ros2()
+
+
+def _simulator(tmp_path: Path) -> Path:
+    """ballchase with the tables above, each step exactly one command (action: nearest), and
+    a big pitch so that episodes end by the step limit or the ball, rarely off the pitch."""
+    data = behaviour_to_data(load_behaviour(BEHAVIOURS / "ballchase.yaml"))
+    data["environment"].update(action="nearest", motion=MOTION, noise=NOISE)
+    path = tmp_path / "measured-robot.yaml"
+    path.write_text(behaviour_to_yaml(behaviour_from_data(data)), encoding="utf-8")
+    return path
+
+
+def _record(tmp_path: Path, sim: Path, namespace: str, steps: int, drive: Any) -> Path:
+    """A session of ``steps`` steps on the served ``sim``, driven by ``drive(env, obs, rng)
+    -> action``, recorded as a bag (the robot file's topics and the odometry)."""
+    from flctool.ros2.bags import BagRecorder, session_topics
+    from flctool.ros2.robot import SimRobot
+
+    behaviour = robot_behaviour(namespace, step_timeout=5.0)
+    config = behaviour.environment
+    assert isinstance(config, Ros2Config)
+    bag = tmp_path / "session"
+    robot = SimRobot.from_behaviour(load_behaviour(sim), namespace=namespace)
+    recorder = None
+    try:
+        with make_env(behaviour) as env:
+            # recording starts once the session has found the robot: a recorder found first
+            # would count as the reset topic's subscriber (see docs/ros2.md)
+            recorder = BagRecorder(bag, session_topics(config, [(f"{namespace}/odom",
+                                                                  "nav_msgs/Odometry")]))
+            assert wait_until(recorder.publishers_found, 10.0)
+            rng = np.random.default_rng(4)
+            done, observation, seed = True, None, 0
+            for _ in range(steps):
+                if done:
+                    observation, seed = env.reset_one(seed), seed + 1
+                observation, _, terminated, truncated = env.step_one(
+                    drive(observation, rng))
+                done = terminated or truncated
+        expected = 6 * steps  # a command, the observations, odometry, reward and status
+        assert wait_until(lambda: recorder.messages >= expected, 10.0)  # type: ignore[union-attr]
+    finally:
+        if recorder is not None:
+            recorder.close()
+        robot.close()
+    return bag
+
+
+def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_steps(
+        tmp_path: Path) -> None:
+    from flctool.ros2.bags import fit_motion
+
+    sim = _simulator(tmp_path)
+    singletons = [-1.0, -0.5, 0.0, 0.5, 1.0]
+    bag = _record(tmp_path, sim, "/measured", 1000,
+                  lambda observation, rng: float(rng.choice(singletons)))
+    config = robot_behaviour("/measured").environment
+    assert isinstance(config, Ros2Config)
+    commands = dict(load_behaviour(BEHAVIOURS / "ballchase.yaml").output.commands)
+    fits = fit_motion(bag, config, commands, "/measured/odom")
+    assert sum(fit.steps for fit in fits.values()) == 1000
+    for name, fit in fits.items():
+        n = fit.steps
+        assert n >= 150, (name, n)  # each command ran about 200 times
+        for k, key in enumerate(("forward", "sideways", "rotation")):
+            mean, std = MOTION[name][key], NOISE[name][key]
+            # Within 5 %, or within 4 standard errors where 5 % of the value is less than
+            # 1000 steps can tell (a mean near 0; a deviation from ~200 samples, whose
+            # standard error is about 1 / sqrt(2 n) = 5 %).
+            assert abs(fit.mean[k] - mean) <= max(0.05 * abs(mean), 4 * std / math.sqrt(n)), (
+                name, key, fit.mean[k], mean)
+            assert abs(fit.std[k] - std) <= std * max(0.05, 4 / math.sqrt(2 * n)), (
+                name, key, fit.std[k], std)
+
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(behaviour_to_yaml(robot_behaviour("/measured")), encoding="utf-8")
+    out = tmp_path / "fitted.yaml"
+    result = runner.invoke(app, ["fit-sim", str(bag), "--robot", str(robot), "--sim", str(sim),
+                                 "--odom", "/measured/odom", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "forward_left" in result.output and f"wrote {out}" in result.output
+    fitted = yaml.safe_load(out.read_text(encoding="utf-8"))["environment"]
+    data = behaviour_to_data(load_behaviour(sim))
+    data["environment"] = fitted
+    assert behaviour_from_data(data).environment is not None  # a valid simulator section
+
+
+def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path) -> None:
+    handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
+    flc = compile_behaviour(handmade)
+    bag = _record(tmp_path, BEHAVIOURS / "ballchase-handmade.yaml", "/replayed", 150,
+                  lambda observation, rng: flc.output_one(observation))
+    controller = tmp_path / "controller.yaml"
+    controller.write_text(behaviour_to_yaml(handmade_rules(robot_behaviour("/replayed"))),
+                          encoding="utf-8")
+    out = tmp_path / "replayed.csv"
+    result = runner.invoke(app, ["replay", str(controller), str(bag), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    rows = list(csv.DictReader(io.StringIO(out.read_text(encoding="utf-8"))))
+    assert len(rows) == 150
+    assert all(float(row["difference"]) == 0.0 for row in rows)
+    assert "150 commands replayed; 0 differ" in result.output
+    # and into a bag, beside the recorded commands
+    beside = tmp_path / "beside"
+    result = runner.invoke(app, ["replay", str(controller), str(bag), "-o", str(tmp_path / "x.csv"),
+                                 "--bag", str(beside)])
+    assert result.exit_code == 0, result.output
+    from flctool.ros2.bags import read_messages
+
+    topics: dict[str, list[float]] = {}
+    for topic, _, message in read_messages(beside):
+        topics.setdefault(topic, []).append(getattr(message, "data", 0.0))
+    assert len(topics["/replayed/cmd_vel/replayed"]) == 150
+    assert set(topics["/replayed/cmd_vel/difference"]) == {0.0}
+    assert len(topics["/replayed/cmd_vel"]) == len(list(read_messages(bag, ["/replayed/cmd_vel"])))
+    # another controller differs, and replay says so
+    data = behaviour_to_data(handmade)
+    data["rules"] = [{**rule, "then": "turn_left"} for rule in data["rules"]]
+    other = tmp_path / "other.yaml"
+    other.write_text(behaviour_to_yaml(handmade_rules(robot_behaviour("/replayed")).model_copy(
+        update={"rules": behaviour_from_data(data).rules})), encoding="utf-8")
+    differs = runner.invoke(app, ["replay", str(other), str(bag)])
+    assert differs.exit_code == 0 and "; 0 differ" not in differs.output, differs.output
+
+
+def test_record_writes_a_session_bag_and_refuses_an_existing_one(tmp_path: Path) -> None:
+    from flctool.ros2.bags import read_messages
+    from flctool.ros2.robot import SimRobot
+
+    robot_file = tmp_path / "robot.yaml"
+    robot_file.write_text(behaviour_to_yaml(robot_behaviour("/recorded")), encoding="utf-8")
+    robot = SimRobot.from_behaviour(load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml"),
+                                    namespace="/recorded", auto_reset=True)
+    try:
+        robot.start_episode()  # republishes its observations at 50 Hz while it waits
+        bag = tmp_path / "bag"
+        result = runner.invoke(app, ["record", str(robot_file), "-o", str(bag), "--duration",
+                                     "1", "--wait", "2", "--topic",
+                                     "/recorded/odom:nav_msgs/Odometry"])
+        assert result.exit_code == 0, result.output
+        topics = {topic for topic, _, _ in read_messages(bag)}
+        assert {"/recorded/ball_size", "/recorded/pan", "/recorded/odom"} <= topics
+        again = runner.invoke(app, ["record", str(robot_file), "-o", str(bag), "--duration",
+                                    "0.1"])
+        assert again.exit_code == 1 and "exists" in again.output
+    finally:
+        robot.close()
+
+
+def _iterate(bag: Path) -> Iterator[Any]:
+    from flctool.ros2.bags import read_messages
+
+    return read_messages(bag)
+
+
+def test_a_file_that_is_not_a_bag_is_a_clear_error(tmp_path: Path) -> None:
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"\x89MCAP0\r\n" + b"\x00" * 64)
+    from flctool.errors import FlcError
+
+    with pytest.raises(FlcError, match="not a readable bag"):
+        list(_iterate(junk))
