@@ -17,6 +17,7 @@ episodes count in the run's usage and budget.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -29,6 +30,7 @@ from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import run_trial
 from flctool.rollout import (
     CONFIRMATION_SEED_LOW,
+    T975,
     TRAIN_SEED_LOW,
     Estimate,
     clip_estimate,
@@ -136,8 +138,12 @@ def fitness_interval(fitness: FloatArray, success: NDArray[np.bool_],
         if part.shape[0] < 2:  # no (or one) episode: anything the range allows
             return (low_bound if part.shape[0] == 0 else min(low_bound, float(part[0])),
                     high_bound if part.shape[0] == 0 else max(high_bound, float(part[0])))
-        estimate = mean_interval(part)
-        return estimate.low, estimate.high
+        # the t quantile of the nearest tabulated degrees of freedom below (a little wider,
+        # and no scipy to import for a group of, say, 47 episodes)
+        dof = max(d for d in T975 if d <= part.shape[0] - 1)
+        half = T975[dof] * float(part.std(ddof=1)) / math.sqrt(part.shape[0])
+        mean = float(part.mean())
+        return mean - half, mean + half
 
     s_low, s_high = group(values[won])
     f_low, f_high = group(values[~won])
