@@ -91,18 +91,25 @@ def behaviour_commands(size: int) -> str:
 
 
 def _exported(suffix: str) -> Callable[[int], str]:
-    def make(size: int) -> str:
+    def export(sets: int) -> str:
         from flctool.export import EXPORTERS
         from flctool.spec import parse_behaviour
 
-        # an exported rule grid is about 1.5-2.5 times its YAML
-        per_rule = {".fll": 70, ".fcl": 62, ".fis": 14}[suffix]
-        rules = max(4, size // per_rule)
-        sets = max(2, int(rules ** 0.5))
         behaviour = parse_behaviour(_grid(sets, sets * sets), "grid.yaml")
         exporter = EXPORTERS.get(suffix.lstrip("."))()
         [text] = exporter.texts(behaviour, Path("grid" + suffix)).values()
         return text
+
+    def make(size: int) -> str:
+        """The largest square rule grid whose export is at most ``size`` characters."""
+        sets = 8
+        text = export(sets)
+        while True:  # grow by the ratio still missing, until the next would be too long
+            bigger = max(sets + 1, int(sets * (size / len(text)) ** 0.5))
+            grown = export(bigger)
+            if len(grown) > size:
+                return text
+            sets, text = bigger, grown
     return make
 
 

@@ -60,9 +60,15 @@ def run_one(behaviour_path: Path, learner: str, seed: int, overrides: dict[str, 
             "train_cpu_seconds": train_seconds,
             "training_episodes": int(sum(m.episodes for m in metrics)),
             "selection_episodes": int(sum(m.selection_episodes for m in metrics)),
-            "episodes": int(usage.get("training_episodes", 0)
-                            + usage.get("selection_episodes", 0)),
-            "steps": int(usage.get("training_steps", 0) + usage.get("selection_steps", 0))}
+            # every episode the run used: training, selection, confirmation, baselines
+            "episodes": int(usage.get("episodes", usage.get("training_episodes", 0)
+                                      + usage.get("selection_episodes", 0))),
+            "steps": int(usage.get("steps", usage.get("training_steps", 0)
+                                   + usage.get("selection_steps", 0))),
+            "status": summary.status,
+            "confirmed_fitness": ((summary.to_dict()["best"].get("confirmation") or {})
+                                  .get("mean_fitness") or {}),
+            "heldout_fitness": float(result.mean_fitness.value)}
 
 
 def main() -> None:

@@ -54,6 +54,7 @@ TOKENS: list[tuple[str, float | None]] = [
     ("!!binary aGk=", None), ("!!timestamp 2001-12-14", None), ("2001-12-14", None),
     ("!!python/object:os.system x", None), ("!custom 1", None), ("&a 1", 1.0), ("*nope", None),
     ("\"\\x1b[31mred\"", None), ("somemodule:Env-v0", None), ("this:Env-v0", None),
+    ("1e308", 1e308), ("-1e300", -1e300), ("1e9", 1e9), ("1000000001", 1000000001.0),
 ]
 
 
@@ -67,6 +68,8 @@ class Case:
     path: tuple[Any, ...] | None = None
     expect: float | None = None
     token: str | None = None
+    #: The file's bytes, when the mutation is of its encoding (read from a file, not text).
+    data: bytes | None = None
 
 
 def _scalars(text: str) -> list[tuple[tuple[Any, ...], yaml.ScalarNode]]:
@@ -171,6 +174,23 @@ def _structural(rng: random.Random, case: Case, source: str) -> None:
         case.text = source
 
 
+def _encoding(rng: random.Random, case: Case, source: str) -> None:
+    """The file saved in another encoding, or with a byte that is no UTF-8 in it."""
+    op = rng.choice(["utf16", "latin1", "byte", "truncated"])
+    case.kind = f"encoding_{op}"
+    if op == "utf16":
+        case.data = source.encode("utf-16")
+    elif op == "latin1":
+        at = rng.randrange(len(source))
+        case.data = (source[:at] + "\u00e9" + source[at:]).encode("latin-1", "replace")
+    elif op == "byte":
+        raw = source.encode("utf-8")
+        at = rng.randrange(len(raw))
+        case.data = raw[:at] + bytes([rng.choice([0x80, 0xC3, 0xFF, 0xFE])]) + raw[at:]
+    else:  # cut inside a multi-byte character
+        case.data = (source + "# \u00e9\n").encode("utf-8")[:-2]
+
+
 def make_case(index: int, seed: int) -> Case:
     rng = random.Random(f"{seed}:{index}")
     file = rng.choice(BEHAVIOURS)
@@ -179,10 +199,12 @@ def make_case(index: int, seed: int) -> Case:
     roll = rng.random()
     if roll < 0.6:
         _replace_scalar(rng, case, source)
-    elif roll < 0.9:
+    elif roll < 0.85:
         _lines(rng, case, source)
-    else:
+    elif roll < 0.95:
         _structural(rng, case, source)
+    else:
+        _encoding(rng, case, source)
     return case
 
 
@@ -201,16 +223,24 @@ _MISSING = object()
 
 def run_case(case: Case) -> tuple[str, str]:
     """Load and compile one case; returns (outcome, detail)."""
+    import tempfile
+
     from flctool.compile import compile_behaviour
     from flctool.errors import FlcError, SpecError
-    from flctool.spec import parse_behaviour
+    from flctool.spec import load_behaviour, parse_behaviour
 
     try:
-        behaviour = parse_behaviour(case.text, f"{case.file}#{case.index}")
+        if case.data is not None:
+            with tempfile.TemporaryDirectory() as folder:
+                path = Path(folder) / case.file
+                path.write_bytes(case.data)
+                behaviour = load_behaviour(path)
+        else:
+            behaviour = parse_behaviour(case.text, f"{case.file}#{case.index}")
         compile_behaviour(behaviour)
     except SpecError as error:
         if all(p.line is not None for p in error.problems):
-            return "clear", str(error).splitlines()[1][:160]
+            return "clear", str(error.problems[0])[:160]
         return "unlocated", str(error)[:300]
     except FlcError as error:
         return "clear", str(error)[:160]

@@ -85,6 +85,14 @@ def mean_interval(values: FloatArray) -> Estimate:
     return Estimate(mean, mean - half, mean + half, n)
 
 
+def clip_estimate(estimate: Estimate, bounds: tuple[float, float]) -> Estimate:
+    """``estimate`` with its interval clipped to ``bounds``, the values it can take (a mean
+    fitness of 2 at most has no interval above 2)."""
+    low, high = bounds
+    return Estimate(estimate.value, min(max(estimate.low, low), high),
+                    max(min(estimate.high, high), low), estimate.n)
+
+
 def t975(dof: int) -> float:
     """The 97.5 % quantile of Student's t with ``dof`` degrees of freedom: from :data:`T975`,
     else computed by scipy."""
@@ -136,9 +144,20 @@ class EvaluationResult:
                 "mean_return": self.mean_return.to_dict()}
 
 
+# Episode seeds: four ranges that never meet, so no episode is used for two purposes.
+#
+#   [0, 2^31 - 1)    flctool evaluate --seed S (and the task suite's held-out episodes)
+#   [2^31, 2^32)     a run's confirmation: the fresh figure it reports, and stop.target's
+#   [2^32, 2^62)     training trials, from the run's ``env`` stream
+#   [2^62, 2^63)     model selection's validation episodes
+#
+#: ``flctool evaluate``'s seeds lie below this; every seed from it up is one learning uses.
+EVALUATION_SEED_HIGH = 2**31 - 1
+#: A run's confirmation episodes draw their seeds from [CONFIRMATION_SEED_LOW, TRAIN_SEED_LOW).
+CONFIRMATION_SEED_LOW = 2**31
 #: Training episodes draw their seeds from [TRAIN_SEED_LOW, TRAIN_SEED_HIGH), above every seed
-#: :func:`evaluation_seeds` gives, so an evaluation never replays a training start (the
-#: learners import these; model selection's validation seeds lie above both).
+#: :func:`evaluation_seeds` gives, so an evaluation never replays a training start (model
+#: selection's validation seeds lie above, confirmation's below).
 TRAIN_SEED_LOW = 2**32
 TRAIN_SEED_HIGH = 2**62
 
@@ -151,7 +170,8 @@ def evaluation_seeds(seed: int, episodes: int) -> NDArray[np.int64]:
     if episodes < 1:
         raise EnvError(f"episodes must be at least 1, got {episodes}")
     rng = np.random.default_rng(seed)
-    return np.asarray(rng.choice(2**31 - 1, size=episodes, replace=False), dtype=np.int64)
+    return np.asarray(rng.choice(EVALUATION_SEED_HIGH, size=episodes, replace=False),
+                      dtype=np.int64)
 
 
 def _controller(controller: Controller, consequents: NDArray[np.integer] | None) -> Controller:

@@ -3,7 +3,8 @@
 A run directory holds::
 
     behaviour.yaml          the resolved behaviour: the file, its seed, command-line overrides
-    run.json                learner, seed, status (running / stopped / finished), best so far,
+    run.json                learner, seed, status (running / stopped / finished /
+                            not_learned: no better than a baseline), best so far,
                             and the model-selection record: every validated candidate, the
                             episodes and steps of training and of selection, why it stopped
     metrics.csv             one row per generation: generation, mean, std, best, min fitness,
@@ -41,7 +42,7 @@ import re
 import time
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -55,6 +56,7 @@ from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
 from flctool.learners.budget import Usage
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
+from flctool.learners.confirmation import Confirmed
 from flctool.rollout import Estimate
 from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.spec import (
@@ -67,6 +69,10 @@ from flctool.spec.rules import with_rules
 from flctool.version import __version__
 
 RUN_FORMAT = 1
+#: The status of a run that ended without a controller clearly better than the baselines.
+NOT_LEARNED = "not_learned"
+#: The statuses of a run that has run to its end (all its generations, or a budget).
+ENDED = ("finished", NOT_LEARNED)
 BEHAVIOUR_FILE = "behaviour.yaml"
 RUN_FILE = "run.json"
 METRICS_FILE = "metrics.csv"
@@ -151,28 +157,62 @@ def _append(root: Path, path: Path, text: str) -> None:
 def _best_header(provenance: Mapping[str, Any], run_name: str) -> str:
     validation = provenance.get("validation")
     measured = (f"fitness {provenance['fitness']!r} in training, validated mean fitness "
-                f"{validation['value']!r} over {validation['n']} validation episodes"
+                f"{validation['value']!r} over {validation['n']} validation episodes "
+                "(the best of the candidates on them: optimistic)"
                 if validation else f"fitness {provenance['fitness']!r}")
+    confirmation = provenance.get("confirmation")
+    confirmed = (f"Confirmed on {confirmation['episodes']} fresh episodes: "
+                 f"{confirmation_text(confirmation)}.\n" if confirmation else "")
     return (f"Learned by flctool {__version__} with the {provenance['learner']} learner "
             f"(seed {provenance['seed']}) in run {run_name}:\n"
             f"generation {provenance['generation']}, individual {provenance['individual']}, "
-            f"{measured}.\n"
+            f"{measured}.\n{confirmed}"
             "Deployable: flctool validate / evaluate / export take it as it is.")
 
 
+def confirmation_text(confirmation: Mapping[str, Any]) -> str:
+    """``mean fitness 1.90 [1.84, 1.95], success rate 0.96 [0.87, 0.99], mean return ...``:
+    a confirmation record (:meth:`~flctool.learners.confirmation.Confirmed.record`) as
+    words."""
+    parts = []
+    for key, label in (("mean_fitness", "mean fitness"), ("success_rate", "success rate"),
+                       ("mean_return", "mean return")):
+        estimate = confirmation[key]
+        if estimate["value"] is None:
+            continue
+        interval = ("" if estimate["low"] is None
+                    else f" [{estimate['low']:.3f}, {estimate['high']:.3f}]")
+        parts.append(f"{label} {estimate['value']:.3f}{interval}")
+    return ", ".join(parts)
+
+
 def _provenance(run: Run, generation: int, individual: int, fitness: float,
-                validation: Mapping[str, Any] | None) -> dict[str, Any]:
+                validation: Mapping[str, Any] | None,
+                confirmation: Mapping[str, Any] | None = None) -> dict[str, Any]:
     return _provenance_record(run.learner, run.seed, generation, individual, fitness,
-                              validation)
+                              validation, confirmation)
 
 
 def _provenance_record(learner: str, seed: int, generation: int, individual: int,
-                       fitness: float, validation: Mapping[str, Any] | None) -> dict[str, Any]:
+                       fitness: float, validation: Mapping[str, Any] | None,
+                       confirmation: Mapping[str, Any] | None = None) -> dict[str, Any]:
     provenance = {"learner": learner, "seed": seed, "generation": generation,
                   "individual": individual, "fitness": fitness}
     if validation is not None:
         provenance["validation"] = dict(validation)
+    if confirmation is not None:
+        provenance["confirmation"] = dict(confirmation)
     return provenance
+
+
+def _confirmation_of(confirmations: Iterable[Confirmed], consequents: Any,
+                     sets: Any = None) -> dict[str, Any] | None:
+    """The record of the latest confirmation of the controller ``consequents`` with the set
+    genome ``sets`` (None: the file's sets), if any."""
+    for confirmed in reversed(list(confirmations)):
+        if confirmed.is_of(consequents, sets):
+            return confirmed.record()
+    return None
 
 
 @dataclass(frozen=True)
@@ -187,6 +227,9 @@ class BestController:
     fitness: float
     #: Its mean fitness over the run's validation episodes; None if it was not validated.
     validation: Estimate | None = None
+    #: Its confirmation on fresh episodes, the figure to read (run.json's record of it:
+    #: mean_fitness, success_rate, mean_return, episodes); None if it was not confirmed.
+    confirmation: dict[str, Any] | None = None
 
     @classmethod
     def from_record(cls, record: Mapping[str, Any]) -> BestController:
@@ -200,13 +243,16 @@ class BestController:
         return cls(str(record["learner"]), int(record["seed"]), int(record["generation"]),
                    int(record["individual"]), float(record["fitness"]),
                    None if validation is None else Estimate(
-                       number("value"), number("low"), number("high"), int(validation["n"])))
+                       number("value"), number("low"), number("high"), int(validation["n"])),
+                   None if record.get("confirmation") is None
+                   else dict(record["confirmation"]))
 
     def to_dict(self) -> dict[str, Any]:
         """As run.json records it (NaN as null)."""
         return _provenance_record(self.learner, self.seed, self.generation, self.individual,
                                   self.fitness, self.validation.to_dict()
-                                  if self.validation is not None else None)
+                                  if self.validation is not None else None,
+                                  self.confirmation)
 
 
 @dataclass(frozen=True)
@@ -225,10 +271,11 @@ class RunSummary:
 
     @property
     def usage(self) -> Usage | None:
-        """Episodes and steps the run spent on training and on selection (validation); None
-        if the run recorded none."""
+        """Episodes and steps the run spent on training, selection (validation),
+        confirmation and baselines; None if the run recorded none (counts a run of an
+        earlier version did not record are 0)."""
         recorded = (self.selection or {}).get("usage")
-        return Usage(**{name: int(recorded[name]) for name in Usage().to_dict()}) \
+        return Usage(**{f.name: int(recorded.get(f.name, 0)) for f in fields(Usage)}) \
             if recorded else None
 
     def to_dict(self) -> dict[str, Any]:
@@ -389,9 +436,11 @@ class Run:
             raise RunDirError(f"{self.path}: generation {generation} has individuals "
                               f"0..{len(population) - 1}, not {individual}",
                               hint="pick an individual in that range")
-        provenance = _provenance(self, generation, individual, float(fitness[individual]),
-                                 None)
+        confirmations = checkpoint.selection.confirmations if checkpoint.selection else []
         genes = None if checkpoint.set_genes is None else checkpoint.set_genes[individual]
+        provenance = _provenance(self, generation, individual, float(fitness[individual]),
+                                 None, _confirmation_of(confirmations, population[individual],
+                                                        genes))
         return with_rules(with_set_genes(self.behaviour, genes), population[individual]), \
             provenance
 
@@ -399,13 +448,15 @@ class Run:
         """The best validated candidate recorded in checkpoint ``generation``, if any."""
         selection = self._read_checkpoint(generation)[1].selection
         candidate = selection.best if selection is not None else None
-        if candidate is None:
+        if selection is None or candidate is None:
             return None
         behaviour = with_rules(with_set_genes(self.behaviour, candidate.sets),
                                candidate.consequents)
         validation = candidate.validation.to_dict() if candidate.validation else None
         return behaviour, _provenance(self, candidate.generation, candidate.individual,
-                                      candidate.fitness, validation)
+                                      candidate.fitness, validation,
+                                      _confirmation_of(selection.confirmations,
+                                                       candidate.consequents, candidate.sets))
 
     # -- training ------------------------------------------------------------------------
     def train(self, callbacks: Iterable[Callback] = (), env: BatchEnv | None = None,
@@ -583,9 +634,12 @@ class RunRecorder(Callback):
             generation, individual, consequents, fitness, candidate = learner.selected()
             validation = (candidate.validation.to_dict()
                           if candidate is not None and candidate.validation else None)
-            learned = with_set_genes(run.behaviour, learner.selected_sets())
+            learned_sets = learner.selected_sets()
+            learned = with_set_genes(run.behaviour, learned_sets)
             self._write_best(with_rules(learned, consequents),
-                             _provenance(run, generation, individual, fitness, validation))
+                             _provenance(run, generation, individual, fitness, validation,
+                                         _confirmation_of(learner.confirmation.confirmed,
+                                                          consequents, learned_sets)))
             run.write_info("running", self.best, learner.selection_record())
         return True
 
@@ -619,8 +673,10 @@ class RunRecorder(Callback):
             if learner is not None and self._recorded:
                 selection = learner.selection_record()
             # a run whose best.yaml could not be written is not finished: resume writes it
-            self.run.write_info("finished" if finished and written else "stopped",
-                                self.best or self.run.info().get("best"), selection)
+            status = "finished" if finished and written else "stopped"
+            if status == "finished" and learner is not None and learner.learned is False:
+                status = NOT_LEARNED  # no better than a baseline (flctool.learners.baselines)
+            self.run.write_info(status, self.best or self.run.info().get("best"), selection)
 
 
 # -- creating and opening runs ------------------------------------------------------------

@@ -20,6 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
+from flctool.compile import compile_behaviour
 from flctool.errors import Problem, RunDirError, SpecError
 from flctool.learners import Callback, Learner, make_learner
 from flctool.runs import Run, RunSummary, create_run, open_run
@@ -63,22 +67,50 @@ class Training:
 
 
 def start_run(behaviour: Behaviour | str | Path, overrides: Overrides | None = None,
-              out: str | Path | None = None) -> Training:
+              out: str | Path | None = None, *,
+              baselines: Iterable[str | Path] = ()) -> Training:
     """A new run of ``behaviour`` (a behaviour or its file) with ``overrides`` applied (see
     :func:`~flctool.spec.overrides.resolve_behaviour`), in ``out`` or a new folder under
-    ``runs/``."""
+    ``runs/``. ``baselines`` are files of hand-made controllers of the same rule grid that
+    the run's controller must beat (:mod:`flctool.learners.baselines`)."""
     if not isinstance(behaviour, Behaviour):
         behaviour = load_behaviour(behaviour)
     given = as_overrides(overrides)
     if given:
         behaviour = resolve_behaviour(behaviour, given)
+    tables = [baseline_table(behaviour, path) for path in baselines]
     learner = make_learner(behaviour)
+    learner.baseline_check.given = tables
     try:
         run = create_run(behaviour, Path(out) if out is not None else None)
     except BaseException:
         learner.env.close()  # Training closes it from here on (a robot gets stop)
         raise
     return Training(run, learner, resumed=False)
+
+
+def baseline_table(behaviour: Behaviour, path: str | Path) -> tuple[str, NDArray[np.intp]]:
+    """The hand-made controller in ``path`` as a baseline of ``behaviour``: (its file name,
+    its consequents (M,)); it must have the same inputs, sets and commands and give every
+    rule."""
+    other = load_behaviour(path)
+    if _rule_grid(other) != _rule_grid(behaviour):
+        raise SpecError([Problem(("inputs",), "a baseline must have the rule grid of the "
+                                 f"behaviour it is compared with ({behaviour.name}): the same "
+                                 "inputs, sets and commands, in the same order",
+                                 "give a controller of this behaviour, e.g. a best.yaml of "
+                                 "it or a hand-written one", file=str(path))], str(path))
+    consequents = compile_behaviour(other).consequents
+    if consequents is None:
+        raise SpecError([Problem(("rules",), f"a baseline gives every rule; this one leaves "
+                                 f"{other.rule_count - len(other.rules)} to learn",
+                                 "write the missing rules", file=str(path))], str(path))
+    return Path(path).name, consequents.astype(np.intp)
+
+
+def _rule_grid(behaviour: Behaviour) -> tuple[object, ...]:
+    return (tuple((name, tuple(v.sets)) for name, v in behaviour.inputs.items()),
+            tuple(behaviour.output.commands))
 
 
 def resume_run(path: str | Path, behaviour: Behaviour | str | Path | None = None,

@@ -147,7 +147,7 @@ def test_an_installed_learner_and_environment_run_from_a_behaviour_file(tmp_path
     validated = _flctool(tmp_path, "validate", "demo.yaml")
     assert validated.returncode == 0, validated.stderr
     learned = _flctool(tmp_path, "learn", "demo.yaml", "--out", "run")
-    assert learned.returncode == 0, learned.stderr
+    assert learned.returncode in (0, 3), learned.stderr  # 3: it ended, but not learned
     assert (tmp_path / "run" / "best.yaml").is_file()
     assert "learner: random_search" in (tmp_path / "run" / "best.yaml").read_text()
     evaluated = _flctool(tmp_path, "evaluate", "run/best.yaml", "--episodes", "20")
@@ -176,7 +176,7 @@ def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
                                                      "learner: pitt\n  mutation: 0.2"))
     switched = _flctool(tmp_path, "learn", "pitt.yaml", "--learner", "random_search",
                         "--out", "run", "--json")
-    assert switched.returncode == 0, switched.stderr
+    assert switched.returncode in (0, 3), switched.stderr
     assert "keep: 1" in (tmp_path / "run" / "behaviour.yaml").read_text()
 
 

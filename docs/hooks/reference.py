@@ -295,6 +295,9 @@ EQUATIONS: dict[str, str] = {
     "elites": "GA exploration: elitism, the best copied unchanged",
     "trials": ("experiments: one trial per individual per generation; fitness is the mean of "
                "`trials` trials; fuzzy_q: population × trials episodes per generation"),
+    "restart_after": ("an addition against premature convergence: fresh individuals after "
+                      "this many generations without a better selected controller (0: never, "
+                      "as in the paper)"),
     "common_starts": ("experiments: the start states of a generation's trials (an addition: the "
                       "same for every individual when true)"),
     "q": "eq. 4-9: the fuzzy Q-learning of rule strengths",
@@ -313,13 +316,16 @@ EQUATIONS: dict[str, str] = {
     "selection": ("an addition to the paper: which controller the run returns, chosen on "
                   "validation episodes instead of one noisy trial"),
     "selection.candidates": "an addition: the best distinct controllers kept for validation",
+    "selection.confirmation": ("an addition: fresh episodes the returned controller is confirmed "
+                               "on, the figure a run reports (seeds disjoint from all others)"),
     "selection.episodes": ("an addition: validation episodes per candidate (seeds disjoint from "
                            "training and from evaluate)"),
     "stop": "an addition: the run's budget; the paper stops after a number of generations",
     "stop.episodes": "an addition: stop after this many episodes, selection included",
     "stop.steps": "an addition: stop after this many environment steps",
     "stop.seconds": "an addition: stop after this much training time",
-    "stop.target": "an addition: stop once the validated controller reaches this fitness",
+    "stop.target": ("an addition: stop once the selected controller's confirmation on fresh "
+                    "episodes reaches this success rate, return or fitness"),
     "sets": ("the paper's future work: evolve the antecedents (the fuzzy sets of Sec. II) "
              "with the consequents"),
     "sets.inputs": "which inputs' sets (Sec. II) are learned",

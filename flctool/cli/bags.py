@@ -123,6 +123,7 @@ def record(
 
 @app.command(epilog=example(
     "flctool replay runs/robot session -o replayed.csv",
+    "flctool replay runs/robot session -o replayed.csv --bag session-replayed",
     "flctool replay behaviours/ballchase-handmade.yaml session --robot "
     "behaviours/ballchase-ros2.yaml"))
 def replay(
@@ -132,6 +133,10 @@ def replay(
     robot: RobotOption = None,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="CSV to write (default: "
                                              "stdout).")] = None,
+    bag_out: Annotated[Path | None, typer.Option("--bag", help="Also write a copy of the bag "
+                                                 "with COMMAND/replayed and "
+                                                 "COMMAND/difference beside the recorded "
+                                                 "commands (a new folder).")] = None,
     force: Force = False,
 ) -> None:
     """Run a controller over a bag's recorded inputs: at each recorded command, its output
@@ -160,6 +165,11 @@ def replay(
             sys.stdout.write(buffer.getvalue())
         else:
             write_output(out, buffer.getvalue(), "replay CSV", force=force)
+        if bag_out is not None:
+            from flctool.ros2.bags import write_replay_bag
+
+            write_replay_bag(bag, bag_out, config.command.topic, rows)
+            print(f"wrote {bag_out}", file=sys.stderr)
         differing = sum(1 for row in rows if row.difference != 0.0)
         largest = max((abs(row.difference) for row in rows), default=0.0)
         print(f"{len(rows)} commands replayed; {differing} differ from the recorded ones "

@@ -87,7 +87,7 @@ def evaluate_command(
         evaluate_behaviour,
         parse_seeds,
     )
-    from flctool.rollout import TRAIN_SEED_LOW, trace_episode
+    from flctool.rollout import EVALUATION_SEED_HIGH, trace_episode
 
     listed: list[int] | None = None
     if seeds is not None:
@@ -102,9 +102,10 @@ def evaluate_command(
         if trace is not None:
             check_output(trace, "trace", force=force)
         controller = compile_behaviour(behaviour)
-        if listed is not None and max(listed) >= TRAIN_SEED_LOW:
-            err_console.print(f"[yellow]warning:[/] seeds from {TRAIN_SEED_LOW} up are "
-                              "the range training episodes use; these are not held out",
+        if listed is not None and max(listed) >= EVALUATION_SEED_HIGH:
+            err_console.print(f"[yellow]warning:[/] seeds from {EVALUATION_SEED_HIGH} up are "
+                              "the ranges learning uses (confirmation, training, selection); "
+                              "these are not held out",
                               highlight=False)
         with compiling():  # load (or, on a machine's first run, compile) the kernels
             controller.output(controller.ranges[:, 0][None, :])

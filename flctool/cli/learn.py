@@ -56,6 +56,10 @@ def learn(
     set_: Annotated[list[str] | None, typer.Option(
         "--set", help="Override a learning hyperparameter, e.g. --set q.temperature=0.2 "
         "(repeatable; keys as under 'learning:').")] = None,
+    baseline: Annotated[list[Path] | None, typer.Option(
+        "--baseline", help="A hand-made controller of the same rules that the learned one "
+        "must beat (repeatable); constant commands and random tables are always compared.")]
+    = None,
     as_json: Annotated[bool, typer.Option(
         "--json", help="Print a JSON summary instead of text (progress stays on stderr).")]
     = False,
@@ -75,6 +79,10 @@ def learn(
             "learner": ("--learner", learner), "seed": ("--seed", seed),
             "population": ("--population", population)})
         if resume is not None:
+            if baseline:
+                raise RunDirError("--baseline is given when a run starts; a resumed run "
+                                  "compares with the baselines it started with",
+                                  hint="leave out --baseline")
             if init is not None:
                 raise RunDirError("--init starts a new run; a resumed run continues from its "
                                   "checkpoint", hint="leave out --init")
@@ -89,7 +97,7 @@ def learn(
                                   hint="flctool learn behaviours/ballchase.yaml")
             overrides += command_line_overrides([], {"generations": ("--generations",
                                                                      generations)})
-            training = start_run(file, overrides, out)
+            training = start_run(file, overrides, out, baselines=baseline or [])
             if init is not None:
                 _warm_start(training, init)
         run, behaviour = training.run, training.run.behaviour
@@ -97,6 +105,9 @@ def learn(
                           f"{behaviour.learning.learner} (seed {behaviour.learning.seed}) "
                           f"from generation {training.done} in the run directory "
                           f"{escape(str(run.path))}", highlight=False)
+        from flctool.learners.budget import describe_budget
+
+        err_console.print(escape(describe_budget(training.learner)), highlight=False)
         try:
             summary = _train(training, show_progress=not as_json)
         except KeyboardInterrupt:
@@ -107,6 +118,27 @@ def learn(
         print(json.dumps(summary.to_dict(), indent=2))
     else:
         _report(summary)
+    if summary.status == "not_learned":  # flctool.runs.NOT_LEARNED (kept lazy)
+        from flctool.learners.baselines import NOT_LEARNED_HINT
+
+        verdict = (summary.selection or {}).get("baseline") or {}
+        difference = verdict.get("difference") or {}
+        err_console.print(
+            f"[yellow]not learned:[/] the learned controller is not clearly better than the "
+            f"baseline '{escape(str(verdict.get('baseline')))}' (mean fitness "
+            f"{verdict.get('baseline_fitness', float('nan')):.3f}; difference "
+            f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
+            f"{_number(difference.get('high'))}] over the same {difference.get('n')} "
+            f"episodes)\n  try: {NOT_LEARNED_HINT}", highlight=False)
+        raise typer.Exit(NOT_LEARNED_EXIT)
+
+
+#: The exit code of a run that ended without learning (docs/cli.md).
+NOT_LEARNED_EXIT = 3
+
+
+def _number(value: object) -> str:
+    return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
 
 
 def _warm_start(training: Training, init: Path) -> None:
@@ -155,6 +187,8 @@ def _train(training: Training, show_progress: bool) -> RunSummary:
 
 
 def _report(summary: RunSummary) -> None:
+    from flctool.runs import confirmation_text
+
     best = summary.best
     console.print(f"[green]{summary.status}[/] {summary.learner} (seed {summary.seed}): "
                   f"{summary.generations} generations in {escape(str(summary.path))}")
@@ -165,15 +199,31 @@ def _report(summary: RunSummary) -> None:
     usage = summary.usage
     if usage is not None:
         console.print(f"used {usage.training_episodes} training episodes "
-                      f"({usage.training_steps} steps) and {usage.selection_episodes} "
-                      f"selection episodes ({usage.selection_steps} steps)")
+                      f"({usage.training_steps} steps), {usage.selection_episodes} selection "
+                      f"({usage.selection_steps} steps), {usage.confirmation_episodes} "
+                      f"confirmation ({usage.confirmation_steps} steps) and "
+                      f"{usage.baseline_episodes} baseline episodes "
+                      f"({usage.baseline_steps} steps)")
     if best is not None:
-        validation = best.validation
-        score = (f"validated mean fitness {validation.value:.3f} [{validation.low:.3f}, "
-                 f"{validation.high:.3f}] over {validation.n} episodes"
-                 if validation is not None and not math.isnan(validation.low)
-                 else f"fitness {best.fitness:.3f} in training")
         console.print(f"best controller: generation {best.generation}, individual "
-                      f"{best.individual}, {score} -> "
-                      f"{escape(str(summary.path / 'best.yaml'))}")
+                      f"{best.individual} -> {escape(str(summary.path / 'best.yaml'))}")
+        confirmation = best.confirmation
+        if confirmation:
+            console.print(f"  confirmed on {confirmation['episodes']} fresh episodes: "
+                          f"{confirmation_text(confirmation)}")
+        validation = best.validation
+        if validation is not None and not math.isnan(validation.low):
+            console.print(f"  selection's figure (the best of the candidates on the same "
+                          f"{validation.n} episodes, so optimistic): validated mean "
+                          f"fitness {validation.value:.3f} [{validation.low:.3f}, "
+                          f"{validation.high:.3f}]")
+        elif not confirmation:
+            console.print(f"  fitness {best.fitness:.3f} in training")
+        verdict = (summary.selection or {}).get("baseline")
+        if verdict and verdict.get("learned"):
+            difference = verdict["difference"]
+            console.print(f"  learned: better than the strongest baseline, "
+                          f"'{escape(str(verdict['baseline']))}', by "
+                          f"{_number(difference['value'])} [{_number(difference['low'])}, "
+                          f"{_number(difference['high'])}] mean fitness on the same episodes")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

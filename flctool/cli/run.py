@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from flctool.cli.app import app, example, load_controller, report_interrupted, user_errors
-from flctool.cli.spec_commands import ControllerArgument
 from flctool.errors import FlcError
 
 if TYPE_CHECKING:
@@ -28,9 +27,12 @@ def _log(text: str) -> None:
     "flctool run runs/robot --ros2",
     "flctool run runs/sim/best.yaml --ros2 --robot behaviours/ballchase-ros2.yaml",
     "flctool run behaviours/ballchase-handmade.yaml --ros2 --robot "
-    "behaviours/ballchase-ros2.yaml --episodes 20"))
+    "behaviours/ballchase-ros2.yaml --episodes 20",
+    "flctool run bundle/ --ros2"))
 def run(
-    file: ControllerArgument,
+    file: Annotated[Path, typer.Argument(
+        metavar="CONTROLLER", help="A behaviour file (YAML), a run directory (its best.yaml) "
+        "or an export bundle (its controller.yaml).")],
     ros2: Annotated[bool, typer.Option("--ros2", help="Run as a ROS 2 node, with the topics "
                                        "of the environment: {adapter: ros2} section.")]
     = False,
@@ -50,6 +52,10 @@ def run(
     latest inputs, with a watchdog that publishes stop at once on a stale, NaN or
     out-of-range input or a lost publisher, and again on Ctrl-C."""
     with user_errors():
+        # an export bundle (flctool export --format bundle) deploys its controller.yaml
+        bundled = file / "controller.yaml"
+        if file.is_dir() and bundled.is_file() and (file / "wiring.json").is_file():
+            file = bundled
         behaviour, source = load_controller(file)
         if not ros2:
             raise FlcError("flctool run deploys over ROS 2 only: add --ros2",

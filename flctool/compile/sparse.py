@@ -89,7 +89,10 @@ class SparseRules:
             if value != value:  # NaN: every comparison below would be false
                 raise InferenceError(f"the environment observed NaN for input "
                                      f"'{self._names[i]}'",
-                                     hint="NaN has no membership; fix the adapter's sensor")
+                                     hint="NaN has no membership: check what the environment "
+                                     "observes for it (a Gymnasium environment's or a robot's "
+                                     "reading; flctool's simulators refuse the file values "
+                                     "that could overflow)")
             low, high, sets = self._lows[i], self._highs[i], self._sets[i]
             s = low if value < low else high if value > high else value  # clip to the range
             members = firing_sets(s, sets, self._kinds[i])  # (index, mu > 0) in set order

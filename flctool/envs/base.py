@@ -23,6 +23,7 @@ context manager, as Gymnasium's are::
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any
@@ -66,6 +67,10 @@ class BatchEnv(ABC):
     #: (a simulator; never a robot): learning then reuses a validation episode's outcome for
     #: a controller that would act the same in it, instead of running it again.
     replayable: bool = False
+    #: The lowest and highest fitness :meth:`episode_fitness` can give (unbounded by
+    #: default): confidence intervals of a mean fitness are clipped to it, and a
+    #: ``stop.target`` outside it is refused.
+    fitness_range: tuple[float, float] = (-math.inf, math.inf)
 
     @abstractmethod
     def reset(self, seeds: NDArray[np.int64]) -> tuple[FloatArray, dict[str, Any]]:

@@ -389,6 +389,9 @@ class PitchSim(BatchEnv):
             raise EnvError("no episode yet", hint="call reset(seeds) first")
         return self._engine.success()
 
+    #: What :meth:`episode_fitness` can give: 0 (a failure at once) to 2 (success at once).
+    fitness_range = (0.0, 2.0)
+
     def episode_fitness(self, returns: FloatArray, lengths: NDArray[np.int64],
                         success: BoolArray) -> FloatArray:
         """Trial fitness for the GA, (B,) each: :func:`timed_fitness`."""

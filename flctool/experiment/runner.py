@@ -44,6 +44,7 @@ from flctool.runs import (
     BEHAVIOUR_FILE,
     BEST_FILE,
     CHECKPOINT_DIR,
+    ENDED,
     Run,
     create_run,
     open_run,
@@ -146,9 +147,9 @@ def run_job(job: Job, directory: Path) -> JobOutcome:
     else:
         _clear_unstarted(directory)
         run = create_run(job.behaviour, directory)
-    if heldout_path.is_file() and run.info().get("status") == "finished":
+    if heldout_path.is_file() and run.info().get("status") in ENDED:
         return JobOutcome(job.learner, job.seed, read_heldout(directory)["success_rate"], True)
-    if run.info().get("status") != "finished":
+    if run.info().get("status") not in ENDED:
         run.train()
     result = heldout_evaluation(run, job.heldout_seed, job.heldout_episodes)
     write_text_atomic(heldout_path, json.dumps(result, indent=2) + "\n")
@@ -222,7 +223,7 @@ class Experiment:
             info = json.loads((directory / "run.json").read_text(encoding="utf-8"))
         except (OSError, ValueError):
             return False
-        return isinstance(info, dict) and info.get("status") == "finished"
+        return isinstance(info, dict) and info.get("status") in ENDED
 
     def run(self, executor: Executor, on_done: Callable[[JobOutcome], None] = lambda _: None,
             ) -> list[JobOutcome]:

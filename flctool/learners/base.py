@@ -20,6 +20,7 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -27,10 +28,12 @@ from numpy.typing import NDArray
 
 from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
-from flctool.errors import LearnError
+from flctool.errors import LearnError, Problem, SpecError
+from flctool.learners.baselines import BaselineCheck
 from flctool.learners.budget import Budget, Usage
 from flctool.learners.callbacks import Callback, CallbackList, RunCallback
 from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
+from flctool.learners.confirmation import Confirmation
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate, ModelSelection
 from flctool.learners.trial import SparseRules
@@ -110,15 +113,36 @@ class Learner(ABC):
         self._set_rules: dict[bytes, SparseRules] = {}
         #: Episodes and steps the run has spent, training and selection apart.
         self.usage = Usage()
-        self.selection = ModelSelection(self.config.selection, self.config.seed, self.usage,
-                                        self.config.stop.episodes, self.rank_by)
-        self.budget = Budget(self.config.stop, self.selection, self.usage)
+        config = self.config
+        limit = config.stop.episodes
+        self.confirmation = Confirmation(config.selection.confirmation, config.seed,
+                                         self.usage, limit)
+        #: The end-of-run comparison with baselines; hand-made tables go in its ``given``.
+        self.baseline_check = BaselineCheck(self.confirmation, self.usage, config.seed)
+        self.confirmation.after = partial(self.baseline_check.episodes_needed,
+                                          self.controller.n_commands)
+        # selection leaves room, within stop.episodes, for what the end of the run needs
+        self.selection = ModelSelection(config.selection, config.seed, self.usage, limit,
+                                        self.rank_by, reserve=self.episodes_at_end)
+        self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
+                             reserve=self.episodes_at_end)
+        check_target(behaviour, env)
+
+    def episodes_at_end(self) -> int:
+        """The episodes the end of the run takes after selection: the confirmation and the
+        comparison with baselines."""
+        confirming = self.confirmation.episodes
+        if confirming < 2:
+            return confirming
+        return confirming + self.baseline_check.episodes_needed(self.controller.n_commands,
+                                                                 confirming)
 
     @property
     def run_callbacks(self) -> list[RunCallback]:
         """The parts of the run that act between generations, in order: model selection,
-        then the budget (which looks at what selection chose)."""
-        return [self.selection, self.budget]
+        the budget (which looks at what selection chose, and may have it confirmed), the
+        confirmation of the controller the run returns, and its comparison with baselines."""
+        return [self.selection, self.budget, self.confirmation, self.baseline_check]
 
     @property
     def stop_reason(self) -> str | None:
@@ -308,11 +332,20 @@ class Learner(ABC):
         """What run.json shows of selection and spending: the validated candidates, the
         best, the episodes and steps of training and of selection, why the run stopped."""
         record = {**self.selection.record(), "usage": self.usage.to_dict(),
-                  "stop_reason": self.stop_reason}
+                  "stop_reason": self.stop_reason,
+                  "confirmation": self.confirmation.record(),
+                  "baseline": self.baseline_check.record()}
         genes = self.selected_sets()
         if self.codec is not None and genes is not None:
             record["sets"] = self.sets_record(genes)
         return record
+
+    @property
+    def learned(self) -> bool | None:
+        """Whether the run's controller is clearly better than every baseline (None: the
+        run has not ended, or had nothing confirmed to compare)."""
+        verdict = self.baseline_check.verdict
+        return None if verdict is None else verdict.learned
 
     def sets_record(self, genes: FloatArray) -> dict[str, Any]:
         """What run.json shows of the returned controller's learned sets: the interpretability
@@ -339,10 +372,34 @@ class Learner(ABC):
         if checkpoint.selection is not None:  # None: a checkpoint of a run without one
             self.selection.restore(checkpoint.selection)
             self.budget.restore(checkpoint.selection)
+            self.confirmation.restore(checkpoint.selection.confirmations)
+            self.baseline_check.restore(checkpoint.selection.baselines,
+                                        checkpoint.selection.verdict)
         self.generation, self.elapsed = checkpoint.generation, checkpoint.elapsed
         self.population, self.fitness = checkpoint.population, checkpoint.fitness
         self.set_genes = checkpoint.set_genes
         self.load_extra_state(state)
+
+
+def check_target(behaviour: Behaviour, env: BatchEnv) -> None:
+    """A ``stop.target`` the run can reach: a fitness within the environment's possible
+    range, a success rate only where the environment defines success; a located error
+    otherwise."""
+    target = behaviour.learning.stop.target_in_units()
+    if target is None:
+        return
+    path = ("learning", "stop", "target")
+    low, high = env.fitness_range
+    if target.unit == "fitness" and not low <= target.value <= high:
+        raise SpecError([Problem(path, f"a target mean fitness of {target.value:g} is outside "
+                                 f"the fitness this environment can give, [{low:g}, {high:g}]",
+                                 "give a fitness within it, or the target in the units you "
+                                 "mean: {success: 0.95} or {return: 475}")])
+    if target.unit == "success" and getattr(behaviour.environment, "success",
+                                            "terminated") == "never":
+        raise SpecError([Problem(path, "a success target, but the environment defines no "
+                                 "success (success: never)",
+                                 "give the target as {return: ...} or {fitness: ...}")])
 
 
 #: Rule bases of set genomes kept decoded (a generation's and its elites' fit many times).
@@ -391,7 +448,8 @@ def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[Generati
 
         generation = learner.generation + 1
         while not learner.finished:
-            selection_before = usage.selection_episodes, usage.selection_steps
+            spent = (usage.selection_episodes, usage.selection_steps,
+                     usage.confirmation_episodes, usage.confirmation_steps)
             if generation > 0:
                 learner.advance()
             result = learner.evaluate(generation)
@@ -408,9 +466,9 @@ def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[Generati
             best = learner.selection.best
             metrics = GenerationMetrics.from_fitness(
                 generation, result.fitness, result.episodes, result.steps, learner.elapsed,
-                usage.selection_episodes - selection_before[0],
-                usage.selection_steps - selection_before[1],
-                best.validation_value() if best else float("nan"))
+                usage.selection_episodes - spent[0], usage.selection_steps - spent[1],
+                best.validation_value() if best else float("nan"),
+                usage.confirmation_episodes - spent[2], usage.confirmation_steps - spent[3])
             history.append(metrics)
             generation += 1
             if not callback.on_generation(metrics):

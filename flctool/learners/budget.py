@@ -2,7 +2,8 @@
 
 :class:`Usage` counts every episode and environment step a run spends, training and
 selection apart; :class:`Budget` is the run callback that ends a run when the next generation
-would break ``learning.stop`` or once a controller reaches ``stop.target``. Budgets count
+would break ``learning.stop`` or once the selected controller's confirmation reaches
+``stop.target`` (:mod:`flctool.learners.confirmation`). Budgets count
 training and selection episodes alike and are checked between generations, from counts saved
 in every checkpoint, so that a run stopped by ``episodes``, ``steps`` or ``target`` is as
 reproducible as one that runs all its generations; only ``seconds`` depends on the machine.
@@ -10,7 +11,8 @@ reproducible as one that runs all its generations; only ``seconds`` depends on t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 from flctool.learners.callbacks import RunCallback
@@ -19,63 +21,78 @@ from flctool.spec.learning import StopConfig
 if TYPE_CHECKING:
     from flctool.learners.base import GenerationResult, Learner
     from flctool.learners.checkpoint import SelectionState
+    from flctool.learners.confirmation import Confirmation
     from flctool.learners.selection import ModelSelection
 
 
 @dataclass
 class Usage:
-    """Episodes and environment steps spent, for training and for selection."""
+    """Episodes and environment steps spent: training, selection (validation),
+    confirmation and the baselines' comparison apart."""
 
     training_episodes: int = 0
     training_steps: int = 0
     selection_episodes: int = 0
     selection_steps: int = 0
+    confirmation_episodes: int = 0
+    confirmation_steps: int = 0
+    baseline_episodes: int = 0  # the end-of-run comparison (flctool.learners.baselines)
+    baseline_steps: int = 0
 
     @property
     def episodes(self) -> int:
-        return self.training_episodes + self.selection_episodes
+        return (self.training_episodes + self.selection_episodes + self.confirmation_episodes
+                + self.baseline_episodes)
 
     @property
     def steps(self) -> int:
-        return self.training_steps + self.selection_steps
+        return (self.training_steps + self.selection_steps + self.confirmation_steps
+                + self.baseline_steps)
 
     def to_dict(self) -> dict[str, int]:
         return {"training_episodes": self.training_episodes,
                 "training_steps": self.training_steps,
                 "selection_episodes": self.selection_episodes,
-                "selection_steps": self.selection_steps}
+                "selection_steps": self.selection_steps,
+                "confirmation_episodes": self.confirmation_episodes,
+                "confirmation_steps": self.confirmation_steps,
+                "baseline_episodes": self.baseline_episodes,
+                "baseline_steps": self.baseline_steps,
+                "episodes": self.episodes, "steps": self.steps}
 
 
 class Budget(RunCallback):
     """Ends the run on ``learning.stop`` (see the module docstring): after a generation,
-    ``target`` if the selected controller reached it, else the first budget the next
-    generation -- its trials, its leader's validation and the final selection -- would break.
+    ``target`` if the selected controller's confirmation reached it, else the first budget
+    the next generation -- its trials, its leader's validation, the final selection and the
+    confirmation -- would break.
     """
 
-    def __init__(self, stop: StopConfig, selection: ModelSelection, usage: Usage) -> None:
+    def __init__(self, stop: StopConfig, selection: ModelSelection,
+                 confirmation: Confirmation, usage: Usage,
+                 reserve: Callable[[], int] = lambda: 0) -> None:
         self.stop = stop
+        self.reserve = reserve  # episodes the end of the run needs after selection
+        self.target = stop.target_in_units()
         self.selection = selection
+        self.confirmation = confirmation
         self.usage = usage
         self.stop_reason: str | None = None  # "target", "episodes", "steps" or "seconds"
 
     def on_trials(self, learner: Learner, result: GenerationResult) -> None:
         del result
-        if self.reached_target():
+        if self.target is not None and self.confirmation.reaches(learner, self.target):
             self.stop_reason = "target"
         elif learner.generation + 1 < learner.config.generations:
             self.stop_reason = self.exhausted(learner.episodes_per_generation(),
                                               learner.elapsed)
 
-    def reached_target(self) -> bool:
-        target = self.stop.target
-        best = self.selection.best
-        return target is not None and best is not None and best.validation_value() >= target
-
     def exhausted(self, generation_episodes: int, elapsed: float) -> str | None:
         """Which budget the next generation (``generation_episodes`` training episodes, and
-        the most selection may spend after it) would break, if any."""
+        the most selection and confirmation may spend after it) would break, if any."""
         stop, usage = self.stop, self.usage
-        upcoming = generation_episodes + self.selection.most_episodes_after_generation()
+        upcoming = (generation_episodes + self.selection.most_episodes_after_generation()
+                    + self.reserve())
         if stop.episodes is not None and usage.episodes + upcoming > stop.episodes:
             return "episodes"
         if stop.steps is not None and usage.episodes > 0:
@@ -86,16 +103,44 @@ class Budget(RunCallback):
             return "seconds"
         return None
 
-    def fits(self, episodes: int) -> bool:
-        """Whether ``episodes`` more stay within ``stop.episodes``."""
-        limit = self.stop.episodes
-        return limit is None or self.usage.episodes + episodes <= limit
-
     # -- checkpoints: part of the run's selection record (its format predates this class)
     def state_dict(self) -> dict[str, Any]:
         return {"usage": self.usage.to_dict(), "stop_reason": self.stop_reason}
 
     def restore(self, state: SelectionState) -> None:
-        for name, value in state.usage.to_dict().items():
-            setattr(self.usage, name, value)
+        for counter in fields(Usage):
+            setattr(self.usage, counter.name, getattr(state.usage, counter.name))
         self.stop_reason = state.stop_reason
+
+
+def describe_budget(learner: Learner) -> str:
+    """What the run will spend and why, in one line for ``flctool learn`` to say: its
+    training episodes (generations x population x trials, from the file or the defaults, the
+    paper's protocol), for how many rules and commands, and what selection, confirmation
+    and the comparison with baselines add."""
+    from flctool.spec.located import source_of
+
+    config = learner.config
+    source_map = source_of(learner.behaviour)
+    given = [key for key in ("generations", "population", "trials")
+             if source_map.mark(("learning", key)) is not None
+             or ("learning", key) in source_map.overrides]
+    source = ("the paper's protocol: the file sets none of generations, population, trials"
+              if not given else f"{', '.join(given)} as given, the rest the paper's protocol")
+    free = learner.controller.n_rules - len(learner.fixed_rules)
+    training = config.generations * config.population * config.trials
+    confirming = learner.confirmation.episodes
+    end = learner.episodes_at_end()
+    selection = config.selection
+    validation = (f"selection validates candidates on {selection.episodes} episodes each"
+                  if selection.candidates else "no selection")
+    stop = config.stop
+    limit = f"; at most {stop.episodes} episodes in all (stop.episodes)" \
+        if stop.episodes is not None else ""
+    generations = f"{config.generations} generation{'s' if config.generations != 1 else ''}"
+    return (f"budget: {generations} x {config.population} individuals x "
+            f"{config.trials} trial{'s' if config.trials != 1 else ''} = {training} training "
+            f"episodes ({source}) for {free} rules to learn x "
+            f"{learner.controller.n_commands} commands; {validation}; the returned controller "
+            f"is confirmed on {confirming} fresh episodes and compared with baselines "
+            f"({end - confirming} episodes){limit}")

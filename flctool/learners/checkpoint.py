@@ -13,14 +13,16 @@ what is wrong. Run directories (:mod:`flctool.runs`) and learners both read thro
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.errors import LearnError
+from flctool.learners.baselines import Verdict
 from flctool.learners.budget import Usage
+from flctool.learners.confirmation import Confirmed
 from flctool.learners.metrics import GenerationMetrics
 from flctool.learners.selection import Candidate
 
@@ -34,6 +36,8 @@ STREAMS = ("ga", "env", "explore")
 REQUIRED = ("learner", "generation", "elapsed", "population", "fitness", "rng")
 DAMAGED_HINT = ("delete the damaged checkpoint (and any later ones) to resume from the one "
                 "before")
+#: The counts of a checkpoint's usage record (it may also hold their totals).
+USAGE_FIELDS = tuple(f.name for f in fields(Usage))
 #: Random generator states hold 128-bit integers (PCG64); anything larger is tampering.
 _MAX_RNG_INT = 1 << 128
 #: No run reaches this many generations (-1: before the first).
@@ -68,6 +72,10 @@ class SelectionState:
     stop_reason: str | None
     finalized: bool
     validated: list[dict[str, Any]]
+    confirmations: list[Confirmed] = field(default_factory=list)  # none before confirmation
+    #: Hand-made baseline tables (name, consequents (M,)) and the end-of-run verdict.
+    baselines: list[tuple[str, IntArray]] = field(default_factory=list)
+    verdict: Verdict | None = None
 
 
 @dataclass(frozen=True)
@@ -265,7 +273,14 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
     try:
         hall = [Candidate.from_dict(c) for c in state["hall"]]
         best = None if state["best"] is None else Candidate.from_dict(state["best"])
-        usage = Usage(**{k: int(v) for k, v in state["usage"].items()})
+        counts = state["usage"]
+        usage = Usage(**{k: int(counts[k]) for k in USAGE_FIELDS if k in counts})
+        confirmations = [Confirmed.from_dict(c) for c in state.get("confirmations", [])]
+        baseline_state = state.get("baselines") or {"given": [], "verdict": None}
+        given = [(str(name), np.array(genes, dtype=np.intp))
+                 for name, genes in baseline_state["given"]]
+        verdict = (None if baseline_state["verdict"] is None
+                   else Verdict.from_dict(baseline_state["verdict"]))
         stop_reason = state["stop_reason"]
         finalized = bool(state["finalized"])
         validated = [dict(v) for v in state["validated"]]
@@ -287,4 +302,10 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
             _check_set_genome(candidate.sets, (expected.set_genes,))
     if stop_reason is not None and not isinstance(stop_reason, str):
         raise damaged("'s stop reason is not a name")
-    return SelectionState(hall, best, usage, stop_reason, finalized, validated)
+    for genes in [c.consequents for c in confirmations] + [g for _, g in given]:
+        if genes.shape != (expected.n_rules,) or (genes.size and (
+                genes.min() < 0 or genes.max() >= expected.n_commands)):
+            raise damaged("'s confirmation or baseline record holds a controller that is not "
+                          "one of this behaviour")
+    return SelectionState(hall, best, usage, stop_reason, finalized, validated, confirmations,
+                          given, verdict)

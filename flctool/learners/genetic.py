@@ -20,6 +20,15 @@ gave), :meth:`GeneticLearner.advance` breeds, and rules the file gives are put b
 every operator (:meth:`~flctool.learners.base.Learner.keep_fixed`). With ``learning.sets``
 each controller also carries a set genome (``set_genes``), bred from the same parents by the
 set operators of :mod:`flctool.learners.set_genes`, and acts with its own sets.
+
+**Restarts** answer premature convergence: when the run's selected controller (the best
+validated one; without selection, the best training fitness) has not improved for
+``restart_after`` generations, every individual but the elites is drawn afresh after
+breeding (from the ``ga`` stream; the q table is kept). A population stuck on a poor table --
+the hybrid's operators pull every child towards the q table's favourites, which on some seeds
+are a controller that loses the ball or times out -- then gets a fresh start within the same
+budget (measured in docs/learning.md). Runs started by versions without restarts continue
+without them, so they resume bit for bit. A restarted individual gets fresh set genes too.
 """
 
 from __future__ import annotations
@@ -28,13 +37,14 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.base import GenerationResult, IntArray, Learner
+from flctool.learners.checkpoint import damaged
 from flctool.learners.fuzzy_q import FuzzyQ, new_fuzzy_q
 from flctool.learners.ga import (
     Crossover,
@@ -117,6 +127,12 @@ class GeneticLearner(Learner):
                                               config.sets.sigma)
             self.set_genes = initial_set_genes(self.rngs["ga"], config.population,
                                                self.codec.size, config.sets.sigma)
+        #: Premature-convergence restarts: enabled, best figure seen, generations since it
+        #: improved, restarts made.
+        self.restart_after = config.restart_after
+        self.best_seen = -math.inf
+        self.stalled_for = 0
+        self.restarts = 0
 
     def initial_population(self) -> IntArray:
         """The first generation (P, M): uniform random consequents, given rules as given."""
@@ -135,12 +151,65 @@ class GeneticLearner(Learner):
         return GenerationResult(self.fitness, seeds.size, steps)
 
     def advance(self) -> None:
+        stalled = self._stalled()
         crossover, mutation = self.operator_set.operators(self)
         population, self.set_genes = self.ga.breed_genomes(
             self.rngs["ga"], self.population, self.fitness, crossover, mutation,
             self.set_genes, self.set_operators)
+        if stalled:
+            self._restart(population)
         # Given rules are fixed: whatever crossover and mutation did to them is undone.
         self.population = self.keep_fixed(population)
+
+    def _restart(self, population: IntArray) -> None:
+        """Redraw every individual of ``population`` (P, M) but the elites, in place (and
+        their set genes)."""
+        keep = min(self.elite_count(), population.shape[0] - 1)
+        fresh = population.shape[0] - keep
+        population[keep:] = random_population(self.rngs["ga"], fresh, self.controller.n_rules,
+                                              self.controller.n_commands)
+        config = self.config
+        if self.set_genes is not None and self.codec is not None and config.sets is not None:
+            self.set_genes[keep:] = initial_set_genes(self.rngs["ga"], fresh, self.codec.size,
+                                                      config.sets.sigma)
+        self.restarts += 1
+
+    def _stalled(self) -> bool:
+        """Whether the run's figure has not improved for ``restart_after`` generations (then
+        the count starts again)."""
+        if self.restart_after <= 0:
+            return False
+        best = self.selection.best
+        figure = best.validation_value() if best is not None else float(self.fitness.max())
+        if figure > self.best_seen:
+            self.best_seen, self.stalled_for = figure, 0
+            return False
+        self.stalled_for += 1
+        if self.stalled_for < self.restart_after:
+            return False
+        self.stalled_for = 0
+        return True
+
+    def extra_state(self) -> dict[str, Any]:
+        return {**super().extra_state(),
+                "restarts": {"after": self.restart_after, "best_seen": self.best_seen,
+                             "stalled_for": self.stalled_for, "restarts": self.restarts}}
+
+    def load_extra_state(self, state: dict[str, Any]) -> None:
+        super().load_extra_state(state)
+        record = state.get("restarts")
+        if record is None:  # a run of a version without restarts: it continues without
+            self.restart_after = 0
+            return
+        try:
+            after, best_seen = int(record["after"]), float(record["best_seen"])
+            stalled_for, restarts = int(record["stalled_for"]), int(record["restarts"])
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
+            raise damaged(f"is damaged: its restart record cannot be read ({exc!r})") from None
+        if after < 0 or stalled_for < 0 or restarts < 0 or math.isnan(best_seen):
+            raise damaged("is damaged: its restart record holds negative counts or NaN")
+        self.restart_after, self.best_seen = after, best_seen
+        self.stalled_for, self.restarts = stalled_for, restarts
 
 
 class PittLearner(GeneticLearner):

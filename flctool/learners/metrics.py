@@ -32,14 +32,18 @@ class GenerationMetrics:
     selection_episodes: int = 0  # validation episodes run after this generation
     selection_steps: int = 0  # environment steps of those validation episodes
     validated: float = math.nan  # validated mean fitness of the run's best so far (NaN: none)
+    confirmation_episodes: int = 0  # confirmation episodes run after this generation
+    confirmation_steps: int = 0
 
     @classmethod
     def from_fitness(cls, generation: int, fitness: FloatArray, episodes: int, steps: int,
                      wall_time: float, selection_episodes: int = 0, selection_steps: int = 0,
-                     validated: float = math.nan) -> GenerationMetrics:
+                     validated: float = math.nan, confirmation_episodes: int = 0,
+                     confirmation_steps: int = 0) -> GenerationMetrics:
         f = np.asarray(fitness, dtype=np.float64)
         return cls(generation, float(f.mean()), float(f.std()), float(f.max()), float(f.min()),
-                   episodes, steps, wall_time, selection_episodes, selection_steps, validated)
+                   episodes, steps, wall_time, selection_episodes, selection_steps, validated,
+                   confirmation_episodes, confirmation_steps)
 
     @classmethod
     def columns(cls) -> tuple[str, ...]:
@@ -55,4 +59,7 @@ class GenerationMetrics:
                    int(row["steps"]), float(row["wall_time"]),
                    # absent from the records of runs made before model selection
                    int(row.get("selection_episodes", 0)), int(row.get("selection_steps", 0)),
-                   float(row.get("validated", math.nan)))
+                   float(row.get("validated", math.nan)),
+                   # absent from the records of runs made before confirmation
+                   int(row.get("confirmation_episodes", 0)),
+                   int(row.get("confirmation_steps", 0)))

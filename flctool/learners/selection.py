@@ -46,7 +46,7 @@ from flctool.envs.base import BatchEnv
 from flctool.learners.budget import Usage
 from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import SparseRules, Trial, run_trial
-from flctool.rollout import Estimate, mean_interval
+from flctool.rollout import Estimate, clip_estimate, mean_interval
 from flctool.spec.learning import SelectionConfig
 
 if TYPE_CHECKING:
@@ -96,6 +96,10 @@ class Candidate:
     validated_at: int = -1  # generation after which it was validated
     #: Its set genome (G,) when the run learns the sets too (``learning.sets``), else None.
     sets: FloatArray | None = None
+    #: Its success rate and mean return on the validation episodes (None: not validated, or
+    #: by a version that did not record them).
+    validation_success: float | None = None
+    validation_return: float | None = None
 
     @property
     def fitness(self) -> float:
@@ -115,24 +119,38 @@ class Candidate:
                 "trials": self.trials, "validated_at": self.validated_at,
                 "validation": None if self.validation is None else _estimate_dict(
                     self.validation),
+                "validation_success": self.validation_success,
+                "validation_return": self.validation_return,
                 **({} if self.sets is None else {"sets": self.sets.tolist()})}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Candidate:
         validation = data["validation"]
+        success, mean_return = data.get("validation_success"), data.get("validation_return")
         return cls(np.array(data["consequents"], dtype=np.intp), int(data["generation"]),
                    int(data["individual"]), float(data["fitness_sum"]), int(data["trials"]),
                    None if validation is None else _estimate(validation),
                    int(data["validated_at"]),
                    None if data.get("sets") is None else np.array(data["sets"],
-                                                                  dtype=np.float64))
+                                                                  dtype=np.float64),
+                   None if success is None else float(success),
+                   None if mean_return is None else float(mean_return))
+
+    def validation_in(self, unit: str) -> float:
+        """The validated figure in ``unit`` (``fitness``, ``success`` or ``return``); -inf
+        if it was not measured."""
+        value = {"fitness": None if self.validation is None else self.validation.value,
+                 "success": self.validation_success, "return": self.validation_return}[unit]
+        return -math.inf if value is None else value
 
     def record(self) -> dict[str, Any]:
         """What run.json shows of a candidate: where it came from, training and validation."""
         return {"generation": self.generation, "individual": self.individual,
                 "training_fitness": self.fitness, "training_trials": self.trials,
                 "validation": None if self.validation is None
-                else self.validation.to_dict()}
+                else self.validation.to_dict(),
+                "validation_success": self.validation_success,
+                "validation_return": self.validation_return}
 
 
 def _key(consequents: IntArray, sets: FloatArray | None = None) -> bytes:
@@ -167,12 +185,15 @@ class ModelSelection(RunCallback):
     ``rank_by`` is ``"fitness"`` (GAs: mean training fitness) or ``"recency"`` (fuzzy_q: the
     latest greedy controllers first, because its training fitness is measured while
     exploring and says little about the greedy controller). Validation episodes are added to
-    ``usage``, and never taken beyond ``episode_limit`` (``stop.episodes``).
+    ``usage``, and never taken beyond ``episode_limit`` (``stop.episodes``) less ``reserve()``,
+    what the end of the run needs after selection (confirmation, baselines).
     """
 
     def __init__(self, config: SelectionConfig, run_seed: int, usage: Usage,
-                 episode_limit: int | None = None, rank_by: str = "fitness") -> None:
+                 episode_limit: int | None = None, rank_by: str = "fitness",
+                 reserve: Callable[[], int] = lambda: 0) -> None:
         self.config = config
+        self.reserve = reserve  # episodes the end of the run needs after selection
         self.run_seed = run_seed
         self.usage = usage
         self.episode_limit = episode_limit
@@ -261,8 +282,10 @@ class ModelSelection(RunCallback):
         lengths = np.array([t.length for t in trials], dtype=np.int64)
         fitness = env.episode_fitness(np.array([t.ret for t in trials], dtype=np.float64),
                                       lengths, np.array([t.success for t in trials]))
-        candidate.validation = mean_interval(fitness)
+        candidate.validation = clip_estimate(mean_interval(fitness), env.fitness_range)
         candidate.validated_at = generation
+        candidate.validation_success = float(np.mean([t.success for t in trials]))
+        candidate.validation_return = float(np.mean([t.ret for t in trials]))
         self.usage.selection_episodes += len(trials)
         self.usage.selection_steps += int(lengths.sum())
         self.validated.append(candidate.record())
@@ -317,7 +340,7 @@ class ModelSelection(RunCallback):
         """Whether ``validations`` more validations stay within the episode limit."""
         limit = self.episode_limit
         return limit is None or (self.usage.episodes + validations * self.config.episodes
-                                 <= limit)
+                                 + self.reserve() <= limit)
 
     # -- checkpoints -----------------------------------------------------------------------
     def state_dict(self) -> dict[str, Any]:

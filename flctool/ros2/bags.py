@@ -158,6 +158,7 @@ def bag_topics(path: Path) -> dict[str, str]:
 # -- replay --------------------------------------------------------------------------------------
 @dataclass
 class ReplayRow:
+    stamp: int  # ns, the recorded command's time
     time: float  # s since the bag's first message
     inputs: list[float]
     recorded: float  # the crisp output the command carried ((value - offset) / scale)
@@ -204,8 +205,46 @@ def replay(path: Path, config: Ros2Config, input_names: tuple[str, ...],
         replayed = act(values)
         if command.type == "std_msgs/String":
             replayed = commands[nearest_command(commands, replayed)]
-        rows.append(ReplayRow((stamp - start) / 1e9, values, recorded, replayed))
+        rows.append(ReplayRow(stamp, (stamp - start) / 1e9, values, recorded, replayed))
     return rows
+
+
+def write_replay_bag(source: Path, out: Path, command_topic: str,
+                     rows: list[ReplayRow]) -> int:
+    """A copy of the bag ``source`` (its ROS 2 CDR messages) with two topics beside the
+    recorded commands, at each replayed command's time: ``COMMAND/replayed`` and
+    ``COMMAND/difference`` (std_msgs/Float64). Returns the messages written."""
+    rosbag2, store = _rosbags()
+    from rosbags.highlevel import AnyReader
+
+    if out.exists():
+        raise FlcError(f"{out} exists", hint="write the replay into a new bag (a folder)")
+    written = 0
+    with AnyReader([source], default_typestore=store) as reader, rosbag2.Writer(
+            out, version=9, storage_plugin=rosbag2.StoragePlugin.MCAP) as writer:
+        copies = {}
+        for connection in reader.connections:
+            if connection.msgdef.format.name != "MSG" or not connection.digest.startswith(
+                    "RIHS01_"):
+                continue  # a ROS 1 bag's connections: not copied into a ROS 2 bag
+            copies[connection.id] = writer.add_connection(
+                connection.topic, connection.msgtype, msgdef=connection.msgdef.data,
+                rihs01=connection.digest)
+        replayed = writer.add_connection(f"{command_topic}/replayed", "std_msgs/msg/Float64",
+                                         typestore=store)
+        difference = writer.add_connection(f"{command_topic}/difference",
+                                           "std_msgs/msg/Float64", typestore=store)
+        float64 = store.types["std_msgs/msg/Float64"]
+        for connection, stamp, raw in reader.messages(
+                [c for c in reader.connections if c.id in copies]):
+            writer.write(copies[connection.id], stamp, raw)
+            written += 1
+        for row in rows:
+            for target, value in ((replayed, row.replayed), (difference, row.difference)):
+                writer.write(target, row.stamp, store.serialize_cdr(float64(data=value),
+                                                                    "std_msgs/msg/Float64"))
+                written += 1
+    return written
 
 
 def _field(message: Any, path: str) -> Any:

@@ -69,11 +69,34 @@ def behaviour_to_yaml(behaviour: Behaviour, header: str = "", *, defaults: bool 
     return data_to_yaml(behaviour_to_data(behaviour, defaults=defaults), header)
 
 
+#: Rules written by one call of PyYAML's dumper (see data_to_yaml).
+_RULES_AT_ONCE = 2000
+
+
+def _dump(value: Any) -> str:
+    with no_collection():  # see flctool.spec.bounded: twice as fast for a large table
+        return str(yaml.dump(value if isinstance(value, list) else _styled(value),
+                             Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
+
+
 def data_to_yaml(data: dict[str, Any], header: str = "") -> str:
     """A behaviour given as data (:func:`behaviour_to_data`'s form) written as
     :func:`behaviour_to_yaml` writes it."""
-    with no_collection():  # see flctool.spec.bounded: twice as fast for a large table
-        body = yaml.dump(_styled(data), Dumper=_Dumper, sort_keys=False, allow_unicode=True,
-                         width=100)
+    rules = data.get("rules")
+    if isinstance(rules, list) and len(rules) > _RULES_AT_ONCE and "rules" in data:
+        # PyYAML composes a node per value before it writes any: a table of 100,000 rules
+        # would take hundreds of MB at once. The rules are written a block at a time into
+        # the place the rest of the file leaves for them (a block list writes the same lines
+        # at the top level as under a key: '- {if: ...}').
+        placeholder = "rules: []\n"
+        head = _dump({**data, "rules": []})
+        if head.count(placeholder) == 1:
+            blocks = [_dump([_styled(rule, "rule") for rule in rules[i:i + _RULES_AT_ONCE]])
+                      for i in range(0, len(rules), _RULES_AT_ONCE)]
+            body = head.replace(placeholder, "rules:\n" + "".join(blocks))
+        else:
+            body = _dump(data)
+    else:
+        body = _dump(data)
     comment = "".join(f"# {line}".rstrip() + "\n" for line in header.splitlines())
     return comment + body

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from flctool.spec.base import Section
 from flctool.spec.set_learning import SetLearningConfig
@@ -54,6 +54,42 @@ class SelectionConfig(Section):
         "controllers kept for validation (0: no selection, best.yaml is the last "
         "generation's best by its training trials)"))
     episodes: int = Field(20, ge=1, description="validation episodes per candidate")
+    confirmation: int = Field(50, ge=0, description=(
+        "fresh episodes the returned controller is confirmed on: the figure the run reports "
+        "and stop.target is checked on (0: none)"))
+
+
+class TargetConfig(Section):
+    """A target in the units a user reads: one of a success rate, a mean return, or a mean
+    fitness (the learners' own figure)."""
+
+    success: float | None = Field(None, ge=0, le=1, description=(
+        "the confirmed success rate to reach, e.g. 0.95"))
+    return_: float | None = Field(None, alias="return", description=(
+        "the confirmed mean return (undiscounted) to reach, e.g. 475 on CartPole"))
+    fitness: float | None = Field(None, description=(
+        "the confirmed mean fitness to reach (what a plain number means)"))
+
+    @model_validator(mode="after")
+    def _one_unit(self) -> TargetConfig:
+        given = [name for name in ("success", "return_", "fitness")
+                 if getattr(self, name) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of success, return and fitness, e.g. "
+                             "{success: 0.95}")
+        return self
+
+    @property
+    def unit(self) -> str:
+        """``success``, ``return`` or ``fitness``."""
+        if self.success is not None:
+            return "success"
+        return "return" if self.return_ is not None else "fitness"
+
+    @property
+    def value(self) -> float:
+        value = next(v for v in (self.success, self.return_, self.fitness) if v is not None)
+        return float(value)
 
 
 class StopConfig(Section):
@@ -68,8 +104,15 @@ class StopConfig(Section):
     seconds: float | None = Field(None, gt=0, description=(
         "training time; the run stops after the generation that used it up (not "
         "reproducible: resumed runs may stop elsewhere)"))
-    target: float | None = Field(None, description=(
-        "stop once a controller's validated mean fitness reaches this"))
+    target: float | TargetConfig | None = Field(None, description=(
+        "stop once the selected controller's confirmation on fresh episodes reaches this: "
+        "{success: 0.95}, {return: 475}, or a mean fitness ({fitness: 1.9}, or the number)"))
+
+    def target_in_units(self) -> TargetConfig | None:
+        """The target as a unit and a value (a plain number is a mean fitness)."""
+        if self.target is None or isinstance(self.target, TargetConfig):
+            return self.target
+        return TargetConfig(fitness=self.target)
 
 
 def _learner_required_unless_default(schema: dict[str, Any], model: type[Any]) -> None:
@@ -115,6 +158,9 @@ class GeneticConfig(LearningConfig):
     elites: int = Field(1, ge=0, description="best individuals copied unchanged")
     common_starts: bool = Field(False, description=(
         "every individual of a generation gets the same start states"))
+    restart_after: int = Field(0, ge=0, description=(
+        "generations without a better selected controller after which every individual but "
+        "the elites is drawn afresh (premature convergence); 0: never, as in the paper"))
 
     @field_validator("elites")
     @classmethod
@@ -150,6 +196,11 @@ class HybridConfig(GeneticConfig):
     learner: Literal["hybrid"] = Field("hybrid", description=(
         "the paper's method: the GA guided by fuzzy-Q rule strengths (the default)"))
     q: QConfig = QConfig()
+    # Measured (docs/learning.md): restarts lift the hybrid's worst seeds, whose q-guided
+    # operators can lock a population onto a poor table; they lower Pitt's.
+    restart_after: int = Field(5, ge=0, description=(
+        "generations without a better selected controller after which every individual but "
+        "the elites is drawn afresh (premature convergence); 0: never, as in the paper"))
 
 
 def learner_keys(model: type[BaseModel]) -> tuple[str, ...]:

@@ -36,10 +36,11 @@ def test_learn_writes_a_run_and_a_json_summary(tmp_path: Path) -> None:
     result = runner.invoke(app, ["learn", BALLCHASE, "--generations", "3", "--seed", "5",
                                  "--learner", "pitt", "--population", "4", "--out", str(out),
                                  "--set", "pitt_crossover=one_point", "--json"])
-    assert result.exit_code == 0, result.output
     summary = json.loads(result.stdout)
+    # three generations of four controllers learn nothing a random table does not do
+    assert summary["status"] == "not_learned" and result.exit_code == 3, result.output
     assert summary["learner"] == "pitt" and summary["seed"] == 5
-    assert summary["generations"] == 3 and summary["status"] == "finished"
+    assert summary["generations"] == 3
     assert summary["last"]["episodes"] == 4
     resolved = load_behaviour(out / "behaviour.yaml")
     assert resolved.learning.seed == 5 and resolved.learning.pitt_crossover == "one_point"
@@ -102,7 +103,7 @@ def test_switching_learner_drops_the_files_keys_for_the_other_learner(tmp_path: 
     result = runner.invoke(app, ["learn", str(tmp_path / "pitt.yaml"), "--learner", "fuzzy_q",
                                  "-g", "1", "-p", "2", "--set", "selection.candidates=0",
                                  "--out", str(out)])
-    assert result.exit_code == 0, result.output
+    assert result.exit_code in (0, 3), result.output  # 3: one generation learns little
     learning = load_behaviour(out / "behaviour.yaml").learning
     assert learning.learner == "fuzzy_q"
     assert "pitt_crossover" not in (out / "behaviour.yaml").read_text()

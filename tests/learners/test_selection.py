@@ -15,6 +15,7 @@ from flctool.errors import LearnError
 from flctool.learners import Callback, GenerationMetrics, make_learner, train
 from flctool.learners.base import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
 from flctool.learners.budget import Usage
+from flctool.learners.confirmation import confirmation_seeds
 from flctool.learners.selection import (
     VALIDATION_SEED_LOW,
     ModelSelection,
@@ -22,8 +23,15 @@ from flctool.learners.selection import (
 )
 from flctool.learners.trial import run_trial
 from flctool.plugins import names
-from flctool.rollout import evaluation_seeds
-from flctool.runs import BEST_FILE, METRICS_FILE, create_run, open_run, resolve_behaviour
+from flctool.rollout import CONFIRMATION_SEED_LOW, evaluation_seeds
+from flctool.runs import (
+    BEST_FILE,
+    ENDED,
+    METRICS_FILE,
+    create_run,
+    open_run,
+    resolve_behaviour,
+)
 from flctool.spec import Behaviour
 from flctool.spec.learning import SelectionConfig, StopConfig
 from tests.conftest import BEHAVIOURS
@@ -59,17 +67,25 @@ def test_selection_seeds_are_disjoint_from_training_and_evaluation(name: str) ->
                                                                        episodes=7))
     learner = make_learner(behaviour, env)
     train(learner)
-    # validation runs its episodes one after another, like training, on seeds of its own
+    # validation and confirmation run their episodes one after another, like training, on
+    # seeds of their own
     seen = [seed for _, seeds in env.seen for seed in seeds]
-    training = [seed for seed in seen if seed < TRAIN_SEED_HIGH]
+    training = [seed for seed in seen if TRAIN_SEED_LOW <= seed < TRAIN_SEED_HIGH]
     flat = [seed for seed in seen if seed >= TRAIN_SEED_HIGH]
+    confirmation = [seed for seed in seen if seed < TRAIN_SEED_LOW]
     validation = [flat[i : i + 7] for i in range(0, len(flat), 7)]
-    assert validation and training
+    assert validation and training and confirmation
     assert all(seeds == validation_seeds(3, 7).tolist() for seeds in validation)
-    assert all(TRAIN_SEED_LOW <= seed < TRAIN_SEED_HIGH for seed in training)
+    # the confirmation, then the baselines on the same episodes (paired comparisons)
+    assert confirmation[:50] == confirmation_seeds(3, 50).tolist()
+    assert set(confirmation) == set(confirmation[:50])
+    assert all(CONFIRMATION_SEED_LOW <= seed < TRAIN_SEED_LOW for seed in confirmation)
     evaluation = set(evaluation_seeds(0, 1000).tolist()) | set(range(1000))
-    assert not set(validation[0]) & (set(training) | evaluation)
+    assert max(evaluation) < CONFIRMATION_SEED_LOW
+    assert not set(validation[0]) & (set(training) | evaluation | set(confirmation))
+    assert not set(confirmation) & (set(training) | evaluation)
     assert learner.usage.selection_episodes == 7 * len(validation)
+    assert learner.usage.confirmation_episodes == 50
 
 
 @pytest.mark.parametrize("name", names("learner"))
@@ -118,13 +134,15 @@ def test_no_selection_returns_the_last_generation_s_best_and_runs_no_validation(
 def test_an_episode_budget_counts_selection_and_is_never_exceeded(name: str) -> None:
     stop = StopConfig(episodes=80)
     behaviour = line_behaviour(learner=name, generations=50, stop=stop,
-                               selection=SelectionConfig(candidates=2, episodes=5))
+                               selection=SelectionConfig(candidates=2, episodes=5,
+                                                         confirmation=0))
     learner = make_learner(behaviour, LineEnv())
     history = train(learner)
     usage = learner.usage
     assert learner.stop_reason == "episodes" and learner.finished
     assert usage.episodes <= 80 and usage.selection_episodes > 0
-    assert usage.episodes == sum(m.episodes + m.selection_episodes for m in history)
+    assert usage.episodes == sum(m.episodes + m.selection_episodes + m.confirmation_episodes
+                                 for m in history)
     assert learner.generation < 49  # without the budget it would have gone on
 
 
@@ -169,18 +187,19 @@ def metrics_rows(path: Path) -> list[dict[str, str]]:
 
 
 @pytest.mark.parametrize("learner", names("learner"))
-@pytest.mark.parametrize("stop", [{"stop.episodes": 150}, {"stop.steps": 2500},
+@pytest.mark.parametrize("stop", [{"stop.episodes": 300}, {"stop.steps": 5000},
                                   {"stop.target": 1.9}])
 def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
         tmp_path: Path, learner: str, stop: dict[str, object]) -> None:
     behaviour = ballchase(learner=learner, seed=5, generations=12, **stop,
-                          **{"selection.candidates": 3, "selection.episodes": 8})
+                          **{"selection.candidates": 3, "selection.episodes": 8,
+                             "selection.confirmation": 8})
     whole = create_run(behaviour, tmp_path / "a")
     whole_summary = whole.train()
     part = create_run(behaviour, tmp_path / "b")
     assert part.train([StopAfter(1)]).status == "stopped"
     resumed = open_run(part.path).train()
-    assert resumed.status == whole_summary.status == "finished"
+    assert resumed.status == whole_summary.status in ENDED
     assert resumed.generations == whole_summary.generations
     assert metrics_rows(part.path / METRICS_FILE) == metrics_rows(whole.path / METRICS_FILE)
     assert (part.path / BEST_FILE).read_text().split("\n", 1)[1] == (

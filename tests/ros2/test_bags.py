@@ -144,6 +144,19 @@ def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path
     assert len(rows) == 150
     assert all(float(row["difference"]) == 0.0 for row in rows)
     assert "150 commands replayed; 0 differ" in result.output
+    # and into a bag, beside the recorded commands
+    beside = tmp_path / "beside"
+    result = runner.invoke(app, ["replay", str(controller), str(bag), "-o", str(tmp_path / "x.csv"),
+                                 "--bag", str(beside)])
+    assert result.exit_code == 0, result.output
+    from flctool.ros2.bags import read_messages
+
+    topics: dict[str, list[float]] = {}
+    for topic, _, message in read_messages(beside):
+        topics.setdefault(topic, []).append(getattr(message, "data", 0.0))
+    assert len(topics["/replayed/cmd_vel/replayed"]) == 150
+    assert set(topics["/replayed/cmd_vel/difference"]) == {0.0}
+    assert len(topics["/replayed/cmd_vel"]) == len(list(read_messages(bag, ["/replayed/cmd_vel"])))
     # another controller differs, and replay says so
     data = behaviour_to_data(handmade)
     data["rules"] = [{**rule, "then": "turn_left"} for rule in data["rules"]]

@@ -229,3 +229,18 @@ def test_flctool_run_stops_when_the_robot_dies_and_publishes_stop_on_ctrl_c(
     text = "".join(t for _, t in lines)
     assert "stop published; leaving" in text and "interrupted" in text
     assert "Traceback" not in text
+
+
+def test_run_deploys_an_export_bundles_controller(tmp_path: Any) -> None:
+    from typer.testing import CliRunner
+
+    from flctool.cli import app
+
+    bundle = tmp_path / "bundle"
+    controller = tmp_path / "controller.yaml"
+    controller.write_text(behaviour_to_yaml(handmade_rules(robot_behaviour())), encoding="utf-8")
+    runner = CliRunner()
+    assert runner.invoke(app, ["export", str(controller), "--format", "bundle", "-o",
+                               str(bundle)]).exit_code == 0
+    result = runner.invoke(app, ["run", str(bundle)])  # the bundle's controller.yaml, loaded
+    assert result.exit_code == 1 and "deploys over ROS 2 only: add --ros2" in result.output

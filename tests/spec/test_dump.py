@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from flctool import compile_behaviour
 from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml, parse_behaviour
 
 from ..compile.reference import random_behaviour_data
+from ..conftest import ROOT
 
 
 def test_yaml_and_json_round_trip_exactly() -> None:
@@ -39,3 +41,19 @@ def test_defaults_can_be_left_out(minimal_text: str) -> None:
     lean = behaviour_to_yaml(behaviour, defaults=False)
     assert "learning:" not in lean and "description" not in lean
     assert parse_behaviour(lean) == behaviour
+
+
+def test_a_long_rule_table_is_written_in_blocks_with_the_same_bytes(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Rules are dumped a block at a time (bounded memory); the file is byte for byte what
+    one call of the dumper writes."""
+    import yaml
+
+    from flctool.spec import dump, load_behaviour
+
+    behaviour = load_behaviour(ROOT / "behaviours" / "ballchase-handmade.yaml")
+    data = dump.behaviour_to_data(behaviour)
+    whole = yaml.dump(dump._styled(data), Dumper=dump._Dumper, sort_keys=False,
+                      allow_unicode=True, width=100)
+    monkeypatch.setattr(dump, "_RULES_AT_ONCE", 4)  # 15 rules: four blocks
+    assert dump.data_to_yaml(data, "a header") == "# a header\n" + whole

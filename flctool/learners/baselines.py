@@ -1,0 +1,172 @@
+"""Did the run learn anything? Its controller against baselines, on the same episodes.
+
+When a run ends, :class:`BaselineCheck` compares the confirmed controller
+(:mod:`flctool.learners.confirmation`) with controllers that need no learning: every
+constant command (all learned rules fire command k), :data:`RANDOM_TABLES` random rule
+tables, and any hand-made rule tables given (``flctool learn --baseline FILE``). All run on
+the confirmation's own episodes, so each comparison is paired, episode by episode.
+
+Racing keeps it cheap: every baseline runs the first :data:`SCREEN_EPISODES` confirmation
+episodes; the one with the best mean there runs the rest. The run's controller has
+**learned** if the 95 % t interval of its mean fitness difference to that strongest baseline,
+over all the confirmation episodes, lies above zero. (Picking the strongest baseline on the
+first episodes favours the baseline a little, so a verdict of learned is, if anything,
+conservative.) Otherwise the run ends with status ``not_learned`` and a message that says
+what to try. Every baseline episode counts in the run's usage (``baseline_episodes``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from flctool.learners.budget import Usage
+from flctool.learners.callbacks import RunCallback
+from flctool.learners.trial import run_trial
+from flctool.rollout import Estimate, mean_interval
+
+if TYPE_CHECKING:
+    from flctool.learners.base import IntArray, Learner
+    from flctool.learners.confirmation import Confirmation
+
+#: Random rule tables among the baselines.
+RANDOM_TABLES = 3
+#: Confirmation episodes every baseline runs before the strongest one runs the rest.
+SCREEN_EPISODES = 10
+#: Index of the random tables' child in the run's SeedSequence (after ga, env, explore,
+#: validation and confirmation).
+_BASELINE_STREAM = 5
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The comparison at the end of a run."""
+
+    learned: bool
+    baseline: str  # the strongest baseline's name
+    difference: Estimate  # mean fitness of the run's controller minus the baseline's, paired
+    baseline_fitness: float  # the strongest baseline's mean fitness on those episodes
+    screened: dict[str, float]  # every baseline's mean fitness on the screening episodes
+
+    def record(self) -> dict[str, Any]:
+        return {"learned": self.learned, "baseline": self.baseline,
+                "difference": self.difference.to_dict(),
+                "baseline_fitness": self.baseline_fitness, "screened": dict(self.screened)}
+
+    def to_dict(self) -> dict[str, Any]:
+        d = self.difference
+        return {**self.record(), "exact": [d.value, d.low, d.high, d.n]}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Verdict:
+        value, low, high, n = data["exact"]
+        return cls(bool(data["learned"]), str(data["baseline"]),
+                   Estimate(float(value), float(low), float(high), int(n)),
+                   float(data["baseline_fitness"]),
+                   {str(k): float(v) for k, v in dict(data["screened"]).items()})
+
+    def message(self) -> str:
+        """What a user reads when the run did not learn."""
+        d = self.difference
+        return (f"the learned controller is not clearly better than the baseline "
+                f"'{self.baseline}' (mean fitness {self.baseline_fitness:.3f}): the "
+                f"difference is {d.value:.3f} [{d.low:.3f}, {d.high:.3f}] over the same "
+                f"{d.n} episodes")
+
+
+#: What to try when a run did not learn.
+NOT_LEARNED_HINT = ("give it more budget (--generations, --set trials=2, --set "
+                    "population=20), try another learner (--learner fuzzy_q or pitt), or "
+                    "use coarser sets (fewer rules to learn)")
+
+
+class BaselineCheck(RunCallback):
+    """Compares the run's confirmed controller with baselines when the run ends (see the
+    module docstring). ``given`` are hand-made rule tables: (name, consequents (M,))."""
+
+    def __init__(self, confirmation: Confirmation, usage: Usage, run_seed: int,
+                 given: list[tuple[str, IntArray]] | None = None) -> None:
+        self.confirmation = confirmation
+        self.usage = usage
+        self.run_seed = run_seed
+        self.given = list(given or [])
+        self.verdict: Verdict | None = None
+
+    def episodes_needed(self, n_commands: int, confirmed: int) -> int:
+        """The episodes the comparison takes after a confirmation of ``confirmed`` episodes:
+        every baseline on the screening episodes, the strongest on the rest."""
+        screen = min(SCREEN_EPISODES, confirmed)
+        return (n_commands + RANDOM_TABLES + len(self.given)) * screen + confirmed - screen
+
+    def on_finish(self, learner: Learner) -> None:
+        final = self.confirmation.final
+        self.verdict = None
+        if final is None or len(final.episode_fitness) < 2:
+            return  # nothing confirmed (confirmation off, or no budget left): no verdict
+        learned = np.array(final.episode_fitness, dtype=np.float64)
+        baselines = self.baselines(learner)
+        confirmed = learned.shape[0]
+        limit = self.confirmation.episode_limit
+        while limit is not None and confirmed >= 2 and (
+                self.usage.episodes + self.episodes_needed(learner.controller.n_commands,
+                                                           confirmed) > limit):
+            confirmed -= 1  # the budget leaves room for a comparison on fewer episodes
+        if confirmed < 2:
+            return  # stop.episodes leaves no room for a comparison: no verdict
+        learned = learned[:confirmed]
+        seeds = self.confirmation.seeds[:confirmed]
+        screen = min(SCREEN_EPISODES, confirmed)
+        screened = {name: self._fitness(learner, genes, seeds[:screen])
+                    for name, genes in baselines}
+        means = {name: float(values.mean()) for name, values in screened.items()}
+        strongest = max(means, key=lambda name: means[name])  # ties: the first listed
+        genes = dict(baselines)[strongest]
+        rest = self._fitness(learner, genes, seeds[screen:])
+        baseline = np.concatenate([screened[strongest], rest])
+        difference = mean_interval(learned - baseline)
+        self.verdict = Verdict(bool(difference.low > 0.0), strongest, difference,
+                               float(baseline.mean()), means)
+
+    def baselines(self, learner: Learner) -> list[tuple[str, IntArray]]:
+        """The baselines, in order: each constant command, the random tables, the given
+        tables; rules the file gives are as given in all of them."""
+        controller = learner.controller
+        n_rules, n_commands = controller.n_rules, controller.n_commands
+        tables: list[tuple[str, IntArray]] = [
+            (f"always {name}", np.full(n_rules, k, dtype=np.intp))
+            for k, name in enumerate(controller.command_names)]
+        rng = np.random.default_rng(np.random.SeedSequence(self.run_seed,
+                                                           spawn_key=(_BASELINE_STREAM,)))
+        tables += [(f"random table {i + 1}",
+                    rng.integers(n_commands, size=n_rules).astype(np.intp))
+                   for i in range(RANDOM_TABLES)]
+        tables += [(name, np.asarray(genes, dtype=np.intp)) for name, genes in self.given]
+        return [(name, learner.keep_fixed(genes[None, :].copy())[0]) for name, genes in tables]
+
+    def _fitness(self, learner: Learner, genes: IntArray,
+                 seeds: NDArray[np.int64]) -> NDArray[np.float64]:
+        """Fitness per episode of the controller ``genes`` on ``seeds``, counted in usage."""
+        env, consequents = learner.env, genes.tolist()
+        trials = [run_trial(env, learner.rules, int(seed), consequents) for seed in seeds]
+        lengths = np.array([t.length for t in trials], dtype=np.int64)
+        self.usage.baseline_episodes += len(trials)
+        self.usage.baseline_steps += int(lengths.sum())
+        fitness: NDArray[np.float64] = env.episode_fitness(
+            np.array([t.ret for t in trials], dtype=np.float64), lengths,
+            np.array([t.success for t in trials], dtype=np.bool_))
+        return fitness
+
+    def state_dict(self) -> dict[str, Any]:
+        return {"baselines": {"given": [[name, genes.tolist()] for name, genes in self.given],
+                              "verdict": None if self.verdict is None
+                              else self.verdict.to_dict()}}
+
+    def restore(self, given: list[tuple[str, IntArray]], verdict: Verdict | None) -> None:
+        """Restore what :meth:`state_dict` saved, as the checkpoint reader checked it."""
+        self.given, self.verdict = list(given), verdict
+
+    def record(self) -> dict[str, Any] | None:
+        return None if self.verdict is None else self.verdict.record()
