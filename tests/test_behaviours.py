@@ -20,6 +20,9 @@ HANDMADE = [p for p in SHIPPED if p.stem.endswith("-handmade")]
 # docs/environments.md); here a quick check on 200 episodes with room for sampling noise.
 QUICK_EPISODES = 200
 QUICK_SUCCESS = 0.85
+# Harder tasks, with the hand-made success measured on 1,000 episodes (docs/environments.md)
+# less a margin for 200 episodes' sampling noise.
+QUICK_SUCCESS_OF = {"shoot-handmade.yaml": 0.25, "approach-handmade.yaml": 0.6}
 
 
 def test_there_are_shipped_behaviours() -> None:
@@ -49,7 +52,7 @@ def test_handmade_controller_succeeds(path: Path) -> None:
     assert behaviour.is_deployable
     result = evaluate(compile_behaviour(behaviour), make_env(behaviour, QUICK_EPISODES),
                       np.arange(QUICK_EPISODES, dtype=np.int64))
-    assert result.success.mean() >= QUICK_SUCCESS
+    assert result.success.mean() >= QUICK_SUCCESS_OF.get(path.name, QUICK_SUCCESS)
 
 
 @pytest.mark.parametrize("path", HANDMADE, ids=[p.name for p in HANDMADE])

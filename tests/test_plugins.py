@@ -251,7 +251,7 @@ def test_a_plugin_learners_own_state_is_checkpointed_and_resumed_bit_for_bit(
                  ("--out", "straight",)):
         result = _flctool(tmp_path, "learn", *(("demo.yaml",) if "--out" in args else ()),
                           *args)
-        assert result.returncode == 0, result.stderr
+        assert result.returncode in (0, 3), result.stderr  # 3: it ended, but not learned
     checkpoints = sorted((tmp_path / "parts" / "checkpoints").iterdir())
     assert json.loads(checkpoints[-1].read_text())["drawn"] == 6 + 3 * (6 - 2)  # its hook
     assert (tmp_path / "parts" / "best.yaml").read_text().split("\n", 2)[2] == (

@@ -93,6 +93,10 @@ class BundleExporter(Exporter):
 
     def texts(self, behaviour: Behaviour, path: Path) -> dict[Path, str]:
         require_deployable(behaviour)
+        if getattr(behaviour.environment, "compose", None):
+            from flctool.export.composed_bundle import composed_texts
+
+            return composed_texts(behaviour, path, self.options)
         wires = wiring(behaviour)
         stem = identifier(behaviour.name)
         c_files = CExporter(ExportOptions(provenance=self.options.provenance)).texts(

@@ -9,10 +9,12 @@ test) live in one process, and rclpy installs no signal handlers (flctool's CLI 
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import math
 import threading
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -20,6 +22,16 @@ from typing import Any
 from flctool.ros2 import import_rclpy
 from flctool.ros2.fields import message_class, qos_profile
 from flctool.spec.ros2 import Qos
+
+#: Graphs not closed yet: closed at interpreter exit, since an executor thread still spinning
+#: then makes the C++ runtime abort the process (and its exit code is lost).
+_LIVE: weakref.WeakSet[RosGraph] = weakref.WeakSet()
+
+
+@atexit.register
+def _close_live_graphs() -> None:
+    for graph in list(_LIVE):
+        graph.close()
 
 
 @dataclass
@@ -62,8 +74,9 @@ class RosGraph:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, daemon=True, name=f"ros2:{name}")
-        self._thread.start()
         self._closed = False
+        self._thread.start()
+        _LIVE.add(self)
 
     def _spin(self) -> None:
         # spin ends when the context shuts down (close); an executor error must not hang it

@@ -172,7 +172,7 @@ def test_the_node_stops_within_the_watchdog_bound_and_recovers() -> None:
 def test_flctool_run_drives_the_served_robot_to_the_evaluate_success_rate(tmp_path: Any) -> None:
     """`flctool run --ros2` over the reference robot succeeds as often as `flctool evaluate`
     says (within its 95 % interval)."""
-    episodes = 12
+    episodes = 8
     handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
     expected = evaluate(compile_behaviour(handmade), make_env(handmade),
                         evaluation_seeds(0, 100)).success_rate

@@ -64,7 +64,7 @@ def test_each_learner_reads_its_own_keys() -> None:
     common = {"learner", "seed", "population", "generations", "trials", "selection", "stop",
               "sets"}
     assert set(learner_keys(LearningConfig)) == common
-    genetic = {"crossover", "mutation", "elites", "common_starts"}
+    genetic = {"crossover", "mutation", "elites", "common_starts", "restart_after"}
     assert set(learner_keys(GeneticConfig)) == common | genetic
     assert set(learner_keys(PittConfig)) == common | genetic | {"pitt_crossover"}
     assert set(learner_keys(HybridConfig)) == common | genetic | {"q"}

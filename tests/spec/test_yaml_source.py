@@ -146,3 +146,22 @@ def test_a_value_after_a_refused_key_is_skipped_and_the_map_goes_on() -> None:
     assert [p.message for p in info.value.problems] == ["a key must be a plain name"]
     data, _ = read_yaml("m:\n  n: 3\n", "f.yaml")
     assert data == {"m": {"n": 3}}
+
+
+def test_the_garbage_collector_runs_again_after_a_read_however_it_ends() -> None:
+    import gc
+
+    from flctool.spec import parse_behaviour
+
+    assert gc.isenabled()
+    read_yaml("a: [1, 2]\n", "f.yaml")
+    assert gc.isenabled()
+    with pytest.raises(SpecError):
+        parse_behaviour("flctool: 1\na: [\n", "f.yaml")
+    assert gc.isenabled()
+    gc.disable()
+    try:  # a caller that paused it keeps it paused
+        read_yaml("a: 1\n", "f.yaml")
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
