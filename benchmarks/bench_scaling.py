@@ -1,6 +1,6 @@
 """Rule-base scaling: the cost of a step follows the rules that fire, not M.
 
-    python benchmarks/bench_scaling.py [--json PATH] [--quick]
+    python benchmarks/bench_scaling.py [--json PATH] [--quick] [--sweep]
 
 For M = 15 (the ballchase controller, 3 x 5 sets) and M = 625, 15,625, 117,649 (4 x 5,
 6 x 5 and 6 x 7 overlapping trapezoids), measures per state: batched inference
@@ -14,6 +14,12 @@ that crossing the switch costs no jump), and issue 16's cliff: two inputs of 6 s
 (M = 36) against 5 sets (M = 25), 89 against 26 ns per state when the switch was at 32 rules
 (goal: at most 36 / 25 = 1.44x, the cost growing no faster than M). Times are CPU time, the
 least of several repeats. Writes JSON (default: bench_scaling.json beside this script).
+
+``--sweep`` measures instead every rule base the kernels' choice decides (N <= 8 inputs of
+L <= 9 sets, M <= MAX_RULES): ``output`` against the naive kernel
+(``benchmarks/naive_kernel.py``) at every batch size in ``SWEEP_BATCHES`` (goal: at least 1x
+everywhere), and at 1,000 states both batched walks beside the one ``output`` takes (goal:
+within 25 % of the cheaper), with the worst of each.
 """
 
 from __future__ import annotations
@@ -27,17 +33,24 @@ from typing import Any
 
 import common
 import numpy as np
+from naive_kernel import naive_output
 
 import flctool
 from flctool import Controller
+from flctool.compile import controller as controller_module
 from flctool.compile import kernels
 from flctool.spec import behaviour_from_data
+from flctool.spec.checks import MAX_RULES
 
 GOAL_PER_ACTIVE_RULE = 5.0  # largest M at most 5x the smallest, per fired rule
 GOAL_CLIFF = 36 / 25  # M = 36 against M = 25 (2 inputs): no faster than M grows
 GOAL_WALK_CHOICE = 1.25  # output's walk against the cheaper of the two
 # Rule bases around the switch between the walks, by number of inputs: N x L sets.
 AROUND_SWITCH = {2: (5, 6, 8, 12, 16, 20, 24), 3: (3, 4, 5, 6, 7), 4: (3, 4, 5)}
+# --sweep: every batch size where a walk changes (state by state up to 8 or 16 states, the
+# tiny bases' loop up to 64) on both sides, and a large batch.
+SWEEP_BATCHES = (1, 2, 4, 8, 9, 16, 17, 32, 64, 65, 1000)
+GOAL_VS_NAIVE = 1.0
 
 
 def overlapping_controller(n_inputs: int, n_sets: int, seed: int) -> Controller:
@@ -145,12 +158,85 @@ def crossings(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return found
 
 
+def cpu_per_call(run: Any, repeats: int, at_least: float = 0.02) -> float:
+    """CPU seconds of one call, the least of ``repeats`` loops of at least ``at_least`` s."""
+    best = float("inf")
+    for _ in range(repeats):
+        calls = 0
+        started = time.process_time()
+        while True:
+            run()
+            calls += 1
+            spent = time.process_time() - started
+            if spent >= at_least:
+                break
+        best = min(best, spent / calls)
+    return best
+
+
+def sweep(repeats: int) -> dict[str, Any]:
+    """output against the naive kernel at every N <= 8, L <= 9 (M <= MAX_RULES) and batch of
+    SWEEP_BATCHES, and the walk output takes at 1,000 states against both walks."""
+    rows = []
+    for n_inputs in range(1, 9):
+        for n_sets in range(2, 10):
+            if n_sets ** n_inputs > MAX_RULES:
+                continue
+            controller = overlapping_controller(n_inputs, n_sets, seed=n_inputs * 10 + n_sets)
+            naive = naive_output(controller)
+            for batch in SWEEP_BATCHES:
+                states = common.uniform_states(controller, batch, seed=2)
+                ours = controller.output(states)
+                np.testing.assert_array_equal(ours, naive(states))  # the same bits
+                flctool_s = cpu_per_call(lambda c=controller, s=states: c.output(s), repeats)
+                naive_s = cpu_per_call(lambda s=states, f=naive: f(s), repeats)
+                row = {"inputs": n_inputs, "sets": n_sets, "rules": controller.n_rules,
+                       "batch": batch, "walks_every_rule": controller._layout.dense,
+                       "output_ns": flctool_s / batch * 1e9,
+                       "naive_ns": naive_s / batch * 1e9, "vs_naive": naive_s / flctool_s}
+                if batch == max(SWEEP_BATCHES):
+                    # the every-rule walk is left out where its (B, M) grid would be too big
+                    every = (walk_ns(controller, states, True, repeats)
+                             if controller.n_rules * n_inputs <= 4_000_000 else None)
+                    fired = walk_ns(controller, states, False, repeats)
+                    cheaper = fired if every is None else min(every, fired)
+                    chosen = every if controller._layout.dense and every is not None else fired
+                    row.update({"every_rule_ns": every, "fired_rules_ns": fired,
+                                "over_cheaper": chosen / cheaper})
+                rows.append(row)
+            worst = min(r["vs_naive"] for r in rows if r["rules"] == controller.n_rules
+                        and r["inputs"] == n_inputs)
+            print(f"N = {n_inputs}, L = {n_sets}, M = {controller.n_rules:>7,} "
+                  f"({'every rule' if controller._layout.dense else 'fired rules'}): worst "
+                  f"{worst:.2f}x the naive kernel over batches {SWEEP_BATCHES[0]}-"
+                  f"{SWEEP_BATCHES[-1]}", flush=True)
+    worst_row = min(rows, key=lambda r: r["vs_naive"])
+    choice = [r for r in rows if "over_cheaper" in r]
+    worst_choice = max(r["over_cheaper"] for r in choice)
+    print(f"\nworst against the naive kernel: {worst_row['vs_naive']:.2f}x at N = "
+          f"{worst_row['inputs']}, L = {worst_row['sets']}, B = {worst_row['batch']} (goal >= "
+          f"{GOAL_VS_NAIVE:g}x): {'met' if worst_row['vs_naive'] >= GOAL_VS_NAIVE else 'MISSED'}")
+    print(f"output's walk against the cheaper at 1,000 states (<= {GOAL_WALK_CHOICE}x): "
+          f"{worst_choice:.2f}: {'met' if worst_choice <= GOAL_WALK_CHOICE else 'MISSED'}")
+    return {"rows": rows, "worst_vs_naive": worst_row, "worst_walk_choice": worst_choice}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--json", type=Path, default=Path(__file__).with_suffix(".json"),
                         help="where to write the results")
     parser.add_argument("--quick", action="store_true", help="fewer states and repeats")
+    parser.add_argument("--sweep", action="store_true",
+                        help="every N <= 8, L <= 9 against the naive kernel instead")
     args = parser.parse_args()
+    controller_module.set_inference("kernels")  # the compiled walks are measured here
+    if args.sweep:
+        result = sweep(3 if args.quick else 5)
+        common.write_json(args.json.with_name(args.json.stem + "_sweep.json"), {
+            "benchmark": "bench_scaling --sweep", "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "machine": common.machine(), "timing": "CPU time, least of the repeats",
+            "batches": SWEEP_BATCHES, **result})
+        return
     batch, singles, repeats = (20_000, 5_000, 2) if args.quick else (200_000, 50_000, 5)
 
     ballchase = flctool.compile_behaviour(flctool.load_behaviour(common.BALLCHASE))

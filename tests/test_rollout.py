@@ -55,7 +55,16 @@ def test_t_quantile_table_is_scipys() -> None:
         assert quantile == pytest.approx(float(stdtrit(dof, 0.975)), rel=3e-16, abs=0.0), dof
     assert 31 not in T975
     assert t975(31) == float(stdtrit(31, 0.975))
-    assert t975(19) == T975[19]
+
+
+def test_t_quantile_expansion_is_within_its_bound_of_scipy() -> None:
+    from scipy.special import stdtrit
+
+    for dof in (200, 201, 350, 998, 1000, 5000, 10**6):
+        assert dof not in T975
+        assert abs(t975(dof) - float(stdtrit(dof, 0.975))) <= 2.3e-12, dof
+    for dof in (1000, 2500, 10**5):
+        assert abs(t975(dof) - float(stdtrit(dof, 0.975))) <= 1e-15, dof
 
 
 def test_evaluate_collects_every_episode() -> None:

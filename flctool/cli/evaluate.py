@@ -79,6 +79,7 @@ def evaluate_command(
     with a 95 % confidence interval. Success lines appear only when the environment defines
     success."""
     from flctool.compile import compile_behaviour
+    from flctool.compile import controller as controller_module
     from flctool.envs import make_env
     from flctool.evaluation import (
         DEFAULT_EPISODES,
@@ -107,8 +108,9 @@ def evaluate_command(
                               "the ranges learning uses (confirmation, training, selection); "
                               "these are not held out",
                               highlight=False)
-        with compiling():  # load (or, on a machine's first run, compile) the kernels
-            controller.output(controller.ranges[:, 0][None, :])
+        # Inference starts in numpy; if the work grows enough to pay for the compiled kernels,
+        # loading them (compiling, on a machine's first run) is announced.
+        controller_module.kernel_loading = compiling
         total = len(listed) if listed is not None else (episodes or DEFAULT_EPISODES)
         success = defines_success(behaviour)
         # The environment first: its errors come before the progress bar.

@@ -80,10 +80,13 @@ def infer(
                 else:
                     if controller is None:
                         from flctool.compile import compile_behaviour
+                        from flctool.compile import controller as controller_module
 
+                        controller_module.kernel_loading = compiling  # announced if slow
                         controller = compile_behaviour(behaviour)
                     states = reader.parse(lines)
-                    with compiling(), _numba_without_scipy_blas():
+                    # numpy first; the kernels once the table is large enough to pay for them
+                    with _numba_without_scipy_blas():
                         values = controller.output(states).tolist()
                 target.write(format_rows(lines, values))
 

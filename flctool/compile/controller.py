@@ -10,7 +10,10 @@ q tables and exports index rules. It is coded once, in :mod:`flctool.spec.rule_o
 from __future__ import annotations
 
 import math
+import os
+import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from functools import cache, cached_property
 from typing import TYPE_CHECKING, Any, TypeVar, cast
@@ -18,6 +21,7 @@ from typing import TYPE_CHECKING, Any, TypeVar, cast
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.compile import vectorised
 from flctool.compile.membership import memberships
 from flctool.compile.rules import rule_consequents, rule_grid
 from flctool.errors import InferenceError, NotDeployableError
@@ -26,6 +30,7 @@ from flctool.spec.shapes import set_row
 
 if TYPE_CHECKING:
     from flctool.compile.kernels import Layout
+    from flctool.compile.sparse import SparseRules
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -33,6 +38,62 @@ _FLOAT64 = np.dtype(np.float64)
 # From this many states, output(threads=n) splits the batch (below, starting threads costs
 # more than it saves).
 THREADED_STATES = 20_000
+
+#: Where inference runs: ``auto`` (numpy first, the compiled kernels once they pay),
+#: ``kernels`` (always compiled) or ``numpy`` (never compiled); set by
+#: :func:`set_inference`, or in the environment before flctool is imported.
+INFERENCE_MODES = ("auto", "kernels", "numpy")
+INFERENCE_VARIABLE = "FLCTOOL_INFERENCE"
+#: CPU seconds of numpy inference after which a process (``auto``) loads the kernels: about
+#: what loading them costs (importing numba and the cached machine code, 0.3 s of CPU
+#: measured; compiling them, once per machine, several seconds). Renting until the rent
+#: equals the price, then buying, spends at most about twice the cheaper of the two, whatever
+#: the work turns out to be; and a small job never pays for the kernels at all.
+KERNELS_PAY_AFTER = 0.3
+#: Called around loading the kernels (the command line shows a notice there, as compiling
+#: takes seconds on a machine's first run).
+kernel_loading: Callable[[], AbstractContextManager[None]] = nullcontext
+
+
+class _Inference:
+    """This process's choice of path (one per process: loading the kernels is too)."""
+
+    mode = "auto"
+    numpy_seconds = 0.0  # CPU spent in numpy inference so far
+
+
+_kernels_on = False  # read on every call: a module global is the cheapest lookup
+
+
+def set_inference(mode: str) -> None:
+    """Where :class:`Controller` inference runs from now on in this process: ``auto``,
+    ``kernels`` or ``numpy`` (:data:`INFERENCE_MODES`). Every path gives the same bits;
+    ``kernels`` suits a control loop that must not pause to load them mid-run."""
+    global _kernels_on
+    if mode not in INFERENCE_MODES:
+        raise ValueError(f"unknown inference mode '{mode}'; use one of: "
+                         f"{', '.join(INFERENCE_MODES)}")
+    _Inference.mode = mode
+    _kernels_on = mode == "kernels" or (
+        mode == "auto" and _Inference.numpy_seconds >= KERNELS_PAY_AFTER)
+
+
+def _spent_in_numpy(seconds: float) -> None:
+    global _kernels_on
+    _Inference.numpy_seconds += seconds
+    if _Inference.mode == "auto" and _Inference.numpy_seconds >= KERNELS_PAY_AFTER:
+        _kernels_on = True
+
+
+def _inference_from_environment() -> None:
+    mode = os.environ.get(INFERENCE_VARIABLE, "auto")
+    try:
+        set_inference(mode)
+    except ValueError:
+        set_inference("auto")  # a mistyped variable must not break every command
+
+
+_inference_from_environment()
 
 
 _Array = TypeVar("_Array", bound=NDArray[Any])
@@ -116,6 +177,14 @@ class Controller:
         never make a (B, M) array.
         """
         array = self._as_states(states)
+        if not _kernels_on:
+            started = time.thread_time()
+            if np.isnan(array).any():
+                self._raise_nan(array)
+            dense = vectorised.activations(array, self.ranges, self.quadruples, self.kinds,
+                                           self._strides, self.n_rules)
+            _spent_in_numpy(time.thread_time() - started)
+            return dense
         alpha = np.zeros((array.shape[0], self.n_rules))
         layout = self._layout
         if _kernel("activations")(array, layout.floats, layout.ints, alpha) >= 0:
@@ -130,6 +199,11 @@ class Controller:
         follows A, not M: per-step work that uses only these follows the active rules.
         """
         x = self._as_state(state)
+        if not _kernels_on:
+            if np.isnan(x).any():
+                self._raise_nan(x[None, :])
+            return vectorised.active_rules(x, self.ranges, self.quadruples, self.kinds,
+                                           self._strides)
         layout = self._layout
         rules, alpha, nan_input = _kernel("active_one")(layout.floats, layout.ints, x)
         if nan_input >= 0:
@@ -148,7 +222,11 @@ class Controller:
         many contiguous parts inferred at once (the kernels release the GIL); each state's
         output is computed alone, so the result is identical to ``threads=1``.
         """
-        own_floats, own_ints, own, n_inputs = self._own
+        kernels_on = _kernels_on
+        if kernels_on:
+            own_floats, own_ints, own, n_inputs = self._own
+        else:
+            n_inputs = len(self.input_names)
         # Any float64 (B, N) array goes to the kernel as it is (it reads strides). (Each
         # attribute read here costs tens of ns, a good part of a call on a few states.)
         shape = states.shape if type(states) is np.ndarray else None
@@ -156,6 +234,8 @@ class Controller:
                 and states.dtype is _FLOAT64):
             states = self._as_states(states)
             shape = states.shape
+        if not kernels_on:
+            return self._output_numpy(states, consequents)
         count = shape[0]
         if consequents is None and own is not None and (threads <= 1
                                                          or count < THREADED_STATES):
@@ -167,6 +247,20 @@ class Controller:
                 self._raise_undefined(states, failed)
             return out
         return self._output_tables(states, consequents, threads)
+
+    def _output_numpy(self, states: FloatArray, consequents: IntArray | None) -> FloatArray:
+        # output() without the kernels (vectorised.output): the same bits, the same errors.
+        started = time.thread_time()
+        table = self._consequents(consequents)  # (raises if there are none)
+        if np.isnan(states).any():
+            self._raise_nan(states)
+        out, failed = vectorised.output(states, self.ranges, self.quadruples, self.kinds,
+                                        self._strides, self.singletons,
+                                        table.reshape(-1, self.n_rules))
+        if failed >= 0:
+            self._raise_undefined(states, failed)
+        _spent_in_numpy(time.thread_time() - started)
+        return out[0] if table.ndim == 1 else out
 
     def _output_tables(self, states: FloatArray, consequents: IntArray | None,
                        threads: int) -> FloatArray:
@@ -197,11 +291,46 @@ class Controller:
         if not (type(state) is np.ndarray and state.dtype is _FLOAT64
                 and state.shape == self._state_shape):
             state = self._as_state(state)
+        if not _kernels_on:
+            return self._output_one_in_python(state)
         floats, ints, kernel = self._one
         value: float = kernel(floats, ints, state)
         if value != value:  # a NaN input, or no rule fires (never a NaN output)
             self._raise_undefined(state[None, :], 0)
         return value
+
+    def _output_one_in_python(self, state: FloatArray) -> float:
+        # output_one() without numpy's per-call costs: the rule base in plain Python (the
+        # learners' path, the same bits), a few microseconds a state.
+        started = time.thread_time()
+        consequents = self._consequent_list  # NotDeployableError without them
+        rules = self._rules
+        values = state.tolist()
+        if any(v != v for v in values):
+            self._raise_nan(state[None, :])
+        try:
+            fired, alphas, _ = rules.activations(values)
+        except InferenceError:  # no rule fires: said as the kernels' path says it
+            self._raise_undefined(state[None, :], 0)
+        value = rules.output(alphas, [consequents[m] for m in fired])
+        _spent_in_numpy(time.thread_time() - started)
+        return value
+
+    @cached_property
+    def _rules(self) -> SparseRules:
+        from flctool.compile.sparse import SparseRules
+
+        return SparseRules(self)
+
+    @cached_property
+    def _consequent_list(self) -> list[int]:
+        return [int(k) for k in self.require_consequents()]
+
+    @cached_property
+    def _strides(self) -> tuple[int, ...]:
+        # Rule index = sum(set index * stride), the last input fastest (eq. 1's order).
+        shape = self.shape
+        return tuple(math.prod(shape[i + 1:]) for i in range(len(shape)))
 
     def _infer_threaded(self, states: FloatArray, tables: IntArray, out: FloatArray,
                         threads: int) -> int:
@@ -313,7 +442,7 @@ class Controller:
                                 self.command_names, self.ranges, self.quadruples,
                                 self.rule_grid, self.singletons, _frozen(table.copy()),
                                 self.kinds)
-        for shared in ("_layout",):  # same sets: share what depends on them
+        for shared in ("_layout", "_rules", "_strides"):  # same sets: share what depends on them
             if shared in self.__dict__:
                 controller.__dict__[shared] = self.__dict__[shared]
         return controller
@@ -323,9 +452,10 @@ class Controller:
 def _kernel(name: str) -> Callable[..., Any]:
     # A kernel's compiled entry point, found once a process and only when first used
     # (importing numba, and compiling or loading the cached machine code of that kernel).
-    from flctool.compile import kernels
+    with kernel_loading():
+        from flctool.compile import kernels
 
-    return kernels.entry(name)
+        return kernels.entry(name)
 
 
 def compile_behaviour(behaviour: Behaviour) -> Controller:

@@ -272,21 +272,25 @@ def _compact(mu: FloatArray, b: int, ints: IntArray, scratch: IntArray,
 
 
 # Batched inference walks every rule for a block of states at once (loops over states that
-# vectorise, 0.13 to 0.23 ns per rule, input and state) while that costs less than finding
-# each state's fired rules and walking only those (about 2 ns per set, plus a cost per state
-# that grows with each input, whatever M is). The per-state costs below were
-# measured on both walks (benchmarks/bench_scaling.py prints them around the switch); with
-# the switch where they cross, going past it costs no more than staying (no cliff).
-_DENSE_NS_PER_RULE_INPUT = (0.15, 0.15, 0.15, 0.23)  # index: N (more: the last); 2 fused
-_SPARSE_NS_PER_SET = 2.0
-_SPARSE_NS_BY_INPUTS = (0.0, 50.0, 95.0, 170.0, 235.0, 450.0)  # index: N
+# vectorise, 0.11 to 0.22 ns per rule, input and state) while that costs less than finding
+# each state's fired rules and walking only those (about 1.2 ns per set, plus a cost per
+# state that grows with each input, whatever M is). The costs below were measured on both
+# walks for every N <= 8 and L <= 9 with M <= MAX_RULES (1,000 states a batch;
+# benchmarks/bench_scaling.py --sweep measures them again and prints the walk each size
+# takes); with the switch where they cross, going past it costs no more than staying (no
+# cliff). Past 8 inputs the cost per state is extrapolated (x1.7 per input, as from 7 to 8).
+_DENSE_NS_PER_RULE_INPUT = (0.17, 0.17, 0.17, 0.2)  # index: N (more: the last); 2 fused
+_SPARSE_NS_PER_SET = 1.2
+_SPARSE_NS_BY_INPUTS = (0.0, 140.0, 150.0, 200.0, 250.0, 330.0, 460.0, 720.0, 1230.0)  # N
+_SPARSE_GROWTH_PAST_LAST = 1.7
 
 
 def walks_every_rule(n_rules: int, n_inputs: int, n_sets: int) -> bool:
     """Whether batched inference walks every rule (else only each state's fired rules):
     the estimated cheaper one for M rules, N inputs and S sets in all."""
     last = len(_SPARSE_NS_BY_INPUTS) - 1
-    per_state = _SPARSE_NS_BY_INPUTS[min(n_inputs, last)] * 2.3 ** max(0, n_inputs - last)
+    per_state = (_SPARSE_NS_BY_INPUTS[min(n_inputs, last)]
+                 * _SPARSE_GROWTH_PAST_LAST ** max(0, n_inputs - last))
     sparse = _SPARSE_NS_PER_SET * n_sets + per_state
     dense = _DENSE_NS_PER_RULE_INPUT[min(n_inputs, len(_DENSE_NS_PER_RULE_INPUT) - 1)]
     return dense * n_rules * n_inputs <= sparse
@@ -628,6 +632,17 @@ CHEAP_DENSE_RULE_INPUTS = 64
 # two inputs and 8-10 for more.
 OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2
 OWN_SMALL_BATCH = 8
+# ... except for a small rule base walked every rule, whose batches of up to TINY_BATCH
+# states go through _tiny_states: a naive loop, 1-1.5 ns a rule-input and state there, costs
+# less than finding each state's fired rules (about 80 ns a state for three inputs, 200 for
+# four, more beyond) or the blocks' set-up. For one or two inputs (fired rules found in
+# 15-45 ns) only bases of at most TINY_RULES_FEW_INPUTS rules, and only past
+# OWN_SMALL_BATCH states; for more inputs bases of at most TINY_RULE_INPUTS (M x N).
+# Measured against the naive kernel at 1-65 states: one input of 2-9 sets, 2 x 2, 3 x 2,
+# 3 x 3, 4 x 2 and 5 x 2 sets were up to 21 % slower through the other walks.
+TINY_BATCH = 2 * _BLOCK
+TINY_RULES_FEW_INPUTS = 16
+TINY_RULE_INPUTS = 160
 
 
 @_jit
@@ -715,6 +730,50 @@ def _own_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Flo
 
 
 @_jit
+def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray,
+                 tables: IntArray) -> int:
+    # infer_own for a few states of a tiny rule base (see TINY_BATCH): each block's
+    # memberships, then every rule of each state in rule order -- the naive loop, whose few
+    # nanoseconds a state beat both other walks' set-up. Zeros add nothing (module doc).
+    lo, hi, quads, singletons, _, offsets, _, grid, kinds = _unpack(floats, ints)
+    n, sets = ints[0], ints[1]
+    work = np.empty((n + sets) * _BLOCK)
+    xs = work[: n * _BLOCK].reshape((n, _BLOCK))
+    mu = work[n * _BLOCK :].reshape((sets, _BLOCK))
+    low, high = _singleton_bounds(floats, ints)
+    for first in range(0, states.shape[0], _BLOCK):
+        count = min(_BLOCK, states.shape[0] - first)
+        nan_state = _block_memberships(states, first, count, lo, hi, quads, kinds, offsets,
+                                       xs, mu)
+        if nan_state >= 0:
+            return nan_state
+        for b in range(count):
+            numerator = 0.0
+            denominator = 0.0
+            for m in range(grid.shape[0]):
+                alpha = mu[grid[m, 0], b]
+                for i in range(1, n):
+                    alpha = min(alpha, mu[grid[m, i], b])  # eq. 2
+                numerator += alpha * singletons[tables[0, m]]
+                denominator += alpha
+            if denominator == 0.0:  # no rule fires (see infer)
+                return first + b
+            out[first + b] = _within(numerator / denominator, low, high)
+    return -1
+
+
+@_jit
+def _tiny(ints: IntArray, count: int) -> bool:
+    # Whether infer_own takes _tiny_states (see TINY_BATCH).
+    n, rules = ints[0], ints[3]
+    if rules == 0 or count > TINY_BATCH:
+        return False
+    if n <= 2:
+        return bool(rules <= TINY_RULES_FEW_INPUTS and count > OWN_SMALL_BATCH)
+    return bool(rules * n <= TINY_RULE_INPUTS)
+
+
+@_jit
 def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray) -> int:
     """Eq. 3 for ``states (B, N)`` into ``out (B,)`` with the controller's own consequents,
     which follow the layout's ints in ``ints`` as for :func:`infer_one`; returns what
@@ -728,6 +787,8 @@ def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: Float
     """
     tables = _own_table(ints)
     count = states.shape[0]
+    if _tiny(ints, count):
+        return _tiny_states(floats, ints, states, out, tables)
     small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 else OWN_SMALL_BATCH
     if count <= small:
         return _own_states(floats, ints, states, out, tables)

@@ -121,6 +121,8 @@ def test_loading_the_kernels_for_a_large_table_spares_scipy_blas() -> None:
     probe = (
         "import sys\nimport numpy as np\nimport flctool\n"
         "from flctool.cli.infer import _numba_without_scipy_blas\n"
+        "from flctool.compile.controller import set_inference\n"
+        "set_inference('kernels')  # the kernels, however small the job\n"
         f"c = flctool.compile_behaviour(flctool.load_behaviour({str(HANDMADE)!r}))\n"
         "with _numba_without_scipy_blas():\n"
         "    values = c.output(np.array([[0.2, 10.0]] * 100))\n"

@@ -21,6 +21,7 @@ from flctool.compile import Controller, kernels
 from flctool.compile.membership import trapezoid_scalar
 from flctool.errors import InferenceError
 from flctool.spec import behaviour_from_data
+from flctool.spec.checks import MAX_RULES
 
 from .reference import random_behaviour_data, reference_output
 
@@ -178,8 +179,9 @@ def test_nan_raises_on_every_path(handmade_path: Path) -> None:
 def test_with_consequents_shares_the_layout(handmade_path: Path) -> None:
     controller = compile_behaviour(load_behaviour(handmade_path))
     controller.output_one([0.5, 10.0])
+    layout, rules = controller._layout, controller._rules  # what each path builds
     flipped = controller.with_consequents(4 - np.asarray(controller.consequents))
-    assert flipped._layout is controller._layout
+    assert flipped._layout is layout and flipped._rules is rules
     assert flipped.output_one([0.5, 10.0]) == -controller.output_one([0.5, 10.0])
 
 
@@ -361,3 +363,20 @@ def test_the_walks_switch_where_their_costs_cross() -> None:
     assert kernels.walks_every_rule(25, 2, 10) and kernels.walks_every_rule(36, 2, 12)
     assert kernels.walks_every_rule(3, 1, 3)
     assert not kernels.walks_every_rule(15_625, 6, 30)
+
+
+def test_the_walk_choice_is_measured_for_every_size_it_decides() -> None:
+    # The cost model's per-state costs are tabulated (measured) for every N up to 8, and for
+    # each N the walk changes at most once as the sets grow: every rule for small bases,
+    # each state's fired rules past the switch, never back (no size where the model, read
+    # between its measurements, flips).
+    assert len(kernels._SPARSE_NS_BY_INPUTS) > 8
+    for n_inputs in range(1, 9):
+        choices = [kernels.walks_every_rule(n_sets ** n_inputs, n_inputs, n_sets * n_inputs)
+                   for n_sets in range(2, 10) if n_sets ** n_inputs <= MAX_RULES]
+        assert choices[0], n_inputs  # two sets an input: every rule
+        switches = sum(a != b for a, b in itertools.pairwise(choices))
+        assert switches <= 1 and (switches == 0 or not choices[-1]), (n_inputs, choices)
+    # the sizes issue 29 found on the wrong walk
+    assert not kernels.walks_every_rule(3 ** 6, 6, 18)
+    assert kernels.walks_every_rule(7 ** 3, 3, 21)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -204,3 +205,49 @@ def test_a_file_that_is_not_a_bag_is_a_clear_error(tmp_path: Path) -> None:
 
     with pytest.raises(FlcError, match="not a readable bag"):
         list(_iterate(junk))
+
+
+@pytest.mark.slow
+def test_a_deployment_recorded_by_flctool_record_replays_exactly(tmp_path: Path) -> None:
+    """`flctool run --ros2` on the reference robot, recorded by `flctool record` in another
+    process: replaying the bag gives every recorded command exactly."""
+    import os
+    import subprocess
+    import sys
+    import threading
+
+    from ..ros2_support import ros_environment, served_robot
+
+    controller = tmp_path / "controller.yaml"
+    controller.write_text(behaviour_to_yaml(handmade_rules(robot_behaviour("/deployed",
+                                                                           rate=20.0))),
+                          encoding="utf-8")
+    bag = tmp_path / "session"
+    env = {**os.environ, **ros_environment()}
+    with served_robot("--namespace", "/deployed", "--auto-reset", "--seed", "500"):
+        recorder = subprocess.Popen(
+            [sys.executable, "-m", "flctool", "record", str(controller), "-o", str(bag),
+             "--wait", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        lines: list[str] = []
+        reader = threading.Thread(target=lambda: lines.extend(recorder.stderr), daemon=True)  # type: ignore[arg-type]
+        reader.start()
+        try:
+            assert wait_until(lambda: any("recording" in line for line in lines), 60.0), lines
+            run = subprocess.run(
+                [sys.executable, "-m", "flctool", "run", str(controller), "--ros2",
+                 "--episodes", "5"], capture_output=True, text=True, timeout=240, env=env,
+                check=False)
+            assert run.returncode == 0, run.stderr
+        finally:
+            recorder.terminate()  # SIGTERM ends a recording cleanly
+            assert recorder.wait(timeout=30) == 0
+            reader.join(timeout=5)
+    result = runner.invoke(app, ["replay", str(controller), str(bag), "-o",
+                                 str(tmp_path / "replayed.csv")])
+    assert result.exit_code == 0, result.output
+    published = int(re.search(r"(\d+) commands published", run.stdout)[1])  # type: ignore[index]
+    replayed = re.search(r"(\d+) commands replayed; (\d+) differ", result.output)
+    assert replayed is not None, result.output
+    # the recorder may match the node's command publisher a moment after its first command
+    assert published - 5 <= int(replayed[1]) <= published and replayed[2] == "0", (
+        published, result.output)
