@@ -1,6 +1,6 @@
 """Compiled inference kernels: eq. 1-3, bit for bit, at every batch size.
 
-Three ways through, each chosen where it is cheapest:
+Four ways through, each chosen where it is cheapest:
 
 - **a few states** (:func:`infer_one`; with the controller's own consequents
   :func:`infer_own` up to ``OWN_SMALL_BATCH_FEW_INPUTS`` or ``OWN_SMALL_BATCH`` states;
@@ -9,6 +9,9 @@ Three ways through, each chosen where it is cheapest:
   input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
   only the rules combining them summed -- an odometer over the fired sets, last input
   fastest, which is increasing rule order;
+- **a few states of a tiny rule base** (:func:`_tiny_states`, with the own consequents; see
+  ``TINY_BATCH``): the memberships of the block, then every rule of each state -- the naive
+  loop, cheaper there than finding the fired rules or setting up the blocks;
 - **blocks of states, every rule**: for small rule bases (:func:`walks_every_rule`), the
   memberships and then eq. 2-3 of every rule for ``_BLOCK`` states at once, in loops over
   the states that vectorise;
