@@ -100,9 +100,9 @@ class CExporter(Exporter):
         if self.options.single:
             error, bound, count = check_float_error(behaviour)
             accuracy = [f" * float: the largest difference from flctool's (64-bit) output, "
-                        f"measured at export on {count} states", f" * (a grid over every "
-                        f"range, its ends and every set corner), is {error:.3g}; the "
-                        f"documented bound is {bound:.3g}."]
+                        f"measured at export on {count} states", " * (half uniform in the "
+                        "ranges, half on a grid over every range, its ends and every set",
+                        f" * corner), is {error:.3g}; the documented bound is {bound:.3g}."]
         about = header_lines(behaviour, self.options.provenance)
         lines = ["/*", *(f" * {line}" for line in about), " *",
                  f" * A fuzzy logic controller: {len(behaviour.inputs)} inputs, "

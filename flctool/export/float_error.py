@@ -22,16 +22,19 @@ from flctool.spec.shapes import trapezoids
 
 #: The float export's documented bound, relative to max(1, largest |command|).
 FLOAT_BOUND = 1e-5
-#: How many (rule, state) pairs the measurement may evaluate: it stays well under a second.
+#: How many (rule, state) pairs the measurement may evaluate: it stays within about a second.
 WORK = 20_000_000
+#: The most states it measures on (a small controller gets this many).
+MAX_STATES = 200_000
 F32 = np.float32
 
 
 def grid_states(behaviour: Behaviour) -> np.ndarray:
-    """(S, N) float-representable states: each input takes values from 257 points across its
-    range, its ends, every set corner and the floats next to them, combined at random
-    (seed 0; S shrinks with the number of rules, from 20,000 to at least 1,000)."""
-    count = int(min(20_000, max(1_000, WORK // behaviour.rule_count)))
+    """(S, N) float-representable states: each input takes, half the time, a value from 257
+    points across its range, its ends, every set corner and the floats next to them, and
+    otherwise a uniform random float in its range, combined at random (seed 0; S shrinks
+    with the number of rules, from 200,000 to at least 1,000)."""
+    count = int(min(MAX_STATES, max(1_000, WORK // behaviour.rule_count)))
     rng = np.random.default_rng(0)
     columns = []
     for variable in behaviour.inputs.values():
@@ -41,7 +44,12 @@ def grid_states(behaviour: Behaviour) -> np.ndarray:
         points = np.concatenate([points, np.nextafter(points, F32(-np.inf)),
                                  np.nextafter(points, F32(np.inf))])
         points = points[(points >= F32(lo)) & (points <= F32(hi))]
-        columns.append(rng.choice(np.unique(points), count))
+        column = rng.choice(np.unique(points), count)
+        # half the states anywhere in the range: the largest errors lie between grid points
+        spread = rng.random(count) < 0.5
+        column[spread] = np.clip(rng.uniform(lo, hi, int(spread.sum())).astype(F32),
+                                 F32(lo), F32(hi))
+        columns.append(column)
     return np.column_stack(columns).astype(np.float64)
 
 

@@ -17,6 +17,7 @@ episodes count in the run's usage and budget.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -29,6 +30,7 @@ from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import run_trial
 from flctool.rollout import (
     CONFIRMATION_SEED_LOW,
+    T975,
     TRAIN_SEED_LOW,
     Estimate,
     clip_estimate,
@@ -114,6 +116,45 @@ class Confirmed:
                                                                   dtype=np.float64))
 
 
+def fitness_interval(fitness: FloatArray, success: NDArray[np.bool_],
+                     bounds: tuple[float, float]) -> Estimate:
+    """The mean fitness (E,) of confirmation episodes, with a 95 % interval that allows for
+    outcomes too rare to have shown: the mean is ``p mu_s + (1 - p) mu_f`` (success rate
+    ``p``, mean fitness of successes and of the other episodes), so the interval combines the
+    Wilson interval of ``p`` with t intervals of the two means -- the fitness range's bound
+    standing in for a group no episode fell into. (A plain t interval over 50 episodes that
+    all succeeded is narrow, and missed the held-out figure in 6 of 30 ballchase runs.)"""
+    values = np.asarray(fitness, dtype=np.float64)
+    n = int(values.shape[0])
+    plain = clip_estimate(mean_interval(values), bounds)
+    won = np.asarray(success, dtype=bool)
+    k = int(won.sum())
+    low_bound, high_bound = bounds
+    if n < 2 or not (np.isfinite(low_bound) and np.isfinite(high_bound)):
+        return plain
+    rate = wilson_interval(k, n)
+
+    def group(part: FloatArray) -> tuple[float, float]:
+        if part.shape[0] < 2:  # no (or one) episode: anything the range allows
+            return (low_bound if part.shape[0] == 0 else min(low_bound, float(part[0])),
+                    high_bound if part.shape[0] == 0 else max(high_bound, float(part[0])))
+        # the t quantile of the nearest tabulated degrees of freedom below (a little wider,
+        # and no scipy to import for a group of, say, 47 episodes)
+        dof = max(d for d in T975 if d <= part.shape[0] - 1)
+        half = T975[dof] * float(part.std(ddof=1)) / math.sqrt(part.shape[0])
+        mean = float(part.mean())
+        return mean - half, mean + half
+
+    s_low, s_high = group(values[won])
+    f_low, f_high = group(values[~won])
+    # the mean is monotone in p for fixed group means: take the worse end of each
+    lows = [p * s_low + (1 - p) * f_low for p in (rate.low, rate.high)]
+    highs = [p * s_high + (1 - p) * f_high for p in (rate.low, rate.high)]
+    low = min(min(lows), plain.low)
+    high = max(max(highs), plain.high)
+    return Estimate(plain.value, max(low, low_bound), min(high, high_bound), n)
+
+
 def _exact(estimate: Estimate) -> list[float | int]:
     # repr-exact through JSON (NaN is written as NaN and read back as nan)
     return [estimate.value, estimate.low, estimate.high, estimate.n]
@@ -183,7 +224,7 @@ class Confirmation(RunCallback):
         self.usage.confirmation_steps += int(lengths.sum())
         confirmed = Confirmed(np.array(consequents, dtype=np.intp), generation, individual,
                               learner.generation,
-                              clip_estimate(mean_interval(fitness), env.fitness_range),
+                              fitness_interval(fitness, success, env.fitness_range),
                               wilson_interval(int(success.sum()), count),
                               mean_interval(returns), tuple(fitness.tolist()),
                               None if sets is None else np.array(sets, dtype=np.float64))

@@ -129,7 +129,7 @@ class GeneticLearner(Learner):
                                                self.codec.size, config.sets.sigma)
         #: Premature-convergence restarts: enabled, best figure seen, generations since it
         #: improved, restarts made.
-        self.restart_after = config.restart_after
+        self.restart_after = config.restarts_after
         self.best_seen = -math.inf
         self.stalled_for = 0
         self.restarts = 0

@@ -20,4 +20,5 @@ def import_rclpy() -> ModuleType:
         import rclpy
     except ImportError:
         raise MissingDependencyError("ros-rclpy", "ros2", "ROS 2") from None
-    return rclpy
+    module: ModuleType = rclpy  # typed even where rclpy is absent (mypy reads it as Any)
+    return module

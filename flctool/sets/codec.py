@@ -124,7 +124,10 @@ class _PartitionLayout:
             reach = 0.0
             for i in range(first, last - 1):
                 reach += scaled.get(i, 0.0)
-                points[i + 1] = _rounded(start + (end - start) * (reach / total), end - start)
+                # rounding may not step past a neighbour: a pinned point is not rounded, and a
+                # closed gap (a triangle's peak) must stay closed
+                point = _rounded(start + (end - start) * (reach / total), end - start)
+                points[i + 1] = min(end, max(points[i], point))
         count = len(self.codec.quads)
         return [(points[a], points[b], points[c], points[d])
                 for a, b, c, d in (_corner_indices(j, count) for j in range(count))]

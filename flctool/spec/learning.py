@@ -8,7 +8,7 @@ names that model, so ``learning:`` is the union of the models of every learner t
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
@@ -158,9 +158,20 @@ class GeneticConfig(LearningConfig):
     elites: int = Field(1, ge=0, description="best individuals copied unchanged")
     common_starts: bool = Field(False, description=(
         "every individual of a generation gets the same start states"))
-    restart_after: int = Field(0, ge=0, description=(
+    # One default for the key both GA learners read (an experiment's one file carries it
+    # for both); what an unset key means is the learner's: `restarts_after`.
+    restart_after: int | None = Field(None, ge=0, description=(
         "generations without a better selected controller after which every individual but "
-        "the elites is drawn afresh (premature convergence); 0: never, as in the paper"))
+        "the elites is drawn afresh (premature convergence); 0: never, as in the paper; "
+        "unset: 5 under hybrid, 0 under pitt"))
+
+    #: What an unset ``restart_after`` means for this learner.
+    default_restart_after: ClassVar[int] = 0
+
+    @property
+    def restarts_after(self) -> int:
+        """``restart_after`` as the learner reads it: the file's, or the learner's default."""
+        return self.default_restart_after if self.restart_after is None else self.restart_after
 
     @field_validator("elites")
     @classmethod
@@ -198,9 +209,7 @@ class HybridConfig(GeneticConfig):
     q: QConfig = QConfig()
     # Measured (docs/learning.md): restarts lift the hybrid's worst seeds, whose q-guided
     # operators can lock a population onto a poor table; they lower Pitt's.
-    restart_after: int = Field(5, ge=0, description=(
-        "generations without a better selected controller after which every individual but "
-        "the elites is drawn afresh (premature convergence); 0: never, as in the paper"))
+    default_restart_after: ClassVar[int] = 5
 
 
 def learner_keys(model: type[BaseModel]) -> tuple[str, ...]:

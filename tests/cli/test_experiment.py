@@ -91,8 +91,10 @@ def test_one_file_carries_the_settings_of_every_compared_learner(tmp_path: Path)
         for seed in (0, 1):
             path = out / "runs" / f"{learner}-seed{seed}" / "behaviour.yaml"
             written = yaml.safe_load(path.read_text())["learning"]
-            # every key of its learner but 'sets', not written when no sets are learned
-            assert tuple(written) == tuple(k for k in learner_keys(model) if k != "sets"), learner
+            # every key of its learner but the unset ones, which are not written: 'sets' (no
+            # sets learned) and 'restart_after' (the learner's default)
+            assert tuple(written) == tuple(k for k in learner_keys(model)
+                                           if k not in ("sets", "restart_after")), learner
             learning = load_behaviour(path).learning  # a valid file of its learner
             assert (learning.learner, learning.seed, learning.generations) == (learner, seed, 2)
             assert len(open_run(path.parent).metrics()) == 2

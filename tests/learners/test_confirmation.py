@@ -176,3 +176,18 @@ def test_learn_says_the_budget_and_why(tmp_path: Path) -> None:
     assert ("budget: 1 generation x 10 individuals x 1 trial = 10 training episodes "
             "(generations as given, the rest the paper's protocol) for 15 rules to learn x 5 "
             "commands") in " ".join(result.stderr.split())
+
+
+def test_the_confirmation_interval_allows_for_outcomes_too_rare_to_have_shown() -> None:
+    from flctool.learners.confirmation import fitness_interval
+    from flctool.rollout import mean_interval
+
+    fitness = np.linspace(1.85, 1.9, 50)  # fifty successes, all alike
+    every = fitness_interval(fitness, np.ones(50, dtype=bool), (0.0, 2.0))
+    plain = mean_interval(fitness)
+    assert every.value == plain.value and every.n == 50
+    # a failure rate of up to Wilson's 7 % at fitness 0 is still possible
+    assert every.low < plain.low - 0.1 and every.high >= plain.high
+    assert 0.0 <= every.low <= every.value <= every.high <= 2.0
+    unbounded = fitness_interval(fitness, np.ones(50, dtype=bool), (-np.inf, np.inf))
+    assert (unbounded.low, unbounded.high) == (plain.low, plain.high)

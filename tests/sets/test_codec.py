@@ -39,6 +39,7 @@ def strong_partitions(draw: st.DrawFn) -> tuple[dict[str, list[float]], float, f
     points = [low, *(round(low + c * width, 6) for c in cuts), high]
     if len(set(points)) != len(points) or points != sorted(points):
         points = [low + width * i / (2 * count - 1) for i in range(2 * count)]
+        points[-1] = high  # width * n / n may miss width by an ulp
     # a triangle: a set whose shoulders meet (gap between P_2j and P_2j+1 closed)
     for j in range(1, count - 1):
         if draw(st.booleans()):
