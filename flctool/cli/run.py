@@ -57,6 +57,11 @@ def run(
         if file.is_dir() and bundled.is_file() and (file / "wiring.json").is_file():
             file = bundled
         behaviour, source = load_controller(file)
+        if getattr(behaviour.environment, "compose", None):
+            raise FlcError(f"{behaviour.name} is a composed behaviour: flctool run deploys "
+                           "one controller", hint="deploy the composition with its bundle's "
+                           "flc_composed_step (flctool export --format bundle, "
+                           "docs/formats/bundle.md)")
         if not ros2:
             raise FlcError("flctool run deploys over ROS 2 only: add --ros2",
                            hint="for the robot link or a simulator, use flctool evaluate")

@@ -1,6 +1,6 @@
 """Compiled inference kernels: eq. 1-3, bit for bit, at every batch size.
 
-Three ways through, each chosen where it is cheapest:
+Four ways through, each chosen where it is cheapest:
 
 - **a few states** (:func:`infer_one`; with the controller's own consequents
   :func:`infer_own` up to ``OWN_SMALL_BATCH_FEW_INPUTS`` or ``OWN_SMALL_BATCH`` states;
@@ -9,6 +9,9 @@ Three ways through, each chosen where it is cheapest:
   input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
   only the rules combining them summed -- an odometer over the fired sets, last input
   fastest, which is increasing rule order;
+- **a few states of a tiny rule base** (:func:`_tiny_states`, with the own consequents; see
+  ``TINY_BATCH``): the memberships of the block, then every rule of each state -- the naive
+  loop, cheaper there than finding the fired rules or setting up the blocks;
 - **blocks of states, every rule**: for small rule bases (:func:`walks_every_rule`), the
   memberships and then eq. 2-3 of every rule for ``_BLOCK`` states at once, in loops over
   the states that vectorise;
@@ -630,19 +633,23 @@ CHEAP_DENSE_RULE_INPUTS = 64
 # grow as 2^N), the blocks' set-up about 1 us, then 5-50 ns a state. Measured on ballchase
 # and random 1-4 input controllers, state by state is cheaper up to 14-16 states for one or
 # two inputs and 8-10 for more.
-OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2
+OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2, and any N walked every rule in blocks
 OWN_SMALL_BATCH = 8
-# ... except for a small rule base walked every rule, whose batches of up to TINY_BATCH
-# states go through _tiny_states: a naive loop, 1-1.5 ns a rule-input and state there, costs
-# less than finding each state's fired rules (about 80 ns a state for three inputs, 200 for
-# four, more beyond) or the blocks' set-up. For one or two inputs (fired rules found in
-# 15-45 ns) only bases of at most TINY_RULES_FEW_INPUTS rules, and only past
-# OWN_SMALL_BATCH states; for more inputs bases of at most TINY_RULE_INPUTS (M x N).
+# (Walked every rule, blocks of 9 states cost about what 16 do: 4 x 4 and 5 x 3 sets were
+# 0.90-0.94x the naive kernel at 9 states through the blocks, 1.4x at 16 and 1.7x at 8.)
+# ... except for a small rule base walked every rule, which goes through _tiny_states (a
+# naive loop over every rule of each state, 1-1.5 ns a rule-input) where that costs less than
+# finding each state's fired rules (by N, about 1.5x the blocks' _SPARSE_NS_BY_INPUTS state
+# by state) or the blocks' set-up: with one or two inputs (fired rules found in 15-45 ns),
+# bases of at most TINY_RULES_FEW_INPUTS rules from OWN_SMALL_BATCH + 1 to TINY_BATCH states;
+# with more inputs, up to OWN_SMALL_BATCH_FEW_INPUTS states, bases whose M x N rule-inputs at
+# TINY_NS_PER_RULE_INPUT cost at most TINY_OVER_FIRED times _SPARSE_NS_BY_INPUTS[N].
 # Measured against the naive kernel at 1-65 states: one input of 2-9 sets, 2 x 2, 3 x 2,
-# 3 x 3, 4 x 2 and 5 x 2 sets were up to 21 % slower through the other walks.
+# 3 x 3, 4 x 2, 5 x 2 and 6 x 2 sets were 0.60-0.98x through the other walks.
 TINY_BATCH = 2 * _BLOCK
 TINY_RULES_FEW_INPUTS = 16
-TINY_RULE_INPUTS = 160
+TINY_NS_PER_RULE_INPUT = 1.2
+TINY_OVER_FIRED = 1.5
 
 
 @_jit
@@ -766,11 +773,13 @@ def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Fl
 def _tiny(ints: IntArray, count: int) -> bool:
     # Whether infer_own takes _tiny_states (see TINY_BATCH).
     n, rules = ints[0], ints[3]
-    if rules == 0 or count > TINY_BATCH:
+    if rules == 0:
         return False
     if n <= 2:
-        return bool(rules <= TINY_RULES_FEW_INPUTS and count > OWN_SMALL_BATCH)
-    return bool(rules * n <= TINY_RULE_INPUTS)
+        return rules <= TINY_RULES_FEW_INPUTS and OWN_SMALL_BATCH < count <= TINY_BATCH
+    fired = _SPARSE_NS_BY_INPUTS[min(n, len(_SPARSE_NS_BY_INPUTS) - 1)]
+    return bool(count <= OWN_SMALL_BATCH_FEW_INPUTS
+                and rules * n * TINY_NS_PER_RULE_INPUT <= TINY_OVER_FIRED * fired)
 
 
 @_jit
@@ -789,7 +798,8 @@ def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: Float
     count = states.shape[0]
     if _tiny(ints, count):
         return _tiny_states(floats, ints, states, out, tables)
-    small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 else OWN_SMALL_BATCH
+    # the blocks' walk of every rule costs M x N loops however few states: from more states
+    small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 or ints[3] > 0 else OWN_SMALL_BATCH
     if count <= small:
         return _own_states(floats, ints, states, out, tables)
     dense = ints[3] > 0  # the layout keeps the rule grid only for the walk of every rule

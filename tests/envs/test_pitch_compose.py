@@ -161,3 +161,14 @@ def test_composition_mistakes_are_located(tmp_path: Path) -> None:
         load_behaviour(path)
     assert "environment.compose.chase:" in str(caught.value)
     assert "reads 'guard'" in str(caught.value)
+
+
+def test_flctool_run_refuses_a_composition_clearly(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from flctool.cli.app import app
+
+    result = CliRunner().invoke(app, ["run", str(_write(tmp_path)), "--ros2"])
+    assert result.exit_code != 0
+    assert "is a composed behaviour: flctool run deploys one controller" in result.output
+    assert "--format bundle" in result.output
