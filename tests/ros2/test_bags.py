@@ -7,6 +7,7 @@ import csv
 import io
 import math
 import re
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -74,6 +75,10 @@ def _record(tmp_path: Path, sim: Path, namespace: str, steps: int, drive: Any) -
             recorder = BagRecorder(bag, session_topics(config, [(f"{namespace}/odom",
                                                                   "nav_msgs/Odometry")]))
             assert wait_until(recorder.publishers_found, 10.0)
+            # discovery is not symmetric: the recorder can see a publisher before that
+            # publisher has matched the recorder, and a sample sent before then is not
+            # delivered to it; let both sides finish matching before the first step
+            time.sleep(1.0)
             rng = np.random.default_rng(4)
             done, observation, seed = True, None, 0
             for _ in range(steps):
