@@ -184,6 +184,23 @@ TRAIN_SEED_LOW = 2**32
 TRAIN_SEED_HIGH = 2**62
 
 
+def distinct_run_seeds(run_seed: int, stream: int, low: int, high: int,
+                       episodes: int) -> NDArray[np.int64]:
+    """``episodes`` distinct seeds (E,) in [low, high), drawn from the child ``stream`` of the
+    run's seed: the same for the whole run (a resumed run meets the same episodes), and a
+    prefix of a longer draw."""
+    rng = np.random.default_rng(np.random.SeedSequence(run_seed, spawn_key=(stream,)))
+    seeds: list[int] = []
+    seen: set[int] = set()
+    while len(seeds) < episodes:
+        for value in rng.integers(low, high, size=episodes - len(seeds),
+                                  dtype=np.int64).tolist():
+            if value not in seen:
+                seen.add(value)
+                seeds.append(value)
+    return np.array(seeds, dtype=np.int64)
+
+
 def evaluation_seeds(seed: int, episodes: int) -> NDArray[np.int64]:
     """``episodes`` distinct episode seeds drawn from ``seed`` (what ``flctool evaluate
     --seed`` uses). Evaluations with different seeds almost surely share no episode (two

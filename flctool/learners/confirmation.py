@@ -34,6 +34,7 @@ from flctool.rollout import (
     TRAIN_SEED_LOW,
     Estimate,
     clip_estimate,
+    distinct_run_seeds,
     mean_interval,
     wilson_interval,
 )
@@ -51,17 +52,8 @@ def confirmation_seeds(run_seed: int, episodes: int) -> NDArray[np.int64]:
     """The run's ``episodes`` distinct confirmation seeds (E,), in [2^31, 2^32): the same for
     the whole run (a resumed run confirms on the same episodes), and a prefix of a longer
     draw."""
-    rng = np.random.default_rng(np.random.SeedSequence(run_seed,
-                                                       spawn_key=(_CONFIRMATION_STREAM,)))
-    seeds: list[int] = []
-    seen: set[int] = set()
-    while len(seeds) < episodes:
-        for value in rng.integers(CONFIRMATION_SEED_LOW, TRAIN_SEED_LOW,
-                                  size=episodes - len(seeds), dtype=np.int64).tolist():
-            if value not in seen:
-                seen.add(value)
-                seeds.append(value)
-    return np.array(seeds, dtype=np.int64)
+    return distinct_run_seeds(run_seed, _CONFIRMATION_STREAM, CONFIRMATION_SEED_LOW,
+                              TRAIN_SEED_LOW, episodes)
 
 
 @dataclass(frozen=True)

@@ -46,7 +46,7 @@ from flctool.envs.base import BatchEnv
 from flctool.learners.budget import Usage
 from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import SparseRules, Trial, run_trial
-from flctool.rollout import Estimate, clip_estimate, mean_interval
+from flctool.rollout import Estimate, clip_estimate, distinct_run_seeds, mean_interval
 from flctool.spec.learning import SelectionConfig
 
 if TYPE_CHECKING:
@@ -70,17 +70,8 @@ def validation_seeds(run_seed: int, episodes: int) -> NDArray[np.int64]:
     Drawn from a child of the run's seed that the training streams do not use, and the same
     for the whole run, so no state needs saving: a resumed run validates on the same episodes.
     """
-    sequence = np.random.SeedSequence(run_seed, spawn_key=(_VALIDATION_STREAM,))
-    rng = np.random.default_rng(sequence)
-    seeds: list[int] = []
-    seen: set[int] = set()
-    while len(seeds) < episodes:
-        for value in rng.integers(VALIDATION_SEED_LOW, VALIDATION_SEED_HIGH,
-                                  size=episodes - len(seeds), dtype=np.int64).tolist():
-            if value not in seen:
-                seen.add(value)
-                seeds.append(value)
-    return np.array(seeds, dtype=np.int64)
+    return distinct_run_seeds(run_seed, _VALIDATION_STREAM, VALIDATION_SEED_LOW,
+                              VALIDATION_SEED_HIGH, episodes)
 
 
 @dataclass
