@@ -122,6 +122,9 @@ def test_a_faulty_input_stops_the_robot_within_the_bound(fault: str) -> None:
         with Ros2Env(config, behaviour.name, behaviour.input_names,
                      dict(behaviour.output.commands)) as env:
             assert wait_until(lambda: spy.subscription.get_publisher_count() > 0, 10.0)
+            # discovery is not symmetric: the spy can see the command publisher before that
+            # publisher has matched the spy, and a stop sent before then never reaches it
+            time.sleep(1.0)
             observation = env.reset_one(3)
             started = 0.0
             with pytest.raises(LinkError) as caught:
