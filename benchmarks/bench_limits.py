@@ -92,8 +92,8 @@ def behaviour_commands(size: int) -> str:
 
 def _exported(suffix: str) -> Callable[[int], str]:
     def export(sets: int) -> str:
+        from flctool.behaviour import parse_behaviour
         from flctool.export import EXPORTERS
-        from flctool.spec import parse_behaviour
 
         behaviour = parse_behaviour(_grid(sets, sets * sets), "grid.yaml")
         exporter = EXPORTERS.get(suffix.lstrip("."))()
@@ -148,8 +148,8 @@ def _infer(path: Path, out: Path) -> list[str]:
 
 
 def shapes() -> list[Shape]:
+    from flctool.behaviour.yaml_source import MAX_FILE_CHARS
     from flctool.export.base import MAX_IMPORT_CHARS
-    from flctool.spec.yaml_source import MAX_FILE_CHARS
 
     csv_limit = 50 * MB  # no limit: streamed; measured to the behaviour files' limit
     return [

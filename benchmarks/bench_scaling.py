@@ -37,10 +37,10 @@ from naive_kernel import naive_output
 
 import flctool
 from flctool import Controller
+from flctool.behaviour import behaviour_from_data
+from flctool.behaviour.checks import MAX_RULES
 from flctool.compile import controller as controller_module
 from flctool.compile import kernels
-from flctool.spec import behaviour_from_data
-from flctool.spec.checks import MAX_RULES
 
 GOAL_PER_ACTIVE_RULE = 5.0  # largest M at most 5x the smallest, per fired rule
 GOAL_CLIFF = 36 / 25  # M = 36 against M = 25 (2 inputs): no faster than M grows

@@ -40,9 +40,9 @@ from pathlib import Path
 import numpy as np
 
 from flctool import compile_behaviour
+from flctool.behaviour import Behaviour
 from flctool.errors import FlcError, SpecError
 from flctool.export import IMPORTERS
-from flctool.spec import Behaviour
 
 SUFFIXES = (".fll", ".fis", ".fcl")
 

@@ -225,9 +225,9 @@ def run_case(case: Case) -> tuple[str, str]:
     """Load and compile one case; returns (outcome, detail)."""
     import tempfile
 
+    from flctool.behaviour import load_behaviour, parse_behaviour
     from flctool.compile import compile_behaviour
     from flctool.errors import FlcError, SpecError
-    from flctool.spec import load_behaviour, parse_behaviour
 
     try:
         if case.data is not None:
@@ -310,8 +310,8 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="write counts and examples here")
     args = parser.parse_args()
     # Imported once here, so that each forked worker starts warm.
+    import flctool.behaviour
     import flctool.compile
-    import flctool.spec
 
     del flctool
 

@@ -30,11 +30,11 @@ from typing import Any
 from scipy.stats import mannwhitneyu
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.set_learning import strong_partition_problems
 from flctool.envs import make_env
 from flctool.rollout import evaluate, evaluation_seeds
 from flctool.runs import BEST_FILE, create_run, resolve_behaviour
-from flctool.spec.models import Behaviour
-from flctool.spec.set_learning import strong_partition_problems
 
 ROOT = Path(__file__).resolve().parents[1]
 #: task -> (behaviour file, score: "return" (mean return) or "success" (success rate))

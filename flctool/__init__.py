@@ -34,12 +34,14 @@ from flctool.version import __version__ as __version__
 # isort: off
 if TYPE_CHECKING:
     # read and change a behaviour
-    from flctool.spec import (
+    from flctool.behaviour import (
         Behaviour as Behaviour, load_behaviour as load_behaviour,
         parse_behaviour as parse_behaviour, behaviour_to_yaml as behaviour_to_yaml,
     )
-    from flctool.spec.overrides import Override as Override, resolve_behaviour as resolve_behaviour
-    from flctool.spec.rules import with_rules as with_rules
+    from flctool.behaviour.overrides import (
+        Override as Override, resolve_behaviour as resolve_behaviour,
+    )
+    from flctool.behaviour.rules import with_rules as with_rules
 
     # compile it; make its environment
     from flctool.compile import Controller as Controller, compile_behaviour as compile_behaviour

@@ -136,7 +136,7 @@ class ExportError(FlcError):
 
 class NotDeployableError(FlcError):
     """A behaviour lacks rule consequents where a complete controller is needed (running,
-    evaluating or exporting it); raised by :func:`flctool.spec.require_deployable`."""
+    evaluating or exporting it); raised by :func:`flctool.behaviour.require_deployable`."""
 
 
 class UnknownNameError(FlcError):

@@ -27,9 +27,9 @@ from flctool.rollout import Estimate, EvaluationResult, evaluate, evaluation_see
 if TYPE_CHECKING:
     from numpy.typing import NDArray
 
+    from flctool.behaviour import Behaviour
     from flctool.compile import Controller
     from flctool.envs import BatchEnv
-    from flctool.spec import Behaviour
 
 #: Most episodes stepped together; the peak memory of an evaluation follows this, not the
 #: number of episodes.

@@ -26,13 +26,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
+from flctool.behaviour import Behaviour
+from flctool.behaviour.models import FuzzySet
+from flctool.behaviour.shapes import set_row
 from flctool.compile.membership import memberships
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
 from flctool.inputs import no_such_file
 from flctool.runs import Run
-from flctool.spec import Behaviour
-from flctool.spec.models import FuzzySet
-from flctool.spec.shapes import set_row
 
 FloatArray = NDArray[np.float64]
 FORMATS = ("png", "svg")
@@ -532,8 +532,8 @@ def _strengths(run: Run, folder: Path, rule: int | None) -> Drawn:
 
 
 def _best(best: Path, folder: Path, title: str, before: Behaviour | None = None) -> Drawn:
+    from flctool.behaviour import load_behaviour
     from flctool.rollout import evaluation_seeds
-    from flctool.spec import load_behaviour
 
     # the first episode of 'flctool evaluate --episodes 1': never a training start
     seed = int(evaluation_seeds(0, 1)[0])

@@ -5,7 +5,7 @@ adapters) and a lazy ``"module:Class"`` implementation. The registries
 (:data:`flctool.learners.LEARNERS`, :data:`flctool.envs.ENVIRONMENTS`,
 :data:`flctool.export.EXPORTERS`) and the behaviour-file sections (``learning:`` read by the
 model of the plugin its ``learner`` names, ``environment:`` by its ``adapter``'s,
-:mod:`flctool.spec.sections`) are all found from these lists, so adding a learner is one
+:mod:`flctool.behaviour.sections`) are all found from these lists, so adding a learner is one
 module plus one entry.
 
 Installed packages add entries through the entry-point groups ``flctool.learners``,
@@ -41,9 +41,9 @@ class Plugin:
     """One learner, environment adapter or export format.
 
     ``config`` is the model of the section the plugin reads: for a learner a subclass of
-    :class:`~flctool.spec.learning.LearningConfig` adding the learner's own keys whose
+    :class:`~flctool.behaviour.learning.LearningConfig` adding the learner's own keys whose
     ``learner`` is ``Literal[name]``; for an adapter a subclass of
-    :class:`~flctool.spec.environment.AdapterConfig` whose ``adapter`` is ``Literal[name]``;
+    :class:`~flctool.behaviour.environment.AdapterConfig` whose ``adapter`` is ``Literal[name]``;
     ``None`` for an export format. ``config`` may be given lazily as a ``"module:Class"``
     string too (the built-ins are, so that this module imports no model);
     ``target`` is imported only when used.
@@ -71,8 +71,8 @@ def load_attribute(target: str) -> Any:
     return getattr(importlib.import_module(module_name), attr)
 
 
-_LEARNING = "flctool.spec.learning"
-_ENVIRONMENT = "flctool.spec.environment"
+_LEARNING = "flctool.behaviour.learning"
+_ENVIRONMENT = "flctool.behaviour.environment"
 
 BUILTIN: dict[str, tuple[Plugin, ...]] = {
     "learner": (
@@ -89,7 +89,7 @@ BUILTIN: dict[str, tuple[Plugin, ...]] = {
                f"{_ENVIRONMENT}:GymnasiumConfig"),
         Plugin("robot-link", "flctool.envs.robot_link:RobotLinkEnv",
                f"{_ENVIRONMENT}:RobotLinkConfig"),
-        Plugin("ros2", "flctool.envs.ros2_env:Ros2Env", "flctool.spec.ros2:Ros2Config"),
+        Plugin("ros2", "flctool.envs.ros2_env:Ros2Env", "flctool.behaviour.ros2:Ros2Config"),
     ),
     "exporter": (
         Plugin("yaml", "flctool.export.yaml_format:YamlExporter", suffixes=(".yaml", ".yml")),
@@ -193,17 +193,17 @@ def _problem(kind: str, plugin: object, taken: set[str],
     if kind == "exporter":
         bad = [s for s in plugin.suffixes if not (s.startswith(".") and len(s) > 1)]
         return f"suffixes {bad} must each be '.' and a name" if bad else None
-    from flctool.spec.environment import AdapterConfig
-    from flctool.spec.learning import LearningConfig
+    from flctool.behaviour.environment import AdapterConfig
+    from flctool.behaviour.learning import LearningConfig
 
     try:
         config = plugin.config_model()
     except Exception as error:  # a third party's config that does not import or is no model
         return f"its config cannot be used ({type(error).__name__}: {error})"
     if kind == "environment" and not issubclass(config, AdapterConfig):
-        return "an adapter's config must extend flctool.spec.environment.AdapterConfig"
+        return "an adapter's config must extend flctool.behaviour.environment.AdapterConfig"
     if kind == "learner" and not issubclass(config, LearningConfig):
-        return "a learner's config must extend flctool.spec.learning.LearningConfig"
+        return "a learner's config must extend flctool.behaviour.learning.LearningConfig"
     tag = "learner" if kind == "learner" else "adapter"
     field = config.model_fields.get(tag)
     if field is None or getattr(field.annotation, "__args__", None) != (plugin.name,):

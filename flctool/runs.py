@@ -50,6 +50,13 @@ from typing import Any
 import numpy as np
 
 from flctool.atomic import remove_stale_temporaries, sync_file, write_text_atomic
+from flctool.behaviour import (
+    Behaviour,
+    behaviour_to_yaml,
+    load_behaviour,
+)
+from flctool.behaviour.overrides import Override, resolve_behaviour
+from flctool.behaviour.rules import with_rules
 from flctool.dirlock import DirectoryLock, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
@@ -59,13 +66,6 @@ from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
 from flctool.learners.confirmation import Confirmed
 from flctool.rollout import Estimate
 from flctool.sets.codec import set_gene_count, with_set_genes
-from flctool.spec import (
-    Behaviour,
-    behaviour_to_yaml,
-    load_behaviour,
-)
-from flctool.spec.overrides import Override, resolve_behaviour
-from flctool.spec.rules import with_rules
 from flctool.version import __version__
 
 RUN_FORMAT = 1

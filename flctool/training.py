@@ -8,7 +8,7 @@
 
 The learner (and with it the environment) is built before a new run directory is made, so a
 behaviour whose environment does not fit leaves nothing behind; its errors are located in the
-file (or at the override, :class:`~flctool.spec.overrides.Override`) they are about. A resumed
+file (or at the override, :class:`~flctool.behaviour.overrides.Override`) they are about. A resumed
 run continues only as it was recorded: overrides that differ from the run are refused; its
 generation budget is the one thing it may change, given by itself (``generations``).
 """
@@ -23,12 +23,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour import Behaviour, behaviour_to_data, load_behaviour
+from flctool.behaviour.overrides import Override, Overrides, as_overrides, resolve_behaviour
 from flctool.compile import compile_behaviour
 from flctool.errors import Problem, RunDirError, SpecError
 from flctool.learners import Callback, Learner, make_learner
 from flctool.runs import Run, RunSummary, create_run, open_run
-from flctool.spec import Behaviour, behaviour_to_data, load_behaviour
-from flctool.spec.overrides import Override, Overrides, as_overrides, resolve_behaviour
 
 
 @dataclass
@@ -70,7 +70,7 @@ def start_run(behaviour: Behaviour | str | Path, overrides: Overrides | None = N
               out: str | Path | None = None, *,
               baselines: Iterable[str | Path] = ()) -> Training:
     """A new run of ``behaviour`` (a behaviour or its file) with ``overrides`` applied (see
-    :func:`~flctool.spec.overrides.resolve_behaviour`), in ``out`` or a new folder under
+    :func:`~flctool.behaviour.overrides.resolve_behaviour`), in ``out`` or a new folder under
     ``runs/``. ``baselines`` are files of hand-made controllers of the same rule grid that
     the run's controller must beat (:mod:`flctool.learners.baselines`)."""
     if not isinstance(behaviour, Behaviour):

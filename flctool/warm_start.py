@@ -26,10 +26,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.rule_order import rule_grid
 from flctool.errors import LearnError
 from flctool.learners.base import Learner
-from flctool.spec.models import Behaviour
-from flctool.spec.rule_order import rule_grid
 
 #: Mixed with the run's seed for the warm start's own draws (the GA's stream is left as is).
 _STREAM = 0x5EED_1417
@@ -152,8 +152,8 @@ def warm_start(learner: Learner, behaviour: Behaviour, source: Behaviour, label:
 def warm_start_from_path(learner: Learner, behaviour: Behaviour, path: Path) -> WarmStart:
     """:func:`warm_start` from a run directory (its best.yaml and last q table) or a
     controller file."""
+    from flctool.behaviour import load_behaviour, require_deployable
     from flctool.runs import open_run
-    from flctool.spec import load_behaviour, require_deployable
 
     if path.is_dir():
         run = open_run(path)

@@ -21,7 +21,7 @@ from typing import Any
 
 import pytest
 
-from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data, load_behaviour
+from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data, load_behaviour
 
 from .conftest import BEHAVIOURS, restore_sigint
 

@@ -18,13 +18,13 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data
 from flctool.envs import check_env, make_env
 from flctool.envs.robot_server import RobotServer
 from flctool.export import EXPORTERS, IMPORTERS
 from flctool.learners import Callback, GenerationMetrics
 from flctool.plugins import BUILTIN, Plugin, plugins
 from flctool.runs import ENDED, create_run, open_run, resolve_behaviour
-from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data
 
 from .conftest import BEHAVIOURS
 from .ros2_support import robot_behaviour, sim_robot

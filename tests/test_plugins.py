@@ -14,11 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from flctool.behaviour.learning import LearningConfig
 from flctool.envs import ENVIRONMENTS
 from flctool.export import EXPORTERS, Exporter
 from flctool.learners import LEARNERS, Learner
 from flctool.plugins import BUILTIN, Plugin, _problem, plugins
-from flctool.spec.learning import LearningConfig
 
 PACKAGE = Path(__file__).parent / "plugin_package"
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,12 +77,12 @@ def test_registries_hold_exactly_the_plugins() -> None:
     (Plugin("pitt", "x:Y", LearningConfig), "the name 'pitt' is taken"),
     (Plugin("mine", "no_colon", LearningConfig), "is not 'module:attribute'"),
     (Plugin("mine", "x:Y", "no.such.module:Config"), "its config cannot be used"),
-    (Plugin("mine", "x:Y", "flctool.spec.environment:PitchConfig"), "must extend"),
-    (Plugin("mine", "x:Y", "flctool.spec.base:Section"), "must extend"),
+    (Plugin("mine", "x:Y", "flctool.behaviour.environment:PitchConfig"), "must extend"),
+    (Plugin("mine", "x:Y", "flctool.behaviour.base:Section"), "must extend"),
     (Plugin("mine", "x:Y", type("Mine", (LearningConfig,), {})),
      "must declare learner: Literal['mine']"),
     (Plugin("mine", "x:Y", LearningConfig), "must declare learner: Literal['mine']"),
-    (Plugin("mine", "x:Y", "flctool.spec.learning:PittConfig"),
+    (Plugin("mine", "x:Y", "flctool.behaviour.learning:PittConfig"),
      "must declare learner: Literal['mine']"),
 ])
 def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem: str) -> None:
@@ -196,8 +196,8 @@ def test_an_entry_point_must_be_named_like_its_plugin() -> None:
 
 
 def test_an_adapter_plugin_must_extend_adapter_config() -> None:
-    found = _problem("environment", Plugin("mine", "x:Y", "flctool.spec.base:Section"), set())
-    assert found is not None and "must extend flctool.spec.environment.AdapterConfig" in found
+    found = _problem("environment", Plugin("mine", "x:Y", "flctool.behaviour.base:Section"), set())
+    assert found is not None and "must extend flctool.behaviour.environment.AdapterConfig" in found
 
 
 BROKEN = '''\
@@ -206,7 +206,7 @@ from typing import Literal
 from pydantic import field_validator
 
 from flctool.plugins import Plugin
-from flctool.spec.environment import AdapterConfig
+from flctool.behaviour.environment import AdapterConfig
 
 
 class WobblyConfig(AdapterConfig):

@@ -40,7 +40,7 @@ def test_the_whole_flow_runs_on_the_public_names(tmp_path: Path) -> None:
 
 def test_import_flctool_loads_no_heavy_module() -> None:
     code = ("import sys, flctool; print(sorted(m for m in ('numpy', 'pydantic', 'ast', "
-            "'flctool.spec') if m in sys.modules))")
+            "'flctool.behaviour') if m in sys.modules))")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             timeout=60)
     assert result.stdout.split() == ["[]"], result.stderr

@@ -14,6 +14,7 @@ import pytest
 import yaml
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import Behaviour
 from flctool.errors import RunDirError, SpecError
 from flctool.learners import Callback, GenerationMetrics
 from flctool.runs import (
@@ -26,7 +27,6 @@ from flctool.runs import (
     open_run,
     resolve_behaviour,
 )
-from flctool.spec import Behaviour
 
 from .conftest import BEHAVIOURS
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import pytest
 
 from flctool import SpecError, load_behaviour
+from flctool.behaviour.overrides import Override
 from flctool.cli.app import command_line_overrides
 from flctool.errors import RunDirError
-from flctool.spec.overrides import Override
 from flctool.training import resume_run, start_run
 
 from .conftest import BEHAVIOURS

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from flctool.behaviour import behaviour_from_data, behaviour_to_data, load_behaviour
 from flctool.cli import app
 from flctool.compile.rules import rule_consequents
 from flctool.errors import LearnError
 from flctool.runs import open_run
-from flctool.spec import behaviour_from_data, behaviour_to_data, load_behaviour
 from flctool.training import start_run
 from flctool.warm_start import command_map, rule_map, seeded_population, warm_start_from_path
 

@@ -48,8 +48,8 @@ from flctool.inputs import no_such_file
 from flctool.version import __version__
 
 if TYPE_CHECKING:
-    from flctool.spec import Behaviour
-    from flctool.spec.overrides import Override
+    from flctool.behaviour import Behaviour
+    from flctool.behaviour.overrides import Override
 
 #: Exit codes, the same for every command.
 EXIT_INPUT, EXIT_USAGE, EXIT_INTERRUPTED = 1, 2, 130
@@ -395,7 +395,7 @@ def command_line_overrides(assignments: Sequence[str],
     out."""
     import yaml
 
-    from flctool.spec.overrides import Override
+    from flctool.behaviour.overrides import Override
 
     overrides: list[Override] = []
     for text in assignments:
@@ -434,7 +434,7 @@ def controller_file(path: Path) -> Path:
 def load_controller(path: Path) -> tuple[Behaviour, Path]:
     """The deployable behaviour a controller argument names (see :func:`controller_file`),
     and the file it was read from. One with rules still to learn is a clear error."""
-    from flctool.spec import load_behaviour, require_deployable
+    from flctool.behaviour import load_behaviour, require_deployable
 
     source = controller_file(path)
     behaviour = load_behaviour(source)

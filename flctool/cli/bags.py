@@ -28,8 +28,8 @@ from flctool.cli.spec_commands import ControllerArgument
 from flctool.errors import FlcError
 
 if TYPE_CHECKING:
-    from flctool.spec import Behaviour
-    from flctool.spec.ros2 import Ros2Config
+    from flctool.behaviour import Behaviour
+    from flctool.behaviour.ros2 import Ros2Config
 
 RobotOption = Annotated[Path | None, typer.Option(
     help="A behaviour file whose environment: {adapter: ros2} section names the topics "
@@ -42,9 +42,9 @@ def _log(text: str) -> None:
 
 def _ros2_config(behaviour: Behaviour, robot: Path | None) -> Ros2Config:
     """The ros2 section of ``robot`` (checked against the behaviour), else the behaviour's."""
+    from flctool.behaviour import load_behaviour
+    from flctool.behaviour.ros2 import Ros2Config
     from flctool.errors import SpecError
-    from flctool.spec import load_behaviour
-    from flctool.spec.ros2 import Ros2Config
 
     config = behaviour.environment
     where = "the controller"
@@ -63,7 +63,7 @@ def _topic(text: str) -> tuple[str, str]:
     topic, _, type_name = text.partition(":")
     if not topic or not type_name:
         raise FlcError(f"--topic {text!r}: write TOPIC:TYPE, e.g. /robot/odom:nav_msgs/Odometry")
-    from flctool.spec.ros2_messages import message_problem, normal_type
+    from flctool.behaviour.ros2_messages import message_problem, normal_type
 
     problem = message_problem(type_name)
     if problem:
@@ -89,7 +89,7 @@ def record(
 ) -> None:
     """Record a learning or deployment session over ROS 2 (inputs, commands, status, rewards,
     and any --topic) as an MCAP bag, until --duration or Ctrl-C."""
-    from flctool.spec import load_behaviour
+    from flctool.behaviour import load_behaviour
 
     with user_errors():
         from flctool.ros2.bags import BagRecorder, session_topics
@@ -199,8 +199,8 @@ def fit_sim(
     with user_errors():
         import yaml
 
+        from flctool.behaviour import behaviour_to_data, load_behaviour
         from flctool.ros2.bags import environment_section, fit_motion
-        from flctool.spec import behaviour_to_data, load_behaviour
 
         robot_behaviour = load_behaviour(robot)
         config = _ros2_config(robot_behaviour, None)

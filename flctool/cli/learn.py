@@ -25,8 +25,8 @@ from flctool.errors import RunDirError
 from flctool.plugins import names
 
 if TYPE_CHECKING:
+    from flctool.behaviour.overrides import Override
     from flctool.runs import RunSummary
-    from flctool.spec.overrides import Override
     from flctool.training import Training
 
 

@@ -35,7 +35,12 @@ def new(
 ) -> None:
     """Scaffold a valid behaviour file: evenly spaced, overlapping sets over each input's
     range (shoulders at the ends), the commands, and rules left to learn."""
-    from flctool.spec.scaffold import parse_command, parse_input, parse_sensor, scaffold_behaviour
+    from flctool.behaviour.scaffold import (
+        parse_command,
+        parse_input,
+        parse_sensor,
+        scaffold_behaviour,
+    )
 
     with user_errors():
         sensor_map = dict(parse_sensor(s) for s in sensors or [])

@@ -16,7 +16,7 @@ from flctool.cli.app import app, example, load_controller, report_interrupted, u
 from flctool.errors import FlcError
 
 if TYPE_CHECKING:
-    from flctool.spec import Behaviour
+    from flctool.behaviour import Behaviour
 
 
 def _log(text: str) -> None:
@@ -70,9 +70,9 @@ def run(
 
 def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: int | None,
               duration: float | None, rate: float | None) -> None:
+    from flctool.behaviour import load_behaviour
+    from flctool.behaviour.ros2 import Ros2Config
     from flctool.compile import compile_behaviour
-    from flctool.spec import load_behaviour
-    from flctool.spec.ros2 import Ros2Config
 
     config = behaviour.environment
     where = str(source)

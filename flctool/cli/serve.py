@@ -49,8 +49,8 @@ def serve(
 ) -> None:
     """Serve a behaviour's simulator over the robot-link protocol (docs/robot-link.md), for
     trying the link without a robot and as an example for bridge writers."""
+    from flctool.behaviour import load_behaviour
     from flctool.envs.robot_server import RobotServer, print_log
-    from flctool.spec import load_behaviour
 
     if ros2:
         _serve_ros2(file, namespace, auto_reset, seed, episodes)
@@ -69,8 +69,8 @@ def serve(
 
 def _serve_ros2(file: Path, namespace: str, auto_reset: bool, seed: int,
                 episodes: int | None) -> None:
+    from flctool.behaviour import load_behaviour
     from flctool.envs.robot_server import print_log
-    from flctool.spec import load_behaviour
 
     with user_errors():
         from flctool.ros2.robot import SimRobot

@@ -27,8 +27,8 @@ from flctool.errors import FlcError, Problem, SpecError, format_path
 if TYPE_CHECKING:
     from rich.table import Table
 
+    from flctool.behaviour import Behaviour
     from flctool.envs.preflight import FileReport
-    from flctool.spec import Behaviour
 
 ControllerArgument = Annotated[Path, typer.Argument(
     metavar="CONTROLLER", help="A behaviour file (YAML), or a run directory (its best.yaml).")]
@@ -141,8 +141,8 @@ def show(
     """Show a behaviour: its inputs and sets, M and K, and the rule table."""
     from rich.table import Table
 
-    from flctool.spec import load_behaviour
-    from flctool.spec.shapes import is_trapezoid
+    from flctool.behaviour import load_behaviour
+    from flctool.behaviour.shapes import is_trapezoid
 
     with user_errors():
         behaviour = load_behaviour(controller_file(file))
@@ -158,7 +158,7 @@ def show(
         unit = f" {variable.unit}" if variable.unit else ""
         span = f"[{variable.range[0]:g}, {variable.range[1]:g}]{unit}"
         for i, (set_name, quad) in enumerate(variable.sets.items()):
-            # a set of another shape: its name, then its parameters (flctool.spec.shapes)
+            # a set of another shape: its name, then its parameters (flctool.behaviour.shapes)
             cells = ([f"{v:g}" for v in quad] if is_trapezoid(quad) else
                      [f"{quad.kind} {' '.join(f'{v:g}' for v in quad.params)}", "", "", ""])
             sets.add_row(name if i == 0 else "", span if i == 0 else "", set_name,
@@ -186,8 +186,8 @@ def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) ->
     the same inputs and sets (then they are not one behaviour before and after learning)."""
     from rich.table import Table
 
+    from flctool.behaviour.shapes import is_trapezoid
     from flctool.sets.measures import movements, partition_measures, trapezoid_sets
-    from flctool.spec.shapes import is_trapezoid
 
     layout = {n: (v.range, tuple(v.sets)) for n, v in behaviour.inputs.items()}
     if layout != {n: (v.range, tuple(v.sets)) for n, v in reference.inputs.items()}:
@@ -259,7 +259,7 @@ def schema(
     force: Force = False,
 ) -> None:
     """Write the behaviour JSON Schema generated from the models (or check it is current)."""
-    from flctool.spec.schema import behaviour_schema_text
+    from flctool.behaviour.schema import behaviour_schema_text
 
     text = behaviour_schema_text()
     with user_errors():

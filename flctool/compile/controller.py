@@ -3,7 +3,7 @@
 Rule order (eq. 1): rule ``m`` is one combination of sets, enumerated with the **last input
 varying fastest**. For inputs with L = (3, 5) sets, rule 0 is (set 0, set 0), rule 1 is
 (set 0, set 1), ..., rule 5 is (set 1, set 0). This order is stable: it is how chromosomes,
-q tables and exports index rules. It is coded once, in :mod:`flctool.spec.rule_order`;
+q tables and exports index rules. It is coded once, in :mod:`flctool.behaviour.rule_order`;
 :attr:`Controller.rule_grid` holds it as an array.
 """
 
@@ -21,12 +21,12 @@ from typing import TYPE_CHECKING, Any, TypeVar, cast
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.shapes import set_row
 from flctool.compile import vectorised
 from flctool.compile.membership import memberships
 from flctool.compile.rules import rule_consequents, rule_grid
 from flctool.errors import InferenceError, NotDeployableError
-from flctool.spec.models import Behaviour
-from flctool.spec.shapes import set_row
 
 if TYPE_CHECKING:
     from flctool.compile.kernels import Layout
@@ -113,12 +113,12 @@ class Controller:
         input_names (N,), set_names (N, L_i), output_name, command_names (K,)
         ranges (N, 2): each input's [low, high]
         quadruples: N arrays of shape (L_i, 4): each set's trapezoid corners, or the
-            parameters of its shape padded with 0 (flctool.spec.shapes.set_row)
+            parameters of its shape padded with 0 (flctool.behaviour.shapes.set_row)
         rule_grid (M, N): set index of each input in each rule
         singletons (K,): the commands' values c^k
         consequents (M,) or None: command index of each rule, when deployable
         kinds: None when every set is a trapezoid, else N tuples (L_i,) of the sets'
-            shape codes (flctool.spec.shapes.CODES; 0 the trapezoid)
+            shape codes (flctool.behaviour.shapes.CODES; 0 the trapezoid)
     """
 
     input_names: tuple[str, ...]

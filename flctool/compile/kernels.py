@@ -162,7 +162,7 @@ def _fired_sets(states: FloatArray, b: int, lo: FloatArray, hi: FloatArray,
         count = 0
         first = offsets[i]
         for j in range(first, offsets[i + 1]):
-            if kinds[j]:  # a shape other than the trapezoid (flctool.spec.shapes)
+            if kinds[j]:  # a shape other than the trapezoid (flctool.behaviour.shapes)
                 mu = _shaped(kinds[j], quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3], s)
             else:
                 mu = _membership(s, quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3])
@@ -243,7 +243,7 @@ def _block_memberships(states: FloatArray, start: int, count: int, lo: FloatArra
         for j in range(offsets[i], offsets[i + 1]):
             pa, pb, pc, pd = quads[j, 0], quads[j, 1], quads[j, 2], quads[j, 3]
             kind = kinds[j]
-            if kind:  # a shape other than the trapezoid (flctool.spec.shapes)
+            if kind:  # a shape other than the trapezoid (flctool.behaviour.shapes)
                 for b in range(count):
                     mu[j, b] = _shaped(kind, pa, pb, pc, pd, xs[i, b])
                 continue
@@ -479,7 +479,7 @@ def _state_sets(floats: FloatArray, ints: IntArray, state: FloatArray, scratch: 
         first = ints[offsets + i]
         for j in range(first, ints[offsets + i + 1]):
             q = quads + 4 * j
-            if ints[kinds + j]:  # a shape other than the trapezoid (flctool.spec.shapes)
+            if ints[kinds + j]:  # a shape other than the trapezoid (flctool.behaviour.shapes)
                 mu = _shaped(ints[kinds + j], floats[q], floats[q + 1], floats[q + 2],
                              floats[q + 3], s)
             else:
@@ -888,7 +888,7 @@ class Layout(NamedTuple):
     # N, S, max L_i, M if the grid is kept (else 0), offsets (N + 1,): input i's sets are
     # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
     # last input fastest; kinds (S,): each set's shape code (0 the trapezoid, whose quad
-    # holds its corners; else its parameters, flctool.spec.shapes); grid (M, N): each
+    # holds its corners; else its parameters, flctool.behaviour.shapes); grid (M, N): each
     # rule's rows of quads, if walks_every_rule
     ints: IntArray
     dense: bool  # whether batched inference walks every rule (walks_every_rule)

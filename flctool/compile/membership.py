@@ -20,7 +20,7 @@ loop, where numpy's per-call overhead would cost more than the arithmetic. Both 
 operations in the same order, so they give the same bits (a test checks it over many random
 sets and values).
 
-The other shapes (:mod:`flctool.spec.shapes`: Gaussian, bell, sigmoids, S, Z, Pi) are coded
+The other shapes (:mod:`flctool.behaviour.shapes`: Gaussian, bell, sigmoids, S, Z, Pi) are coded
 once too, in :func:`shape_membership` (plain Python floats and ``math.exp`` / ``**``, which are
 the C library's ``exp`` and ``pow``, as the compiled kernels', the C export's and fuzzylite's
 are: numpy's own ``exp`` differs from them in the last bit of a few percent of values, so
@@ -79,7 +79,7 @@ def trapezoid(x: NDArray[Any], quads: NDArray[Any]) -> NDArray[Any]:
 def memberships(x: NDArray[Any], rows: NDArray[Any], kinds: Sequence[int] | None
                 ) -> NDArray[Any]:
     """:func:`trapezoid` for sets of any shape: ``rows (L, 4)`` are trapezoid corners or a
-    shape's parameters (padded with 0), ``kinds`` their codes (:data:`flctool.spec.shapes.
+    shape's parameters (padded with 0), ``kinds`` their codes (:data:`flctool.behaviour.shapes.
     CODES`; None: all trapezoids). Shapes other than the trapezoid are computed in float64
     by :func:`shape_membership`, value by value, and then cast to the dtype of ``x``."""
     import numpy as np
@@ -145,7 +145,7 @@ def _gauss(x: float, mean: float, sigma: float) -> float:
 
 def shape_membership(kind: int, p0: float, p1: float, p2: float, p3: float, x: float) -> float:
     """The membership of ``x`` in the set of shape code ``kind`` (1-9, the shapes of
-    :mod:`flctool.spec.shapes` in order) with parameters ``p0..p3`` (the formulas above)."""
+    :mod:`flctool.behaviour.shapes` in order) with parameters ``p0..p3`` (the formulas above)."""
     if kind == 1:
         return _gauss(x, p0, p1)
     if kind == 2:

@@ -2,7 +2,7 @@
 
 Used by :func:`flctool.compile.compile_behaviour` (which makes arrays of it) and by the
 plain-Python path of ``flctool infer`` (which must not load numpy). Rule order itself is coded
-once, in :mod:`flctool.spec.rule_order`; its two functions are named here too, for the
+once, in :mod:`flctool.behaviour.rule_order`; its two functions are named here too, for the
 compiled side.
 """
 
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import math
 
-from flctool.spec.models import Behaviour
-from flctool.spec.rule_order import rule_grid, rule_index
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.rule_order import rule_grid, rule_index
 
 __all__ = ["rule_consequents", "rule_grid", "rule_index"]
 

@@ -15,11 +15,11 @@ import math
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.shapes import set_row
 from flctool.compile.defuzzify import centre_of_area
 from flctool.compile.membership import firing_sets
 from flctool.errors import InferenceError
-from flctool.spec.models import Behaviour
-from flctool.spec.shapes import set_row
 
 if TYPE_CHECKING:
     from flctool.compile.controller import Controller

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Protocol
 
+from flctool.behaviour.located import located
+from flctool.behaviour.models import Behaviour
 from flctool.errors import EnvError
 from flctool.lazy import lazy_attributes
 from flctool.plugins import blamed, registry
 from flctool.registry import Registry
-from flctool.spec.located import located
-from flctool.spec.models import Behaviour
 
 if TYPE_CHECKING:
     from flctool.envs.base import BatchEnv, SingleEnv, Step

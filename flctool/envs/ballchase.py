@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import math
 
+from flctool.behaviour.environment import BALLCHASE_OBSERVATIONS, BallchaseSimConfig
+from flctool.behaviour.models import Behaviour
 from flctool.envs.pitch import PitchSim
 from flctool.envs.pitch_world import OutcomeRule, Test, World
 from flctool.errors import EnvError, Problem, SpecError
-from flctool.spec.environment import BALLCHASE_OBSERVATIONS, BallchaseSimConfig
-from flctool.spec.models import Behaviour
 
 OBSERVATIONS = BALLCHASE_OBSERVATIONS
 _RAD = math.pi / 180.0

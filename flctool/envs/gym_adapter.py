@@ -3,7 +3,7 @@ a Discrete or one-component Box action space, as a :class:`~flctool.envs.base.Ba
 
 * Observations: each behaviour input reads one component of the observation vector, by the
   index declared in ``environment.observations`` (default: the inputs in order read 0, 1, ...),
-  or a feature computed from it (:class:`~flctool.spec.environment.ObservationFeature`: an
+  or a feature computed from it (:class:`~flctool.behaviour.environment.ObservationFeature`: an
   angle from its cosine and sine, a difference, abs, scale and offset).
 * Discrete actions: ``environment.actions`` maps every command to an action; the crisp output
   ``a`` (eq. 3) executes the action of the command whose singleton is nearest ``a``.
@@ -28,11 +28,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.environment import GymnasiumConfig, ObservationFeature
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.errors import EnvError, MissingDependencyError, Problem, SpecError
 from flctool.registry import did_you_mean
-from flctool.spec.environment import GymnasiumConfig, ObservationFeature
-from flctool.spec.models import Behaviour
 
 
 def import_gymnasium() -> Any:

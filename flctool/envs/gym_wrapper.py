@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import FloatArray
 from flctool.envs.pitch import PitchSim
 from flctool.errors import EnvError, MissingDependencyError
-from flctool.spec.models import Behaviour
 
 try:
     import gymnasium as gym
@@ -48,7 +48,7 @@ class PitchGymEnv(gym.Env[FloatArray, Any]):
                  normalise: bool = False) -> None:
         super().__init__()
         if not isinstance(behaviour, Behaviour):
-            from flctool.spec.load import load_behaviour
+            from flctool.behaviour.load import load_behaviour
 
             behaviour = load_behaviour(behaviour)
         from flctool.envs import make_env

@@ -44,6 +44,8 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.environment import PITCH_CHANNELS, Motion, MotionNoise, PitchConfig
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.envs.pitch_dynamics import (
     ARRAYS,
@@ -64,8 +66,6 @@ from flctool.envs.pitch_dynamics import (
 )
 from flctool.envs.pitch_world import OutcomeRule, World, world_from_config
 from flctool.errors import EnvError, SpecError
-from flctool.spec.environment import PITCH_CHANNELS, Motion, MotionNoise, PitchConfig
-from flctool.spec.models import Behaviour
 
 __all__ = ["OutcomeRule", "PitchSim", "World", "world_from_config"]
 

@@ -17,12 +17,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flctool.behaviour.environment import PitchConfig
+from flctool.behaviour.models import Behaviour
 from flctool.compile import Controller, compile_behaviour
 from flctool.envs.base import FloatArray
 from flctool.envs.pitch import Drive, _Drive
 from flctool.errors import Problem, SpecError
-from flctool.spec.environment import PitchConfig
-from flctool.spec.models import Behaviour
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ class ComposedDrive:
 def composed_drive(behaviour: Behaviour, config: PitchConfig, channels: tuple[str, ...],
                    ) -> tuple[Drive, tuple[str, ...]]:
     """The drive of a composition, and the channels its parts read beyond the arbiter's."""
-    from flctool.spec.load import behaviour_from_data
+    from flctool.behaviour.load import behaviour_from_data
 
     problems: list[Problem] = []
     read = list(channels)

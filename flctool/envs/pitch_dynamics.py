@@ -19,9 +19,9 @@ from typing import Any, Generic, TypeVar
 
 import numpy as np
 
+from flctool.behaviour.environment import RELATIVE_CHANNELS
 from flctool.envs.base import BoolArray, FloatArray
 from flctool.envs.pitch_world import Derived, Test, World
-from flctool.spec.environment import RELATIVE_CHANNELS
 
 _RAD = math.pi / 180.0
 _DEG = 180.0 / math.pi

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from flctool.spec.environment import PitchConfig
-from flctool.spec.pitch_vocabulary import BallVelocity, Condition
+from flctool.behaviour.environment import PitchConfig
+from flctool.behaviour.pitch_vocabulary import BallVelocity, Condition
 
 _RAD = math.pi / 180.0
 

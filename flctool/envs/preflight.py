@@ -1,12 +1,12 @@
 """Everything ``flctool validate`` checks in a behaviour file, before any run.
 
-Loading checks the file itself (:func:`flctool.spec.load_behaviour`). The environment adapter
+Loading checks the file itself (:func:`flctool.behaviour.load_behaviour`). The environment adapter
 checks the rest when it is built (a Gymnasium id that does not exist, an observation index
 past the space, a singleton outside the action space, a command without an action), so it is
 built here too, whenever building it has no effect outside this process and checks something
 loading did not. A robot link is not built: connecting would talk to a robot; its checks run
 when ``learn`` connects. A ``ros2`` section's topics, types and fields are checked by loading,
-against the message definitions (flctool.spec.ros2_messages); building it would join the
+against the message definitions (flctool.behaviour.ros2_messages); building it would join the
 graph. The simulators are not built either: everything building them checks is their
 section's ``fit_problems``, which loading already ran, and building them would only cost the
 import of numpy and the simulator (most of ``validate``'s time).
@@ -17,10 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from flctool.behaviour import Behaviour, load_behaviour
+from flctool.behaviour.checks import find_warnings
+from flctool.behaviour.located import locate
 from flctool.errors import MissingDependencyError, Problem
-from flctool.spec import Behaviour, load_behaviour
-from flctool.spec.checks import find_warnings
-from flctool.spec.located import locate
 
 #: Adapters whose checks need the world outside the process (a robot on the network).
 _NOT_BUILT = {"robot-link": "the robot-link adapter's checks run when learn connects to the "

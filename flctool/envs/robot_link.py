@@ -49,6 +49,8 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.environment import RobotLinkConfig
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.envs.robot_protocol import (
     FEATURES,
@@ -69,8 +71,6 @@ from flctool.envs.robot_protocol import (
 )
 from flctool.errors import EnvError, FlcError, LinkError, Problem, SpecError
 from flctool.registry import did_you_mean
-from flctool.spec.environment import RobotLinkConfig
-from flctool.spec.models import Behaviour
 
 T = TypeVar("T")
 _STOP_WAIT = 1.0  # s at most to hand a best-effort stop to a dying link

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv
 from flctool.envs.robot_protocol import (
     FEATURES,
@@ -51,7 +52,6 @@ from flctool.envs.robot_protocol import (
     printable,
 )
 from flctool.errors import EnvError, FlcError
-from flctool.spec.models import Behaviour
 
 _POLL = 0.1  # s; how often blocking waits look whether the server is shutting down
 #: Connections whose handshake is still awaited; a new one beyond this drops the oldest.

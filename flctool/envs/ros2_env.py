@@ -26,13 +26,13 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.ros2 import Ros2Config
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.envs.pitch import timed_fitness
 from flctool.errors import EnvError, FlcError, LinkError, SpecError
 from flctool.ros2.fields import CommandWriter, input_reader, message_class, outcome, value_problem
 from flctool.ros2.graph import Inbox, RosGraph
-from flctool.spec.models import Behaviour
-from flctool.spec.ros2 import Ros2Config
 
 T = TypeVar("T")
 
@@ -342,6 +342,6 @@ class Ros2Env(BatchEnv):
 
 
 def _reward_source(topic: str, type_name: str, field: str | None) -> Any:
-    from flctool.spec.ros2 import InputSource
+    from flctool.behaviour.ros2 import InputSource
 
     return InputSource(topic=topic, type=type_name, field=field)

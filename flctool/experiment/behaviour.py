@@ -1,6 +1,6 @@
 """The behaviour an experiment compares its learners on.
 
-``learning:`` is one model per learner (:mod:`flctool.spec.learning`), so a behaviour file on
+``learning:`` is one model per learner (:mod:`flctool.behaviour.learning`), so a behaviour file on
 its own may carry only its learner's keys. An experiment runs one file with several learners,
 so there its ``learning:`` may also carry the keys of every learner it compares (say
 ``exploration`` for the fuzzy_q runs and ``pitt_crossover`` for the pitt runs), and each run's
@@ -17,20 +17,20 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from flctool.errors import Problem, SpecError
-from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data
-from flctool.spec.dump import data_to_yaml
-from flctool.spec.learning import (
+from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data
+from flctool.behaviour.dump import data_to_yaml
+from flctool.behaviour.learning import (
     DEFAULT_LEARNER,
     EARLIER_RECORD_KEYS,
     keep_keys_read_by,
     learners_text,
     readers_of,
 )
-from flctool.spec.load import read_behaviour_text
-from flctool.spec.located import source_of
-from flctool.spec.overrides import Override, Overrides, apply_overrides, as_overrides
-from flctool.spec.yaml_source import SourceMap, read_yaml
+from flctool.behaviour.load import read_behaviour_text
+from flctool.behaviour.located import source_of
+from flctool.behaviour.overrides import Override, Overrides, apply_overrides, as_overrides
+from flctool.behaviour.yaml_source import SourceMap, read_yaml
+from flctool.errors import Problem, SpecError
 
 #: Keys the experiment decides for each run.
 DECIDED_KEYS = {("learning", "learner"): "--learners", ("learning", "seed"): "--seeds"}
@@ -79,7 +79,7 @@ class ExperimentBehaviour:
 def read_experiment_behaviour(file: str | Path, learners: Sequence[str],
                               overrides: Overrides | None = None) -> ExperimentBehaviour:
     """Read the behaviour file ``file`` for an experiment comparing ``learners``, with
-    ``overrides`` applied (as :func:`flctool.spec.overrides.resolve_behaviour` reads them).
+    ``overrides`` applied (as :func:`flctool.behaviour.overrides.resolve_behaviour` reads them).
     :class:`SpecError` lists every problem, each placed in the file or at its override."""
     data, source = read_yaml(read_behaviour_text(file), str(file))
     return experiment_behaviour(data, source, learners, overrides)

@@ -31,6 +31,8 @@ from pathlib import Path
 from typing import Any
 
 from flctool.atomic import remove_stale_temporaries, write_text_atomic
+from flctool.behaviour import Behaviour, load_behaviour
+from flctool.behaviour.overrides import resolve_behaviour
 from flctool.dirlock import DirectoryLock
 from flctool.errors import RunDirError
 from flctool.evaluation import evaluate_behaviour
@@ -49,8 +51,6 @@ from flctool.runs import (
     create_run,
     open_run,
 )
-from flctool.spec import Behaviour, load_behaviour
-from flctool.spec.overrides import resolve_behaviour
 from flctool.version import __version__
 
 EXPERIMENT_FORMAT = 1

@@ -17,12 +17,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+from flctool.behaviour import Behaviour, require_deployable
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, ExportOptions, Importer
 from flctool.export.source import load_source
 from flctool.plugins import export_suffixes, registry
 from flctool.registry import Registry
-from flctool.spec import Behaviour, require_deployable
 
 #: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.exporters`` entries).
 EXPORTERS: Registry[type[Exporter]] = registry("exporter", "export format")

@@ -18,10 +18,10 @@ from pathlib import Path
 from typing import ClassVar
 
 from flctool.atomic import regular_target, replace_all, write_text_atomic
+from flctool.behaviour import Behaviour
+from flctool.behaviour.bounded import no_collection
 from flctool.errors import ExportError
 from flctool.inputs import read_input
-from flctool.spec import Behaviour
-from flctool.spec.bounded import no_collection
 from flctool.version import __version__
 
 
@@ -108,7 +108,7 @@ class Importer(ABC):
                               hint="is it really a controller? split it or shorten it")
         # a UTF-8 byte-order mark (Windows editors write one) is not part of the text
         text = text.removeprefix("\ufeff")
-        with no_collection():  # see flctool.spec.bounded
+        with no_collection():  # see flctool.behaviour.bounded
             return self.parse_all(text, file)
 
     @abstractmethod

@@ -22,12 +22,12 @@ import json
 from pathlib import Path
 from typing import Any
 
+from flctool.behaviour import Behaviour, require_deployable
+from flctool.behaviour.base import identifier
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, ExportOptions, write_files
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
-from flctool.spec import Behaviour, require_deployable
-from flctool.spec.base import identifier
 from flctool.version import __version__
 
 #: The wiring file's format version.

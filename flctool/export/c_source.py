@@ -15,13 +15,13 @@ from pathlib import Path
 
 import numpy as np
 
+from flctool.behaviour import Behaviour, require_deployable
+from flctool.behaviour.base import identifier
+from flctool.behaviour.checks import uncovered_gap
+from flctool.behaviour.shapes import is_trapezoid, set_row, trapezoids
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, header_lines, number
 from flctool.export.float_error import check_float_error
-from flctool.spec import Behaviour, require_deployable
-from flctool.spec.base import identifier
-from flctool.spec.checks import uncovered_gap
-from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
 _PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 FLOAT_MAX = float(np.finfo(np.float32).max)
@@ -240,7 +240,7 @@ def _shaped_sets(behaviour: Behaviour) -> tuple[str, str, bool] | None:
 
 
 def _shape_functions(prefix: str, real: str) -> list[str]:
-    """The shapes of flctool.spec.shapes, coded as flctool/compile/membership.py codes them
+    """The shapes of flctool.behaviour.shapes, coded as flctool/compile/membership.py codes them
     (``exp`` and ``pow`` are libm's, as Python's and numba's are)."""
     return f"""\
 static {real} {prefix}sigmoid({real} x, {real} c, {real} a)

@@ -22,13 +22,13 @@ from pathlib import Path
 from typing import Any
 
 from flctool import __version__
+from flctool.behaviour import Behaviour, require_deployable
+from flctool.behaviour.base import identifier
+from flctool.behaviour.environment import PitchConfig
 from flctool.errors import ExportError
 from flctool.export.base import ExportOptions
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
-from flctool.spec import Behaviour, require_deployable
-from flctool.spec.base import identifier
-from flctool.spec.environment import PitchConfig
 
 #: The composed wiring file's format version.
 COMPOSED_WIRING_VERSION = 1
@@ -36,7 +36,7 @@ COMPOSED_WIRING_VERSION = 1
 
 def parts_of(behaviour: Behaviour) -> dict[str, Behaviour]:
     """The composition's parts by command name, validated (they are inlined when loaded)."""
-    from flctool.spec.load import behaviour_from_data
+    from flctool.behaviour.load import behaviour_from_data
 
     environment = behaviour.environment
     assert isinstance(environment, PitchConfig)

@@ -17,6 +17,10 @@ import math
 import re
 from typing import NamedTuple
 
+from flctool.behaviour import Behaviour, require_deployable
+from flctool.behaviour.base import identifier
+from flctool.behaviour.models import FuzzySet
+from flctool.behaviour.shapes import ShapedSet
 from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import (
@@ -41,10 +45,6 @@ from flctool.export.imported import (
     unsupported,
     zero_order_constant,
 )
-from flctool.spec import Behaviour, require_deployable
-from flctool.spec.base import identifier
-from flctool.spec.models import FuzzySet
-from flctool.spec.shapes import ShapedSet
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.

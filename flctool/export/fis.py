@@ -15,6 +15,8 @@ from __future__ import annotations
 import itertools
 import re
 
+from flctool.behaviour import Behaviour, require_deployable
+from flctool.behaviour.shapes import ShapedSet, set_row
 from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
@@ -33,8 +35,6 @@ from flctool.export.imported import (
     zero_order_constant,
 )
 from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, centroid, mamdani_report
-from flctool.spec import Behaviour, require_deployable
-from flctool.spec.shapes import ShapedSet, set_row
 
 
 def _vector(values: list[float]) -> str:

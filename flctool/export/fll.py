@@ -17,6 +17,10 @@ import math
 import re
 from dataclasses import dataclass, field
 
+from flctool.behaviour import Behaviour, require_deployable
+from flctool.behaviour.base import identifier
+from flctool.behaviour.models import FuzzySet
+from flctool.behaviour.shapes import ShapedSet, set_row
 from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, header_lines, number
@@ -39,10 +43,6 @@ from flctool.export.mamdani import (
     MamdaniOutput,
     mamdani_report,
 )
-from flctool.spec import Behaviour, require_deployable
-from flctool.spec.base import identifier
-from flctool.spec.models import FuzzySet
-from flctool.spec.shapes import ShapedSet, set_row
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.
 RESERVED = frozenset({"if", "is", "then", "and", "or", "with", "not", "any", "extremely",

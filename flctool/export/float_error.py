@@ -13,12 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from flctool.behaviour import Behaviour
+from flctool.behaviour.shapes import trapezoids
 from flctool.compile import compile_behaviour
 from flctool.compile.defuzzify import centre_of_area
 from flctool.compile.membership import trapezoid
 from flctool.errors import ExportError
-from flctool.spec import Behaviour
-from flctool.spec.shapes import trapezoids
 
 #: The float export's documented bound, relative to max(1, largest |command|).
 FLOAT_BOUND = 1e-5

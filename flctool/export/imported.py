@@ -16,11 +16,11 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from flctool.behaviour import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
+from flctool.behaviour.shapes import ShapedSet, shape_problem, shaped
+from flctool.behaviour.yaml_source import SourceMap
 from flctool.errors import ExportError, PathPart
 from flctool.export import shapes
-from flctool.spec import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
-from flctool.spec.shapes import ShapedSet, shape_problem, shaped
-from flctool.spec.yaml_source import SourceMap
 
 Quad = tuple[float, float, float, float]
 
@@ -57,7 +57,7 @@ def span(xs: Iterable[float]) -> tuple[float, float]:
 class ImportedSet:
     """A set as read; an infinite shoulder (pa = pb = -inf, pc = pd = inf) reaches the end of
     the input's range, where :func:`build_behaviour` puts it. A set of another shape
-    (:mod:`flctool.spec.shapes`) has ``shape`` (its name and parameters in flctool's order)
+    (:mod:`flctool.behaviour.shapes`) has ``shape`` (its name and parameters in flctool's order)
     and no meaningful ``quad``."""
 
     name: str

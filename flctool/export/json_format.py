@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import json
 
+from flctool.behaviour import Behaviour, behaviour_to_data, require_deployable
 from flctool.export.base import Exporter
-from flctool.spec import Behaviour, behaviour_to_data, require_deployable
 
 
 class JsonExporter(Exporter):

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flctool.behaviour import Behaviour
+from flctool.behaviour.shapes import set_row
 from flctool.compile import compile_behaviour
 from flctool.compile.membership import memberships
-from flctool.spec import Behaviour
-from flctool.spec.shapes import set_row
 
 Quad = tuple[float, float, float, float]
 #: How many random states the deviation is measured on (besides every range's ends, every
@@ -44,7 +44,7 @@ def centroid(quad: Quad) -> float:
 @dataclass(frozen=True)
 class MamdaniOutput:
     """A Mamdani output as read: each command's set (shape code and row, as
-    :func:`flctool.spec.shapes.set_row` gives them), the output range, the centroid's
+    :func:`flctool.behaviour.shapes.set_row` gives them), the output range, the centroid's
     resolution, the implication and the aggregation."""
 
     sets: Mapping[str, tuple[int, Quad]]

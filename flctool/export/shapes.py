@@ -1,5 +1,5 @@
 """How fuzzylite (FLL, and FCL in its dialect) and MATLAB / Octave (FIS) write the shapes of
-:mod:`flctool.spec.shapes`: their term names and parameter orders, both ways.
+:mod:`flctool.behaviour.shapes`: their term names and parameter orders, both ways.
 
 flctool writes a shape's parameters in scikit-fuzzy's order; fuzzylite and MATLAB each have
 their own. Each entry here is ``flctool shape -> (their name, order)``, where ``order[k]`` is
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from flctool.spec.shapes import SHAPES
+from flctool.behaviour.shapes import SHAPES
 
 #: fuzzylite 6 / pyfuzzylite terms: Gaussian(mean, sd), GaussianProduct(meanA, sdA, meanB,
 #: sdB), Bell(center, width, slope), Sigmoid(inflection, slope), SigmoidDifference(left,

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from flctool.behaviour import Behaviour, load_behaviour
 from flctool.errors import ExportError
 from flctool.inputs import no_such_file
-from flctool.spec import Behaviour, load_behaviour
 
 
 def load_source(path: str | Path, generation: int | None = None,

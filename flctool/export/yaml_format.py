@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from flctool.behaviour import Behaviour, behaviour_to_yaml, require_deployable
 from flctool.export.base import Exporter, header_lines
-from flctool.spec import Behaviour, behaviour_to_yaml, require_deployable
 
 
 class YamlExporter(Exporter):

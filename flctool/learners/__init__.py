@@ -7,6 +7,8 @@ the adapter protocol.
 
 from __future__ import annotations
 
+from flctool.behaviour.located import located
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv
 from flctool.learners.base import GenerationResult, Learner, train
 from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback, StopAtFitness
@@ -14,8 +16,6 @@ from flctool.learners.metrics import GenerationMetrics
 from flctool.plugins import blamed, registry
 from flctool.registry import Registry
 from flctool.rollout import TRAIN_SEED_LOW
-from flctool.spec.located import located
-from flctool.spec.models import Behaviour
 
 #: Built from :mod:`flctool.plugins` (the built-ins and installed ``flctool.learners`` entries).
 LEARNERS: Registry[type[Learner]] = registry("learner", "learner")

@@ -26,6 +26,9 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.learning import LearningConfig
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.rule_order import rule_index
 from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError, Problem, SpecError
@@ -39,9 +42,6 @@ from flctool.learners.selection import Candidate, ModelSelection
 from flctool.learners.trial import SparseRules
 from flctool.rollout import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
 from flctool.sets.codec import SetCodec
-from flctool.spec.learning import LearningConfig
-from flctool.spec.models import Behaviour
-from flctool.spec.rule_order import rule_index
 
 
 class RuleStrengths(Protocol):

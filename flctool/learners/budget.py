@@ -15,8 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
+from flctool.behaviour.learning import StopConfig
 from flctool.learners.callbacks import RunCallback
-from flctool.spec.learning import StopConfig
 
 if TYPE_CHECKING:
     from flctool.learners.base import GenerationResult, Learner
@@ -118,7 +118,7 @@ def describe_budget(learner: Learner) -> str:
     training episodes (generations x population x trials, from the file or the defaults, the
     paper's protocol), for how many rules and commands, and what selection, confirmation
     and the comparison with baselines add."""
-    from flctool.spec.located import source_of
+    from flctool.behaviour.located import source_of
 
     config = learner.config
     source_map = source_of(learner.behaviour)

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.learning import TargetConfig
 from flctool.learners.budget import Usage
 from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import run_trial
@@ -38,7 +39,6 @@ from flctool.rollout import (
     mean_interval,
     wilson_interval,
 )
-from flctool.spec.learning import TargetConfig
 
 if TYPE_CHECKING:
     from flctool.learners.base import FloatArray, GenerationResult, IntArray, Learner

@@ -29,6 +29,8 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.learning import FuzzyQConfig, QConfig
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.base import GenerationResult, Learner
@@ -36,8 +38,6 @@ from flctool.learners.checkpoint import damaged
 from flctool.learners.ga import GeneticAlgorithm
 from flctool.learners.set_genes import SetOperators, initial_set_genes
 from flctool.learners.trial import add_in_order, run_trial
-from flctool.spec.learning import FuzzyQConfig, QConfig
-from flctool.spec.models import Behaviour
 
 FloatArray = NDArray[np.float64]
 

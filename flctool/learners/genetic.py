@@ -41,6 +41,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from flctool.behaviour.learning import GeneticConfig, HybridConfig, PittConfig, QConfig
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.base import GenerationResult, IntArray, Learner
@@ -59,8 +61,6 @@ from flctool.learners.ga import (
     uniform_mutation,
 )
 from flctool.learners.set_genes import SetOperators, initial_set_genes
-from flctool.spec.learning import GeneticConfig, HybridConfig, PittConfig, QConfig
-from flctool.spec.models import Behaviour
 
 
 def pitt_operators(learner: GeneticLearner) -> tuple[Crossover, Mutation]:

@@ -42,12 +42,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from flctool.behaviour.learning import SelectionConfig
 from flctool.envs.base import BatchEnv
 from flctool.learners.budget import Usage
 from flctool.learners.callbacks import RunCallback
 from flctool.learners.trial import SparseRules, Trial, run_trial
 from flctool.rollout import Estimate, clip_estimate, distinct_run_seeds, mean_interval
-from flctool.spec.learning import SelectionConfig
 
 if TYPE_CHECKING:
     from flctool.learners.base import GenerationResult, Learner

@@ -4,7 +4,7 @@ simulator robot, the deployment node and its watchdog, and bags (docs/ros2.md).
 Everything here needs the optional extra ``flctool[ros2]`` (rclpy and the message packages from
 PyPI's ROS 2 wheels; rosbags and mcap for bags), imported only when used: :func:`import_rclpy`
 turns a missing package into an install hint. The behaviour-file side
-(:mod:`flctool.spec.ros2`) needs none of it.
+(:mod:`flctool.behaviour.ros2`) needs none of it.
 """
 
 from __future__ import annotations

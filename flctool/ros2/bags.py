@@ -19,10 +19,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from flctool.behaviour.ros2 import Qos, Ros2Config
+from flctool.behaviour.ros2_messages import MESSAGES, normal_type, parse_path, ros_type
 from flctool.errors import FlcError, MissingDependencyError
 from flctool.ros2.fields import input_reader, nearest_command, pose_of, wrap_degrees
-from flctool.spec.ros2 import Qos, Ros2Config
-from flctool.spec.ros2_messages import MESSAGES, normal_type, parse_path, ros_type
 
 #: The recorder's node name: sessions do not take a recorder for the robot (ros2_env).
 RECORDER_NODE = "flctool_record"

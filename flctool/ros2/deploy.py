@@ -24,9 +24,9 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from flctool.behaviour.ros2 import InputSource, Ros2Config
 from flctool.ros2.fields import STATUSES, CommandWriter, input_reader, message_class, value_problem
 from flctool.ros2.graph import Inbox, RosGraph
-from flctool.spec.ros2 import InputSource, Ros2Config
 
 
 class Deployment:

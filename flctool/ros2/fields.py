@@ -1,5 +1,5 @@
 """Numbers out of ROS 2 messages and commands into them, by the field paths of
-:mod:`flctool.spec.ros2_messages`.
+:mod:`flctool.behaviour.ros2_messages`.
 
 The readers and writers work on any object with the message's attributes -- rclpy messages, and
 the messages rosbags deserializes from a bag -- so replay and fit-sim read bags with the same
@@ -14,9 +14,9 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from flctool.behaviour.ros2 import CommandTopic, InputSource, OutcomeRule, Qos
+from flctool.behaviour.ros2_messages import MESSAGES, POSES, SERVICES, FieldPath, parse_path
 from flctool.errors import MissingDependencyError
-from flctool.spec.ros2 import CommandTopic, InputSource, OutcomeRule, Qos
-from flctool.spec.ros2_messages import MESSAGES, POSES, SERVICES, FieldPath, parse_path
 
 #: The status texts of an episode status topic.
 STATUSES = ("running", "success", "failure", "timeout")

@@ -19,9 +19,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from flctool.behaviour.ros2 import Qos
 from flctool.ros2 import import_rclpy
 from flctool.ros2.fields import message_class, qos_profile
-from flctool.spec.ros2 import Qos
 
 #: Graphs not closed yet: closed at interpreter exit, since an executor thread still spinning
 #: then makes the C++ runtime abort the process (and its exit code is lost).

@@ -29,12 +29,12 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.ros2 import Qos
 from flctool.envs.base import BatchEnv
 from flctool.errors import EnvError
 from flctool.ros2.fields import message_class
 from flctool.ros2.graph import RosGraph
-from flctool.spec.models import Behaviour
-from flctool.spec.ros2 import Qos
 
 #: s the robot waits, before answering a reset, for a subscriber on each topic it publishes
 #: (a reply published before the client's subscription is matched would be lost).

@@ -3,7 +3,7 @@
 A *set genome* is a flat vector of genes, each in [-1, 1], for the learned inputs in file
 order; the zero genome is the file's sets. The codec knows sets, not learners: a learner
 breeds genomes (:mod:`flctool.learners.set_genes`) and asks the codec for the sets they
-stand for. Decoding gives an ordinary :class:`~flctool.spec.models.Behaviour`, validated
+stand for. Decoding gives an ordinary :class:`~flctool.behaviour.models.Behaviour`, validated
 exactly as a hand-written file is, so compiling, exporting and the reference engines'
 checks need nothing new.
 
@@ -36,10 +36,10 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import SupportsFloat
 
+from flctool.behaviour.models import Behaviour, InputVariable
+from flctool.behaviour.set_learning import InputSetting, Quad, SetLearningConfig, coverage
+from flctool.behaviour.shapes import trapezoids
 from flctool.errors import LearnError
-from flctool.spec.models import Behaviour, InputVariable
-from flctool.spec.set_learning import InputSetting, Quad, SetLearningConfig, coverage
-from flctool.spec.shapes import trapezoids
 
 #: Halvings of a lateral genome's shifts before the file's sets are kept.
 MAX_HALVINGS = 40
@@ -239,8 +239,8 @@ class SetCodec:
 def with_sets(behaviour: Behaviour, sets: dict[str, dict[str, Quad]]) -> Behaviour:
     """``behaviour`` with the given inputs' sets replaced, through the validation every
     behaviour file passes (names, order and ranges are kept)."""
-    from flctool.spec.dump import behaviour_to_data
-    from flctool.spec.load import behaviour_from_data
+    from flctool.behaviour.dump import behaviour_to_data
+    from flctool.behaviour.load import behaviour_from_data
 
     data = behaviour_to_data(behaviour)
     for name, quads in sets.items():

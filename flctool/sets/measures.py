@@ -20,9 +20,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from flctool.spec.models import Behaviour, FuzzySet
-from flctool.spec.set_learning import Quad, coverage, membership
-from flctool.spec.shapes import is_trapezoid, trapezoids
+from flctool.behaviour.models import Behaviour, FuzzySet
+from flctool.behaviour.set_learning import Quad, coverage, membership
+from flctool.behaviour.shapes import is_trapezoid, trapezoids
 
 
 def crossing_height(left: Sequence[float], right: Sequence[float]) -> float:

@@ -192,7 +192,7 @@ def test_start_up_loads_no_command_and_no_heavy_module(options: list[str]) -> No
         "try:\n"
         "    run()\n"
         "finally:\n"
-        "    loaded = [m for m in ('numpy', 'pydantic', 'rich', 'yaml', 'flctool.spec')\n"
+        "    loaded = [m for m in ('numpy', 'pydantic', 'rich', 'yaml', 'flctool.behaviour')\n"
         "              if m in sys.modules]\n"
         "    loaded += [m for m in sys.modules if m.startswith('flctool.cli.')\n"
         "               and m != 'flctool.cli.app']\n"

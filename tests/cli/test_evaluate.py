@@ -10,9 +10,9 @@ import numpy as np
 from typer.testing import CliRunner
 
 from flctool import load_behaviour, with_rules
+from flctool.behaviour import behaviour_to_yaml
 from flctool.cli import app
 from flctool.rollout import evaluation_seeds
-from flctool.spec import behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS
 

@@ -75,8 +75,8 @@ def test_another_plan_in_the_same_directory_is_refused(tmp_path: Path) -> None:
 def test_one_file_carries_the_settings_of_every_compared_learner(tmp_path: Path) -> None:
     """exploration for the fuzzy_q runs, pitt_crossover for the pitt runs, and a --set of
     q for the runs that read q: each run's behaviour.yaml holds its learner's keys only."""
-    from flctool.spec import load_behaviour
-    from flctool.spec.learning import FuzzyQConfig, HybridConfig, PittConfig, learner_keys
+    from flctool.behaviour import load_behaviour
+    from flctool.behaviour.learning import FuzzyQConfig, HybridConfig, PittConfig, learner_keys
 
     from ..experiment.helpers import write_mixed
 

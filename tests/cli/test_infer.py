@@ -11,13 +11,13 @@ import pytest
 from typer.testing import CliRunner
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import Behaviour
 from flctool.cli import app
 from flctool.cli import infer as infer_module
 from flctool.cli.infer import outputs_in_python
 from flctool.compile.rules import rule_consequents
 from flctool.compile.sparse import SparseRules
 from flctool.errors import InferenceError
-from flctool.spec import Behaviour
 
 from ..conftest import BEHAVIOURS
 from ..export.controllers import random_behaviour, random_states

@@ -18,8 +18,8 @@ import pytest
 from typer.testing import CliRunner
 
 from flctool import load_behaviour
+from flctool.behaviour import behaviour_from_data, behaviour_to_data, behaviour_to_yaml
 from flctool.cli import app
-from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS, ROOT, restore_sigint
 

@@ -123,7 +123,7 @@ def test_show_prints_sets_counts_and_rule_grid() -> None:
 
 def test_show_lists_the_rules_of_other_behaviours(tmp_path: Path) -> None:
     from flctool import with_rules
-    from flctool.spec import behaviour_to_yaml
+    from flctool.behaviour import behaviour_to_yaml
 
     cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
     learned = tmp_path / "cartpole.yaml"
@@ -231,9 +231,9 @@ def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
 
 
 def test_show_compare_lists_each_sets_movement(tmp_path: Path) -> None:
+    from flctool.behaviour.dump import behaviour_to_data, behaviour_to_yaml
+    from flctool.behaviour.load import behaviour_from_data
     from flctool.sets.codec import SetCodec
-    from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
-    from flctool.spec.load import behaviour_from_data
 
     data = behaviour_to_data(load_behaviour(BEHAVIOURS / "ballchase.yaml"))
     data["learning"]["sets"] = {"inputs": ["pan"]}

@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flctool import compile_behaviour, load_behaviour, with_rules
+from flctool.behaviour import behaviour_from_data, parse_behaviour
 from flctool.errors import InferenceError, NotDeployableError
-from flctool.spec import behaviour_from_data, parse_behaviour
 
 from .reference import random_behaviour_data, reference_output
 

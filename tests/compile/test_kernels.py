@@ -17,11 +17,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import behaviour_from_data
+from flctool.behaviour.checks import MAX_RULES
 from flctool.compile import Controller, kernels
 from flctool.compile.membership import trapezoid_scalar
 from flctool.errors import InferenceError
-from flctool.spec import behaviour_from_data
-from flctool.spec.checks import MAX_RULES
 
 from .reference import random_behaviour_data, reference_output
 

@@ -12,11 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from flctool import compile_behaviour
+from flctool.behaviour import behaviour_from_data, parse_behaviour
+from flctool.behaviour.shapes import CODES
 from flctool.compile.membership import memberships, shape_membership
 from flctool.compile.sparse import SparseRules
 from flctool.errors import SpecError
-from flctool.spec import behaviour_from_data, parse_behaviour
-from flctool.spec.shapes import CODES
 
 #: (shape, parameters in flctool's order, scikit-fuzzy's value on x)
 REFERENCE = [
@@ -135,7 +135,7 @@ def test_every_inference_path_computes_the_same_bits() -> None:
 
 
 def test_shaped_sets_read_and_write_back() -> None:
-    from flctool.spec import behaviour_to_yaml
+    from flctool.behaviour import behaviour_to_yaml
 
     behaviour = every_shape_behaviour()
     text = behaviour_to_yaml(behaviour)

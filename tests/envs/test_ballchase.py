@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour, parse_behaviour
+from flctool.behaviour.environment import DEFAULT_MOTION, DEFAULT_NOISE, BallchaseSimConfig
 from flctool.envs import check_env, make_env
 from flctool.envs.ballchase import BallchaseSim
 from flctool.errors import SpecError
 from flctool.rollout import evaluate
-from flctool.spec.environment import DEFAULT_MOTION, DEFAULT_NOISE, BallchaseSimConfig
 
 from ..conftest import BEHAVIOURS
 

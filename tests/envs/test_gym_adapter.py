@@ -10,10 +10,10 @@ import pytest
 from gymnasium.envs.classic_control.cartpole import CartPoleEnv
 
 from flctool import compile_behaviour, load_behaviour, parse_behaviour
+from flctool.behaviour.environment import ObservationFeature
 from flctool.envs import check_env, make_env
 from flctool.errors import MissingDependencyError, SpecError
 from flctool.rollout import evaluate
-from flctool.spec.environment import ObservationFeature
 
 from ..conftest import BEHAVIOURS
 

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from flctool import load_behaviour, parse_behaviour
+from flctool.behaviour import behaviour_from_data, behaviour_to_data
 from flctool.envs import ENVIRONMENTS, BatchEnv, SingleEnv, check_env, make_env
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError
 from flctool.plugins import BUILTIN
 from flctool.registry import UnknownNameError
-from flctool.spec import behaviour_from_data, behaviour_to_data
 
 from ..conftest import BEHAVIOURS, MINIMAL
 from ..ros2_support import robot_behaviour, sim_robot

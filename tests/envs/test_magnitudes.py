@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 
 from flctool import parse_behaviour
+from flctool.behaviour import behaviour_to_data, load_behaviour
+from flctool.behaviour.dump import data_to_yaml
+from flctool.behaviour.magnitudes import MAX_MAGNITUDE
 from flctool.errors import FlcError, SpecError
 from flctool.evaluation import evaluate_behaviour
-from flctool.spec import behaviour_to_data, load_behaviour
-from flctool.spec.dump import data_to_yaml
-from flctool.spec.magnitudes import MAX_MAGNITUDE
 
 from ..conftest import BEHAVIOURS
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour, parse_behaviour
+from flctool.behaviour.dump import behaviour_to_data, behaviour_to_yaml
 from flctool.envs import check_env, make_env
 from flctool.errors import SpecError
 from flctool.rollout import evaluate
-from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
 
 from ..conftest import BEHAVIOURS
 

@@ -24,9 +24,14 @@ from typing import Any
 import pytest
 from typer.testing import CliRunner
 
+from flctool.behaviour import (
+    behaviour_from_data,
+    behaviour_to_data,
+    behaviour_to_yaml,
+    load_behaviour,
+)
 from flctool.cli import app
 from flctool.envs.robot_server import RobotServer
-from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml, load_behaviour
 
 from ..conftest import BEHAVIOURS
 

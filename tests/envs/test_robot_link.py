@@ -14,13 +14,13 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
 from flctool.envs import check_env, make_env
 from flctool.envs.robot_link import RobotLinkEnv
 from flctool.envs.robot_protocol import PROTOCOL, VERSION
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError, LinkError, SpecError
 from flctool.rollout import evaluate, evaluation_seeds, trace_episode
-from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
 
 from ..conftest import BEHAVIOURS
 

@@ -13,12 +13,12 @@ import pytest
 from numpy.typing import NDArray
 
 from flctool import load_behaviour
+from flctool.behaviour import behaviour_from_data, behaviour_to_data
 from flctool.envs import make_env
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.envs.robot_protocol import PROTOCOL, VERSION
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import EnvError
-from flctool.spec import behaviour_from_data, behaviour_to_data
 
 from ..conftest import BEHAVIOURS
 

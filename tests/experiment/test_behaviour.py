@@ -8,6 +8,8 @@ import pytest
 import yaml
 
 from flctool import load_behaviour
+from flctool.behaviour import behaviour_to_data, behaviour_to_yaml
+from flctool.behaviour.overrides import Override
 from flctool.errors import RunDirError, SpecError
 from flctool.experiment import (
     ExperimentPlan,
@@ -17,8 +19,6 @@ from flctool.experiment import (
     share_behaviour,
 )
 from flctool.runs import resolve_behaviour
-from flctool.spec import behaviour_to_data, behaviour_to_yaml
-from flctool.spec.overrides import Override
 
 from ..conftest import BEHAVIOURS
 from .helpers import MIXED_LEARNING, line_of, write_mixed

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 
 from flctool import with_rules
-from flctool.spec import Behaviour, behaviour_from_data
-from flctool.spec.shapes import set_row
+from flctool.behaviour import Behaviour, behaviour_from_data
+from flctool.behaviour.shapes import set_row
 
 
 def _partition(rng: np.random.Generator, lo: float, hi: float, count: int

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour
-from flctool.spec import Behaviour
-from flctool.spec.shapes import set_row
+from flctool.behaviour import Behaviour
+from flctool.behaviour.shapes import set_row
 
 #: fuzzylite 6 compares with an absolute tolerance of 1e-6 (fuzzylite::macheps, fixed in the
 #: command line): memberships within 1e-6 of a corner take the corner's value, and rules

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from flctool import compile_behaviour, load_behaviour
-from flctool.spec import Behaviour
+from flctool.behaviour import Behaviour
 
 from ..conftest import BEHAVIOURS
 

@@ -11,12 +11,12 @@ import pytest
 
 from flctool import load_behaviour
 from flctool.atomic import replace_all
+from flctool.behaviour import parse_behaviour, require_deployable
 from flctool.errors import ExportError, NotDeployableError
 from flctool.export import EXPORTERS, IMPORTERS, ExportOptions
 from flctool.export.base import check_writable, header_lines
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
-from flctool.spec import parse_behaviour, require_deployable
 
 from ..conftest import BEHAVIOURS
 from .roundtrip import SHIPPED

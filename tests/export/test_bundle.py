@@ -14,9 +14,9 @@ import pytest
 import yaml
 
 from flctool import compile_behaviour, load_behaviour, with_rules
+from flctool.behaviour import Behaviour, behaviour_from_data
 from flctool.errors import ExportError
 from flctool.export.bundle import BundleExporter
-from flctool.spec import Behaviour, behaviour_from_data
 
 from ..conftest import BEHAVIOURS
 from .controllers import random_states

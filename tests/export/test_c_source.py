@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour, with_rules
+from flctool.behaviour import Behaviour, behaviour_from_data
 from flctool.errors import ExportError
 from flctool.export import ExportOptions
 from flctool.export.c_source import CExporter
 from flctool.export.float_error import check_float_error
-from flctool.spec import Behaviour, behaviour_from_data
 
 from .controllers import random_behaviour, random_states
 from .roundtrip import SHIPPED

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import Behaviour
 from flctool.errors import ExportError, SpecError
 from flctool.export.base import sloped_quad
 from flctool.export.fis import FisExporter, FisImporter
 from flctool.export.imported import DONT_CARE_HINT
-from flctool.spec import Behaviour
 
 from .controllers import random_behaviour, random_states
 from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, octave_outputs, reference_controller

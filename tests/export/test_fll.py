@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, load_behaviour
+from flctool.behaviour import Behaviour
 from flctool.errors import ExportError, SpecError
 from flctool.export.fll import FllExporter, FllImporter
-from flctool.spec import Behaviour
 
 from .controllers import random_behaviour, random_states
 from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, reference_controller
@@ -183,7 +183,7 @@ def test_a_duplicate_rule_names_the_other_rules_line(tmp_path: Path) -> None:
 
 def test_a_broken_rule_table_stops_at_the_line_of_the_first_rule_left_unchecked(
         tmp_path: Path) -> None:
-    from flctool.spec.checks import MAX_RULE_PROBLEMS
+    from flctool.behaviour.checks import MAX_RULE_PROBLEMS
 
     broken = "\n".join(["  rule: if x is nowhere then u is up"] * (MAX_RULE_PROBLEMS + 5))
     path = tmp_path / "broken.fll"

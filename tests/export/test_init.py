@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from flctool import load_behaviour, parse_behaviour
+from flctool.behaviour import Behaviour, behaviour_from_data
 from flctool.errors import NotDeployableError
 from flctool.export import EXPORTERS, IMPORTERS, Exporter, Importer
 from flctool.registry import UnknownNameError
-from flctool.spec import Behaviour, behaviour_from_data
 
 from .controllers import random_behaviour, random_states
 from .roundtrip import SHIPPED, assert_same_controller

@@ -7,8 +7,8 @@ import json
 import jsonschema
 
 from flctool import load_behaviour
+from flctool.behaviour import behaviour_from_data
 from flctool.export.json_format import JsonExporter
-from flctool.spec import behaviour_from_data
 
 from ..conftest import ROOT
 from .controllers import random_behaviour

@@ -12,6 +12,9 @@ import pytest
 from typer.testing import CliRunner
 
 from flctool import load_behaviour, with_rules
+from flctool.behaviour import Behaviour
+from flctool.behaviour.dump import behaviour_to_data, behaviour_to_yaml
+from flctool.behaviour.load import behaviour_from_data
 from flctool.cli import app
 from flctool.export import ExportOptions
 from flctool.export.base import sloped_quad
@@ -19,9 +22,6 @@ from flctool.export.fcl import FclExporter
 from flctool.export.fis import FisExporter
 from flctool.export.fll import FllExporter
 from flctool.sets.codec import SetCodec
-from flctool.spec import Behaviour
-from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
-from flctool.spec.load import behaviour_from_data
 
 from .controllers import random_states
 from .engines import assert_fuzzylite_agrees

@@ -12,9 +12,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from flctool.behaviour import parse_behaviour
 from flctool.compile import compile_behaviour
 from flctool.errors import FlcError, SpecError
-from flctool.spec import parse_behaviour
 
 from ..conftest import BEHAVIOURS
 

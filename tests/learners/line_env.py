@@ -13,9 +13,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool import parse_behaviour
+from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.runs import resolve_behaviour
-from flctool.spec.models import Behaviour
 
 LINE_BEHAVIOUR = """\
 flctool: 1

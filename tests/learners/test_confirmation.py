@@ -12,13 +12,13 @@ import yaml
 from typer.testing import CliRunner
 
 from flctool import load_behaviour
+from flctool.behaviour.learning import StopConfig
 from flctool.cli import app
 from flctool.errors import SpecError
 from flctool.learners import make_learner, train
 from flctool.learners.confirmation import confirmation_seeds
 from flctool.rollout import CONFIRMATION_SEED_LOW, TRAIN_SEED_LOW
 from flctool.runs import create_run, open_run, resolve_behaviour
-from flctool.spec.learning import StopConfig
 from tests.conftest import BEHAVIOURS
 from tests.learners.line_env import LineEnv, line_behaviour
 

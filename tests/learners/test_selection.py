@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from flctool import load_behaviour
+from flctool.behaviour import Behaviour
+from flctool.behaviour.learning import SelectionConfig, StopConfig
 from flctool.errors import LearnError
 from flctool.learners import Callback, GenerationMetrics, make_learner, train
 from flctool.learners.base import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
@@ -32,8 +34,6 @@ from flctool.runs import (
     open_run,
     resolve_behaviour,
 )
-from flctool.spec import Behaviour
-from flctool.spec.learning import SelectionConfig, StopConfig
 from tests.conftest import BEHAVIOURS
 from tests.learners.line_env import LineEnv, line_behaviour
 

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from flctool import load_behaviour
+from flctool.behaviour import Behaviour
 from flctool.errors import LearnError
 from flctool.learners import Callback, GenerationMetrics, make_learner, train
 from flctool.learners.set_genes import SetOperators, initial_set_genes
 from flctool.plugins import names
 from flctool.runs import BEST_FILE, create_run, open_run, resolve_behaviour
-from flctool.spec import Behaviour
 from tests.conftest import BEHAVIOURS
 
 

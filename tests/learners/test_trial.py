@@ -134,7 +134,7 @@ def test_a_nan_observation_is_an_error_as_in_the_controller() -> None:
 
 
 def test_no_rule_firing_is_an_error_not_a_division_by_zero() -> None:
-    from flctool.spec import behaviour_from_data
+    from flctool.behaviour import behaviour_from_data
 
     data = {"flctool": 1, "name": "tiny", "output": {"name": "y", "commands": {"a": 1.0}},
             "inputs": {"x": {"range": [-1e300, 1e300],

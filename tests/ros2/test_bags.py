@@ -18,10 +18,15 @@ import yaml
 from typer.testing import CliRunner
 
 from flctool import compile_behaviour
+from flctool.behaviour import (
+    behaviour_from_data,
+    behaviour_to_data,
+    behaviour_to_yaml,
+    load_behaviour,
+)
+from flctool.behaviour.ros2 import Ros2Config
 from flctool.cli import app
 from flctool.envs import make_env
-from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml, load_behaviour
-from flctool.spec.ros2 import Ros2Config
 
 from ..conftest import BEHAVIOURS
 from ..ros2_support import handmade_rules, require_ros2, robot_behaviour, wait_until

@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour
+from flctool.behaviour import behaviour_to_yaml, load_behaviour
+from flctool.behaviour.ros2 import InputSource, Ros2Config
 from flctool.envs import make_env
 from flctool.rollout import evaluate, evaluation_seeds
 from flctool.ros2.deploy import Deployment
-from flctool.spec import behaviour_to_yaml, load_behaviour
-from flctool.spec.ros2 import InputSource, Ros2Config
 
 from ..conftest import BEHAVIOURS, restore_sigint
 from ..ros2_support import (
@@ -74,9 +74,9 @@ class _Sensors:
     """Publishes ball_size and pan at 50 Hz until told to misbehave; records the commands."""
 
     def __init__(self, namespace: str) -> None:
+        from flctool.behaviour.ros2 import Qos
         from flctool.ros2.fields import message_class
         from flctool.ros2.graph import RosGraph
-        from flctool.spec.ros2 import Qos
 
         self.graph = RosGraph("sensors")
         self.float64 = message_class("std_msgs/Float64")

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
+from flctool.behaviour.ros2 import CommandTopic, InputSource
 from flctool.ros2.fields import CommandWriter, input_reader, message_class, nearest_command
-from flctool.spec.ros2 import CommandTopic, InputSource
 
 from ..ros2_support import require_ros2
 

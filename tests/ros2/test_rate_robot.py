@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from flctool.spec import behaviour_from_data, behaviour_to_data, load_behaviour
+from flctool.behaviour import behaviour_from_data, behaviour_to_data, load_behaviour
 
 from ..conftest import BEHAVIOURS
 from ..ros2_support import require_ros2, wait_until
@@ -25,9 +25,9 @@ class _Robot:
     50 Hz; pan stays 0. The reset service puts ball_size back to 0.2."""
 
     def __init__(self) -> None:
+        from flctool.behaviour.ros2 import Qos
         from flctool.ros2.fields import message_class
         from flctool.ros2.graph import RosGraph
-        from flctool.spec.ros2 import Qos
 
         self.graph = RosGraph("rate_robot")
         self.float64 = message_class("std_msgs/Float64")

@@ -15,11 +15,11 @@ import pytest
 from typer.testing import CliRunner
 
 from flctool import compile_behaviour
+from flctool.behaviour import behaviour_to_yaml, load_behaviour
 from flctool.cli import app
 from flctool.envs import make_env
 from flctool.errors import LinkError
 from flctool.rollout import evaluate
-from flctool.spec import behaviour_to_yaml, load_behaviour
 
 from ..conftest import BEHAVIOURS
 from ..ros2_support import (
@@ -113,7 +113,7 @@ def test_a_faulty_input_stops_the_robot_within_the_bound(fault: str) -> None:
         behaviour = handmade_rules(robot_behaviour("/faulty", step_timeout=STEP_TIMEOUT))
         data = behaviour.environment.model_dump()  # type: ignore[union-attr]
         data["inputs"]["pan"]["valid"] = (-90.0, 90.0)
-        from flctool.spec.ros2 import Ros2Config
+        from flctool.behaviour.ros2 import Ros2Config
 
         config = Ros2Config.model_validate(data)
         from flctool.envs.ros2_env import Ros2Env

@@ -10,11 +10,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from flctool.behaviour.load import behaviour_from_data
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.set_learning import coverage
 from flctool.compile.membership import trapezoid_scalar
 from flctool.sets.codec import SetCodec
-from flctool.spec.load import behaviour_from_data
-from flctool.spec.models import Behaviour
-from flctool.spec.set_learning import coverage
 
 
 def _behaviour(sets: dict[str, list[float]], low: float, high: float,

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from flctool.behaviour.load import behaviour_from_data
+from flctool.behaviour.models import Behaviour
 from flctool.sets.measures import crossing_height, interpretability, movements, partition_measures
-from flctool.spec.load import behaviour_from_data
-from flctool.spec.models import Behaviour
 
 
 def _behaviour(sets: dict[str, list[float]]) -> Behaviour:

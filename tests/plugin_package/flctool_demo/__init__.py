@@ -8,10 +8,10 @@ from typing import Literal
 
 from pydantic import Field
 
+from flctool.behaviour.environment import AdapterConfig
+from flctool.behaviour.learning import LearningConfig
 from flctool.errors import Problem
 from flctool.plugins import Plugin
-from flctool.spec.environment import AdapterConfig
-from flctool.spec.learning import LearningConfig
 
 
 class RandomSearchConfig(LearningConfig):

@@ -6,10 +6,10 @@ from typing import Any
 
 import numpy as np
 
+from flctool.behaviour import Behaviour
 from flctool.envs.base import BatchEnv
 from flctool.learners.base import GenerationResult, IntArray, Learner
 from flctool.learners.ga import evaluate_population, random_population
-from flctool.spec import Behaviour
 from flctool_demo import RandomSearchConfig
 
 

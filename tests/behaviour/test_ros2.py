@@ -12,10 +12,10 @@ import yaml
 from hypothesis import given
 from hypothesis import strategies as st
 
+from flctool.behaviour import load_behaviour
+from flctool.behaviour.ros2 import Ros2Config
+from flctool.behaviour.ros2_messages import MESSAGES, field_type, parse_path
 from flctool.errors import SpecError
-from flctool.spec import load_behaviour
-from flctool.spec.ros2 import Ros2Config
-from flctool.spec.ros2_messages import MESSAGES, field_type, parse_path
 
 from ..conftest import BEHAVIOURS
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from flctool.behaviour.load import parse_behaviour
 from flctool.errors import SpecError, format_path
-from flctool.spec.load import parse_behaviour
 
 BASE = """\
 flctool: 1

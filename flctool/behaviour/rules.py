@@ -20,10 +20,10 @@ import math
 from collections.abc import Iterable
 from typing import Any, SupportsInt
 
+from flctool.behaviour.checks import MAX_RULES
+from flctool.behaviour.models import Behaviour, Rule
+from flctool.behaviour.yaml_source import Mark, SourceMap
 from flctool.errors import FlcError, PathPart, Problem
-from flctool.spec.checks import MAX_RULES
-from flctool.spec.models import Behaviour, Rule
-from flctool.spec.yaml_source import Mark, SourceMap
 
 
 def expand_dont_care(data: Any, source: SourceMap) -> tuple[Any, SourceMap, list[Problem]]:

@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Any
 from flctool.errors import Problem, SpecError
 
 if TYPE_CHECKING:
-    from flctool.spec.models import Behaviour
-    from flctool.spec.yaml_source import SourceMap
+    from flctool.behaviour.models import Behaviour
+    from flctool.behaviour.yaml_source import SourceMap
 
 #: At most this many parts in one composition.
 MAX_PARTS = 8

@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour, parse_behaviour
-from flctool.errors import FlcError
-from flctool.spec.checks import uncovered_gap
-from flctool.spec.scaffold import (
+from flctool.behaviour.checks import uncovered_gap
+from flctool.behaviour.scaffold import (
     MAX_SETS,
     even_partition,
     parse_command,
@@ -18,6 +17,7 @@ from flctool.spec.scaffold import (
     parse_sensor,
     scaffold_behaviour,
 )
+from flctool.errors import FlcError
 
 WALK = [parse_command(c) for c in ("turn_right:-1", "forward:0", "turn_left:1")]
 

@@ -1,8 +1,8 @@
 """Behaviour files: pydantic models, YAML loading with line numbers, and writing back."""
 
-from flctool.spec.dump import behaviour_to_data, behaviour_to_yaml
-from flctool.spec.load import behaviour_from_data, load_behaviour, parse_behaviour
-from flctool.spec.models import (
+from flctool.behaviour.dump import behaviour_to_data, behaviour_to_yaml
+from flctool.behaviour.load import behaviour_from_data, load_behaviour, parse_behaviour
+from flctool.behaviour.models import (
     FORMAT_VERSION,
     Behaviour,
     InputVariable,

@@ -10,9 +10,9 @@ from typing import Any
 
 import yaml
 
-from flctool.spec.bounded import no_collection
-from flctool.spec.models import Behaviour
-from flctool.spec.shapes import SHAPES
+from flctool.behaviour.bounded import no_collection
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.shapes import SHAPES
 
 
 def behaviour_to_data(behaviour: Behaviour, *, defaults: bool = True) -> dict[str, Any]:
@@ -74,7 +74,7 @@ _RULES_AT_ONCE = 2000
 
 
 def _dump(value: Any) -> str:
-    with no_collection():  # see flctool.spec.bounded: twice as fast for a large table
+    with no_collection():  # see flctool.behaviour.bounded: twice as fast for a large table
         return str(yaml.dump(value if isinstance(value, list) else _styled(value),
                              Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100))
 

@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from flctool import compile_behaviour
-from flctool.spec import behaviour_from_data, behaviour_to_data, behaviour_to_yaml, parse_behaviour
+from flctool.behaviour import (
+    behaviour_from_data,
+    behaviour_to_data,
+    behaviour_to_yaml,
+    parse_behaviour,
+)
 
 from ..compile.reference import random_behaviour_data
 from ..conftest import ROOT
@@ -49,7 +54,7 @@ def test_a_long_rule_table_is_written_in_blocks_with_the_same_bytes(
     one call of the dumper writes."""
     import yaml
 
-    from flctool.spec import dump, load_behaviour
+    from flctool.behaviour import dump, load_behaviour
 
     behaviour = load_behaviour(ROOT / "behaviours" / "ballchase-handmade.yaml")
     data = dump.behaviour_to_data(behaviour)

@@ -28,13 +28,13 @@ from typing import TYPE_CHECKING, Literal
 
 from pydantic import Field
 
+from flctool.behaviour.base import Name, Section
+from flctool.behaviour.shapes import is_trapezoid, trapezoids
 from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
-from flctool.spec.base import Name, Section
-from flctool.spec.shapes import is_trapezoid, trapezoids
 
 if TYPE_CHECKING:
-    from flctool.spec.models import Behaviour, InputVariable
+    from flctool.behaviour.models import Behaviour, InputVariable
 
 Mode = Literal["partition", "lateral"]
 BoundIn = Literal["spacing", "units"]
@@ -130,7 +130,7 @@ def set_learning_problems(behaviour: Behaviour) -> list[Problem]:
     for name, setting in config.settings(known).items():
         variable = behaviour.inputs[name]
         shaped = [(s, v.kind) for s, v in variable.sets.items() if not is_trapezoid(v)]
-        if shaped:  # the set genes code trapezoids only (flctool.spec.shapes)
+        if shaped:  # the set genes code trapezoids only (flctool.behaviour.shapes)
             set_name, kind = shaped[0]
             problems.append(Problem(
                 ("inputs", name, "sets", set_name), f"learning.sets learns the sets of input "

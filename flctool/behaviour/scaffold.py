@@ -15,9 +15,9 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from flctool.behaviour.environment import DEFAULT_MOTION
+from flctool.behaviour.load import parse_behaviour
 from flctool.errors import FlcError, SpecError, format_path
-from flctool.spec.environment import DEFAULT_MOTION
-from flctool.spec.load import parse_behaviour
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 #: Set names for a count of sets, from the low end of the range to the high end.

@@ -7,8 +7,8 @@ from typing import Any
 
 import pytest
 
+from flctool.behaviour.yaml_source import MAX_ALIASED_VALUES, MAX_DEPTH, MAX_INT_DIGITS, read_yaml
 from flctool.errors import SpecError
-from flctool.spec.yaml_source import MAX_ALIASED_VALUES, MAX_DEPTH, MAX_INT_DIGITS, read_yaml
 
 
 def _value(text: str) -> Any:
@@ -95,7 +95,7 @@ def test_a_control_character_is_refused_with_its_line(character: str) -> None:
 
 
 def test_a_large_file_reads_like_a_small_one() -> None:
-    from flctool.spec import yaml_source
+    from flctool.behaviour import yaml_source
 
     body = "".join(f"k{i}: [{i}, yes, 010, 1:00, ~, true, 0x10]\n" for i in range(3000))
     assert len(body) > yaml_source._LIBYAML_FROM  # read by libyaml, where installed
@@ -112,7 +112,7 @@ def test_a_large_file_reads_like_a_small_one() -> None:
 def test_both_parsers_read_the_same_values_marks_and_raw_texts() -> None:
     """Files above _LIBYAML_FROM are read by libyaml, smaller ones by PyYAML's parser: the
     same events, so the same values, positions and remembered spellings."""
-    from flctool.spec import yaml_source
+    from flctool.behaviour import yaml_source
 
     body = ("a: &x [1, yes, 010, {b: ~, c: 'q'}]\nd: *x\ne: [off, 1:00, !!str 2]\n"
             "f:\n  - {g: true}\n  - [h, [i]]\n")
@@ -151,7 +151,7 @@ def test_a_value_after_a_refused_key_is_skipped_and_the_map_goes_on() -> None:
 def test_the_garbage_collector_runs_again_after_a_read_however_it_ends() -> None:
     import gc
 
-    from flctool.spec import parse_behaviour
+    from flctool.behaviour import parse_behaviour
 
     assert gc.isenabled()
     read_yaml("a: [1, 2]\n", "f.yaml")

@@ -3,7 +3,7 @@
 A behaviour declares N inputs, each partitioned into L_i fuzzy sets given as trapezoid
 quadruples ``(pa, pb, pc, pd)``; one output with K singleton commands; and optionally the rule
 consequents. Structure and types are checked here; the checks that relate fields to each other
-(coverage, rule references) live in :mod:`flctool.spec.checks`.
+(coverage, rule references) live in :mod:`flctool.behaviour.checks`.
 """
 
 from __future__ import annotations
@@ -24,20 +24,20 @@ from pydantic import (
     model_validator,
 )
 
-from flctool.errors import NotDeployableError
-from flctool.spec.base import BehaviourName, Name, Section
-from flctool.spec.checks import find_problems
-from flctool.spec.environment import AdapterConfig, default_gymnasium_ranges
-from flctool.spec.learning import (
+from flctool.behaviour.base import BehaviourName, Name, Section
+from flctool.behaviour.checks import find_problems
+from flctool.behaviour.environment import AdapterConfig, default_gymnasium_ranges
+from flctool.behaviour.learning import (
     DEFAULT_LEARNER,
     HybridConfig,
     LearningConfig,
     section_for_learner,
 )
-from flctool.spec.located import SourceRef
-from flctool.spec.rule_order import rule_grid
-from flctool.spec.sections import CHOSEN
-from flctool.spec.shapes import ShapedSet
+from flctool.behaviour.located import SourceRef
+from flctool.behaviour.rule_order import rule_grid
+from flctool.behaviour.sections import CHOSEN
+from flctool.behaviour.shapes import ShapedSet
+from flctool.errors import NotDeployableError
 
 FORMAT_VERSION = 1
 
@@ -59,7 +59,7 @@ def _set_form(value: Any) -> str:
 
 
 #: A set: a trapezoid quadruple (the default, and the paper's), or a shape written as a
-#: one-key mapping (flctool.spec.shapes). The form of the value chooses, so an error
+#: one-key mapping (flctool.behaviour.shapes). The form of the value chooses, so an error
 #: concerns the form written.
 FuzzySet = Annotated[Union[Annotated[Quadruple, Tag("trapezoid")],  # noqa: UP007
                            Annotated[ShapedSet, Tag("shape")]], Discriminator(_set_form)]
@@ -125,13 +125,13 @@ class Behaviour(Section):
     rules: list[Rule] = Field(default_factory=list, description=(
         "rule consequents; empty or partial for a behaviour still to be learned"))
     # Typed by the base every plugin's model extends; each is validated by the model of the
-    # plugin it names (flctool.spec.sections) and dumped with all of that model's fields.
+    # plugin it names (flctool.behaviour.sections) and dumped with all of that model's fields.
     learning: SerializeAsAny[LearningConfig] = Field(HybridConfig(), description=(
         "the learner and its hyperparameters; without 'learner:' the section is the "
         f"{DEFAULT_LEARNER} learner's"))
     environment: SerializeAsAny[AdapterConfig] | None = None
-    #: Where each field was written (:mod:`flctool.spec.located`); not part of the value,
-    #: set once by the loader (:func:`flctool.spec.located.attach_source`).
+    #: Where each field was written (:mod:`flctool.behaviour.located`); not part of the value,
+    #: set once by the loader (:func:`flctool.behaviour.located.attach_source`).
     _source: SourceRef = PrivateAttr(default_factory=SourceRef)
 
     def __setattr__(self, name: str, value: Any) -> None:
@@ -195,7 +195,7 @@ class Behaviour(Section):
         return math.prod(len(v.sets) for v in self.inputs.values())
 
     def antecedents(self) -> list[tuple[str, ...]]:
-        """Every rule's set names in rule order (eq. 1, :mod:`flctool.spec.rule_order`)."""
+        """Every rule's set names in rule order (eq. 1, :mod:`flctool.behaviour.rule_order`)."""
         sets = [tuple(v.sets) for v in self.inputs.values()]
         return [tuple(sets[i][j] for i, j in enumerate(rule))
                 for rule in rule_grid([len(s) for s in sets])]

@@ -9,14 +9,14 @@ from pathlib import Path
 import pytest
 
 from flctool import SpecError, load_behaviour
+from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
+from flctool.behaviour.located import locate, locate_error, located, source_of
+from flctool.behaviour.overrides import Override, resolve_behaviour
 from flctool.envs import BatchEnv, make_env
 from flctool.envs.robot_server import RobotServer
 from flctool.errors import Problem
 from flctool.learners import LEARNERS, make_learner
 from flctool.learners.genetic import PittLearner
-from flctool.spec import Behaviour, behaviour_from_data, behaviour_to_data, parse_behaviour
-from flctool.spec.located import locate, locate_error, located, source_of
-from flctool.spec.overrides import Override, resolve_behaviour
 
 from ..conftest import BEHAVIOURS
 

@@ -12,8 +12,8 @@ from typing import Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
-from flctool.spec.base import Section
-from flctool.spec.set_learning import SetLearningConfig
+from flctool.behaviour.base import Section
+from flctool.behaviour.set_learning import SetLearningConfig
 
 #: The learner of a ``learning:`` section that names none: the paper's method.
 DEFAULT_LEARNER = "hybrid"

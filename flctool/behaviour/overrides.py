@@ -15,12 +15,12 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from flctool.behaviour.dump import behaviour_to_data
+from flctool.behaviour.learning import keep_keys_read_by
+from flctool.behaviour.load import behaviour_from_data
+from flctool.behaviour.located import source_of
+from flctool.behaviour.models import Behaviour
 from flctool.errors import PathPart, Problem, SpecError
-from flctool.spec.dump import behaviour_to_data
-from flctool.spec.learning import keep_keys_read_by
-from flctool.spec.load import behaviour_from_data
-from flctool.spec.located import source_of
-from flctool.spec.models import Behaviour
 
 
 def override_path(key: str) -> tuple[str, ...]:
@@ -85,7 +85,7 @@ def apply_overrides(data: dict[str, Any], overrides: Overrides,
                     ) -> dict[tuple[PathPart, ...], str]:
     """Set each override in ``data`` (a behaviour as data, changed in place); returns where
     each overridden field was given, for :meth:`SourceMap.with_overrides
-    <flctool.spec.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
+    <flctool.behaviour.yaml_source.SourceMap.with_overrides>` (see :func:`resolve_behaviour`)."""
     given: dict[tuple[PathPart, ...], str] = {}
     for override in as_overrides(overrides):
         path = list(override.path)

@@ -30,7 +30,7 @@ from typing import Any
 from pydantic import model_validator
 from typing_extensions import TypeIs
 
-from flctool.spec.base import Section
+from flctool.behaviour.base import Section
 
 #: Each shape's parameters, in scikit-fuzzy's order. The index of a shape in this mapping,
 #: plus one, is its code in the compiled layout (0 is the trapezoid).

@@ -21,9 +21,9 @@ from pydantic import (
 )
 from typing_extensions import Self
 
+from flctool.behaviour.base import Name, Section
 from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
-from flctool.spec.base import Name, Section
 
 #: Points every pitch world has. ``goal`` is the centre of the target goal's line
 #: (x = +length/2, y = 0), ``own_goal`` the other one's; ``opponent`` is the first declared

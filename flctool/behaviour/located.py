@@ -17,11 +17,11 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
+from flctool.behaviour.yaml_source import SourceMap
 from flctool.errors import PathPart, Problem, SpecError
-from flctool.spec.yaml_source import SourceMap
 
 if TYPE_CHECKING:
-    from flctool.spec.models import Behaviour
+    from flctool.behaviour.models import Behaviour
 
 #: The source of a behaviour built in Python rather than read from a file.
 UNKNOWN_SOURCE = SourceMap("<behaviour>")

@@ -13,12 +13,8 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from flctool.errors import PathPart, Problem, SpecError
-from flctool.inputs import read_input
-from flctool.plugins import blamed, names
-from flctool.registry import did_you_mean
-from flctool.spec.bounded import no_collection
-from flctool.spec.checks import (
+from flctool.behaviour.bounded import no_collection
+from flctool.behaviour.checks import (
     RuleNamer,
     RuleProblem,
     check_input,
@@ -26,16 +22,20 @@ from flctool.spec.checks import (
     limit_problems,
     rule_path,
 )
-from flctool.spec.compose import inline_parts
-from flctool.spec.dump import behaviour_to_data
-from flctool.spec.environment import AdapterConfig
-from flctool.spec.learning import foreign_key_message
-from flctool.spec.located import attach_source
-from flctool.spec.magnitudes import magnitude_problems
-from flctool.spec.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
-from flctool.spec.rules import expand_dont_care
-from flctool.spec.sections import CHOSEN, section_model
-from flctool.spec.yaml_source import MAX_FILE_CHARS, SourceMap, read_yaml
+from flctool.behaviour.compose import inline_parts
+from flctool.behaviour.dump import behaviour_to_data
+from flctool.behaviour.environment import AdapterConfig
+from flctool.behaviour.learning import foreign_key_message
+from flctool.behaviour.located import attach_source
+from flctool.behaviour.magnitudes import magnitude_problems
+from flctool.behaviour.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
+from flctool.behaviour.rules import expand_dont_care
+from flctool.behaviour.sections import CHOSEN, section_model
+from flctool.behaviour.yaml_source import MAX_FILE_CHARS, SourceMap, read_yaml
+from flctool.errors import PathPart, Problem, SpecError
+from flctool.inputs import read_input
+from flctool.plugins import blamed, names
+from flctool.registry import did_you_mean
 
 
 def load_behaviour(path: str | Path) -> Behaviour:
@@ -52,7 +52,7 @@ def read_behaviour_text(path: str | Path) -> str:
 
 def parse_behaviour(text: str, file: str = "<string>") -> Behaviour:
     """Validate behaviour YAML given as text (``file`` names it in messages)."""
-    with no_collection():  # see flctool.spec.bounded
+    with no_collection():  # see flctool.behaviour.bounded
         data, source = read_yaml(text, file)
         return behaviour_from_data(data, source)
 
@@ -112,7 +112,7 @@ def _within(path: tuple[PathPart, ...], reported: tuple[PathPart, ...]) -> bool:
 
 
 def _partial_problems(data: dict[str, Any]) -> list[Problem]:
-    """The cross-field checks of :mod:`flctool.spec.checks`, run on the sections of a file
+    """The cross-field checks of :mod:`flctool.behaviour.checks`, run on the sections of a file
     that validate on their own (the file as a whole did not)."""
     problems: list[Problem] = []
     inputs = data.get("inputs")

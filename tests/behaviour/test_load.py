@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from flctool.behaviour import behaviour_from_data, load_behaviour, parse_behaviour
+from flctool.behaviour.yaml_source import SourceMap
 from flctool.errors import SpecError
-from flctool.spec import behaviour_from_data, load_behaviour, parse_behaviour
-from flctool.spec.yaml_source import SourceMap
 
 GOOD = """\
 flctool: 1
@@ -98,7 +98,7 @@ BAD = [
      "rules.4", "duplicate rule: the same antecedent as rules[1]"),
     ("unknown key", GOOD.replace("    unit: deg", "    units: deg"), 11,
      "inputs.pan.units", "unknown key 'units'. Did you mean 'unit'?"),
-    # a rule that leaves out an input stands for all its sets (flctool/spec/rules.py); here
+    # a rule that leaves out an input stands for all its sets (flctool/behaviour/rules.py); here
     # that contradicts rules[2]
     ("don't-care conflict", GOOD.replace("{if: {size: large, pan: left}, then: ahead}",
                                          "{if: {size: large}, then: left}"), 22,
@@ -213,7 +213,7 @@ def test_behaviour_is_frozen() -> None:
 
 
 def test_model_validation_outside_the_loader_still_checks_consistency() -> None:
-    from flctool.spec.models import Behaviour
+    from flctool.behaviour.models import Behaviour
 
     data = parse_behaviour(GOOD).model_dump(by_alias=True)
     data["rules"][0]["then"] = "nowhere"

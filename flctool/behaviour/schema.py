@@ -2,7 +2,7 @@
 
 It describes the built-in learners and adapters: ``learning:`` and ``environment:`` are each
 the union of the built-ins' models, chosen by ``learner`` / ``adapter`` (the one place that
-union is built, :mod:`flctool.spec.sections`). Installed plugins do not change it, so the
+union is built, :mod:`flctool.behaviour.sections`). Installed plugins do not change it, so the
 committed schema stays the same wherever it is checked; the two sections' descriptions say
 how a plugin extends them (docs/plugins.md).
 """
@@ -15,9 +15,9 @@ from typing import Annotated, Any, Union
 from pydantic import Field, create_model
 from pydantic.fields import FieldInfo
 
+from flctool.behaviour.models import Behaviour
+from flctool.behaviour.sections import CHOSEN
 from flctool.plugins import BUILTIN
-from flctool.spec.models import Behaviour
-from flctool.spec.sections import CHOSEN
 
 SCHEMA_ID = "https://flctool.dev/schemas/behaviour.schema.json"
 

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from flctool.behaviour import parse_behaviour
+from flctool.behaviour.base import identifier
 from flctool.export import EXPORTERS, IMPORTERS
-from flctool.spec import parse_behaviour
-from flctool.spec.base import identifier
 
 ROOT = Path(__file__).resolve().parents[2]
 

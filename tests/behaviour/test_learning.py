@@ -9,11 +9,8 @@ from pathlib import Path
 import jsonschema
 import pytest
 
-from flctool.errors import SpecError
-from flctool.plugins import names, plugins
-from flctool.runs import resolve_behaviour
-from flctool.spec import behaviour_to_data, parse_behaviour
-from flctool.spec.learning import (
+from flctool.behaviour import behaviour_to_data, parse_behaviour
+from flctool.behaviour.learning import (
     DEFAULT_LEARNER,
     FuzzyQConfig,
     GeneticConfig,
@@ -25,7 +22,10 @@ from flctool.spec.learning import (
     learner_keys,
     readers_of,
 )
-from tests.spec.test_load import GOOD
+from flctool.errors import SpecError
+from flctool.plugins import names, plugins
+from flctool.runs import resolve_behaviour
+from tests.behaviour.test_load import GOOD
 
 SCHEMA = Path(__file__).parents[2] / "schemas" / "behaviour.schema.json"
 

@@ -6,7 +6,7 @@ behaviour model types them by their common base (:class:`LearningConfig`,
 :class:`AdapterConfig`) and validates each one against the named plugin's own model, which
 :func:`flctool.plugins.plugin` imports then, and only then (as Gymnasium's ``make()`` imports
 an environment's entry). No union of every plugin's model is built to load a file; the JSON
-Schema builds the built-ins' one (:mod:`flctool.spec.schema`).
+Schema builds the built-ins' one (:mod:`flctool.behaviour.schema`).
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ from typing import Any
 from pydantic import BaseModel, ValidationInfo
 from pydantic_core import PydanticKnownError
 
+from flctool.behaviour.environment import AdapterConfig
+from flctool.behaviour.learning import DEFAULT_LEARNER, LearningConfig
 from flctool.plugins import blamed, names, plugin
-from flctool.spec.environment import AdapterConfig
-from flctool.spec.learning import DEFAULT_LEARNER, LearningConfig
 
 
 @dataclass(frozen=True)
@@ -56,7 +56,7 @@ class ChosenSection:
         Errors are placed in the section as the named model's own (``learning.keep``); a
         section naming no plugin, or an unknown one, and one that is no mapping, get the
         errors pydantic gives a discriminated union, which the loader words
-        (:mod:`flctool.spec.load`).
+        (:mod:`flctool.behaviour.load`).
         """
         if isinstance(value, self.base):  # a section built in Python: its named model's?
             model = self.model(getattr(value, self.key))

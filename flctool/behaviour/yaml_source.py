@@ -19,8 +19,8 @@ from typing import Any
 
 import yaml
 
+from flctool.behaviour.bounded import no_collection
 from flctool.errors import PathPart, Problem, SpecError
-from flctool.spec.bounded import no_collection
 
 #: Bounds on what a behaviour file may hold, so a hostile or broken file is refused with a
 #: message instead of exhausting the stack or the memory (docs/behaviour-files.md).

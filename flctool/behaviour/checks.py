@@ -13,16 +13,16 @@ from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from flctool.behaviour.environment import AdapterConfig
+from flctool.behaviour.magnitudes import magnitude_problems
+from flctool.behaviour.set_learning import set_learning_problems
+from flctool.behaviour.shapes import is_trapezoid, set_row, trapezoids
 from flctool.errors import PathPart, Problem
 from flctool.plugins import blamed
 from flctool.registry import did_you_mean
-from flctool.spec.environment import AdapterConfig
-from flctool.spec.magnitudes import magnitude_problems
-from flctool.spec.set_learning import set_learning_problems
-from flctool.spec.shapes import is_trapezoid, set_row, trapezoids
 
 if TYPE_CHECKING:
-    from flctool.spec.models import Behaviour, InputVariable, Rule
+    from flctool.behaviour.models import Behaviour, InputVariable, Rule
 
 # Resource limits (docs/behaviour-files.md): past them a run would need more memory or time
 # than any robot behaviour does, so the file is refused up front instead of hanging.

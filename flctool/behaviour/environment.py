@@ -12,11 +12,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
 
-from flctool.errors import FlcError, PathPart, Problem
-from flctool.registry import did_you_mean
-from flctool.spec.base import Name, Section
-from flctool.spec.compose import MAX_PARTS
-from flctool.spec.pitch_vocabulary import (
+from flctool.behaviour.base import Name, Section
+from flctool.behaviour.compose import MAX_PARTS
+from flctool.behaviour.pitch_vocabulary import (
     BallVelocity,
     DerivedChannel,
     FixedPoint,
@@ -25,6 +23,8 @@ from flctool.spec.pitch_vocabulary import (
     StepReward,
     vocabulary_problems,
 )
+from flctool.errors import FlcError, PathPart, Problem
+from flctool.registry import did_you_mean
 
 #: What the ballchase simulator observes; a behaviour's inputs are named after these.
 BALLCHASE_OBSERVATIONS = ("ball_size", "pan")

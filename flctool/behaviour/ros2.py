@@ -4,7 +4,7 @@ Each behaviour input reads one number from a topic (a message type and a field p
 turned into a bearing, distance or heading); the crisp output (eq. 3) is published on a command
 topic; the episode starts by a reset topic or service and ends by a status topic, outcome rules
 over the inputs, or ``max_steps``. Message types and field paths are checked against the
-definitions of :mod:`flctool.spec.ros2_messages` when the file is loaded -- no ROS needed.
+definitions of :mod:`flctool.behaviour.ros2_messages` when the file is loaded -- no ROS needed.
 """
 
 from __future__ import annotations
@@ -14,11 +14,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, field_validator, model_validator
 
-from flctool.errors import Problem
-from flctool.registry import did_you_mean
-from flctool.spec.base import Name, Section
-from flctool.spec.environment import AdapterConfig
-from flctool.spec.ros2_messages import (
+from flctool.behaviour.base import Name, Section
+from flctool.behaviour.environment import AdapterConfig
+from flctool.behaviour.ros2_messages import (
     POSES,
     REDUCTIONS,
     SERVICES,
@@ -28,6 +26,8 @@ from flctool.spec.ros2_messages import (
     numeric_problem,
     parse_path,
 )
+from flctool.errors import Problem
+from flctool.registry import did_you_mean
 
 _NAME = re.compile(r"^~?/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$")
 
