@@ -207,6 +207,9 @@ class HybridConfig(GeneticConfig):
     learner: Literal["hybrid"] = Field("hybrid", description=(
         "the paper's method: the GA guided by fuzzy-Q rule strengths (the default)"))
     q: QConfig = QConfig()
+    greedy_individual: bool = Field(True, description=(
+        "every generation after the first holds the q table's greedy controller (each rule's "
+        "strongest command) in place of one bred child; false: as in the paper"))
     # Measured (docs/learning.md): restarts lift the hybrid's worst seeds, whose q-guided
     # operators can lock a population onto a poor table; they lower Pitt's.
     default_restart_after: ClassVar[int] = 5

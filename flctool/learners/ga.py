@@ -128,6 +128,20 @@ def boltzmann_mutation(rng: np.random.Generator, child: IntArray, rate: float,
     return np.where(mask, drawn, child).astype(np.intp)
 
 
+def greedy_controller(strengths: FloatArray, leader: IntArray) -> IntArray:
+    """The q table's greedy controller: each rule's strongest command -> (M,).
+
+    ``strengths (M, K)`` is the q table; where several commands are strongest (a rule that
+    never fired keeps every q at its initial value) and ``leader (M,)``'s command is one of
+    them, the leader's is kept, so a rule q knows nothing about keeps what selection found.
+    """
+    rows = np.arange(strengths.shape[0])
+    top = strengths.max(axis=1)
+    keep = strengths[rows, leader] >= top
+    greedy: IntArray = np.where(keep, leader, np.argmax(strengths, axis=1)).astype(np.intp)
+    return greedy
+
+
 @dataclass(frozen=True)
 class GeneticAlgorithm:
     """One generation of breeding: elitism, roulette selection, crossover, mutation."""

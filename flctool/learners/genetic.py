@@ -54,6 +54,7 @@ from flctool.learners.ga import (
     Mutation,
     boltzmann_mutation,
     evaluate_population,
+    greedy_controller,
     one_point_crossover,
     random_population,
     strength_crossover,
@@ -127,6 +128,10 @@ class GeneticLearner(Learner):
                                               config.sets.sigma)
             self.set_genes = initial_set_genes(self.rngs["ga"], config.population,
                                                self.codec.size, config.sets.sigma)
+        #: Whether every bred generation holds the q table's greedy controller
+        #: (``learning.greedy_individual``, hybrid only).
+        self.greedy_individual = bool(getattr(config, "greedy_individual", False)
+                                      and self.fuzzy_q is not None)
         #: Premature-convergence restarts: enabled, best figure seen, generations since it
         #: improved, restarts made.
         self.restart_after = config.restarts_after
@@ -152,12 +157,22 @@ class GeneticLearner(Learner):
 
     def advance(self) -> None:
         stalled = self._stalled()
+        # the greedy individual starts from the last generation's best, taken before breeding
+        leader = int(np.argmax(self.fitness))
+        leader_genes = None if self.set_genes is None else self.set_genes[leader].copy()
+        leader_consequents = self.population[leader].copy()
         crossover, mutation = self.operator_set.operators(self)
         population, self.set_genes = self.ga.breed_genomes(
             self.rngs["ga"], self.population, self.fitness, crossover, mutation,
             self.set_genes, self.set_operators)
         if stalled:
             self._restart(population)
+        if self.greedy_individual:
+            assert self.fuzzy_q is not None
+            # the last individual is never an elite (elites < population)
+            population[-1] = greedy_controller(self.fuzzy_q.table(), leader_consequents)
+            if self.set_genes is not None and leader_genes is not None:
+                self.set_genes[-1] = leader_genes
         # Given rules are fixed: whatever crossover and mutation did to them is undone.
         self.population = self.keep_fixed(population)
 
@@ -191,12 +206,21 @@ class GeneticLearner(Learner):
         return True
 
     def extra_state(self) -> dict[str, Any]:
-        return {**super().extra_state(),
-                "restarts": {"after": self.restart_after, "best_seen": self.best_seen,
-                             "stalled_for": self.stalled_for, "restarts": self.restarts}}
+        state = {**super().extra_state(),
+                 "restarts": {"after": self.restart_after, "best_seen": self.best_seen,
+                              "stalled_for": self.stalled_for, "restarts": self.restarts}}
+        if self.fuzzy_q is not None:
+            state["greedy_individual"] = self.greedy_individual
+        return state
 
     def load_extra_state(self, state: dict[str, Any]) -> None:
         super().load_extra_state(state)
+        if self.fuzzy_q is not None:
+            # a run of a version without the greedy individual continues without it
+            greedy = state.get("greedy_individual", False)
+            if not isinstance(greedy, bool):
+                raise damaged("is damaged: its greedy_individual is not true or false")
+            self.greedy_individual = greedy
         record = state.get("restarts")
         if record is None:  # a run of a version without restarts: it continues without
             self.restart_after = 0
