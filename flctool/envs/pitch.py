@@ -11,7 +11,8 @@ One step, in this order (docs/environments.md gives every formula):
    deviation times a standard normal (the paper's "statistical model measured from real robot
    motion");
 2. moving obstacles advance and bounce off the pitch's edges; opponents act on the ball's
-   position (stand, track it along y, chase it);
+   position (stand, track it along y, chase it), then move the robot out of their bodies
+   (contact: the robot cannot walk through them);
 3. the ball rolls (velocity decays by ``ball.friction``); if the robot's body (then an
    opponent's) touches it, it is pushed out of the body and takes ``ball.kick`` times that
    body's step as its velocity; at the pitch's edge it stops, unless it crosses a goal line
