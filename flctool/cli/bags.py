@@ -24,7 +24,7 @@ from flctool.cli.app import (
     user_errors,
     write_output,
 )
-from flctool.cli.spec_commands import ControllerArgument
+from flctool.cli.behaviour_commands import ControllerArgument
 from flctool.errors import FlcError
 
 RobotOption = Annotated[Path | None, typer.Option(
