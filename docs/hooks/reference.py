@@ -298,6 +298,9 @@ EQUATIONS: dict[str, str] = {
     "restart_after": ("an addition against premature convergence: fresh individuals after "
                       "this many generations without a better selected controller (0: never, "
                       "as in the paper)"),
+    "greedy_individual": ("an addition to the hybrid: each bred generation holds the q table's "
+                          "greedy controller (each rule's strongest q_m^k) in place of one "
+                          "child (false: as in the paper)"),
     "common_starts": ("experiments: the start states of a generation's trials (an addition: the "
                       "same for every individual when true)"),
     "q": "eq. 4-9: the fuzzy Q-learning of rule strengths",

@@ -67,7 +67,7 @@ def test_each_learner_reads_its_own_keys() -> None:
     genetic = {"crossover", "mutation", "elites", "common_starts", "restart_after"}
     assert set(learner_keys(GeneticConfig)) == common | genetic
     assert set(learner_keys(PittConfig)) == common | genetic | {"pitt_crossover"}
-    assert set(learner_keys(HybridConfig)) == common | genetic | {"q"}
+    assert set(learner_keys(HybridConfig)) == common | genetic | {"q", "greedy_individual"}
     assert set(learner_keys(FuzzyQConfig)) == common | {"q", "exploration"}
 
 

@@ -11,6 +11,7 @@ import pytest
 
 from flctool.errors import LearnError
 from flctool.learners import make_learner, train
+from flctool.learners.ga import greedy_controller
 from flctool.learners.genetic import HYBRID, PITT, GeneticLearner
 from flctool.runs import open_run
 from tests.learners.line_env import LineEnv, line_behaviour
@@ -121,3 +122,54 @@ def test_without_restarts_the_paper_s_ga_is_unchanged() -> None:
                          LineEnv())
     train(never)
     assert isinstance(never, GeneticLearner) and never.restarts == 0
+
+
+def test_the_greedy_controller_takes_each_rule_s_strongest_command_keeping_ties_to_the_leader(
+        ) -> None:
+    strengths = np.array([[0.0, 2.0, 1.0],   # one strongest: 1
+                          [0.0, 0.0, 0.0],   # never fired: every command ties, leader's kept
+                          [3.0, 1.0, 3.0]])  # a tie the leader is not in: the first strongest
+    leader = np.array([2, 1, 1])
+    assert greedy_controller(strengths, leader).tolist() == [1, 1, 0]
+
+
+def test_every_bred_hybrid_generation_holds_the_q_table_s_greedy_controller() -> None:
+    learner = make_learner(line_behaviour(learner="hybrid", generations=1, population=6),
+                           LineEnv())
+    assert isinstance(learner, GeneticLearner) and learner.greedy_individual
+    learner.evaluate(0)
+    leader = learner.population[int(np.argmax(learner.fitness))].copy()
+    assert learner.fuzzy_q is not None
+    expected = greedy_controller(learner.fuzzy_q.table(), leader)
+    learner.advance()
+    assert learner.population[-1].tolist() == expected.tolist()
+
+
+def test_without_the_greedy_individual_the_hybrid_is_the_paper_s() -> None:
+    behaviour = line_behaviour(learner="hybrid", generations=6, greedy_individual=False)
+    paper = make_learner(behaviour, LineEnv())
+    assert isinstance(paper, GeneticLearner) and not paper.greedy_individual
+    train(paper)
+    assert "greedy_individual" in paper.state_dict()
+    again = make_learner(behaviour, LineEnv())
+    train(again)
+    assert again.state_dict()["population"] == paper.state_dict()["population"]
+
+
+def test_a_run_with_the_greedy_individual_resumes_bit_for_bit() -> None:
+    behaviour = line_behaviour(learner="hybrid", generations=8)
+    whole = make_learner(behaviour, LineEnv())
+    train(whole)
+    from flctool.learners import Callback, GenerationMetrics
+
+    class StopAt(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            return metrics.generation < 3
+
+    first = make_learner(behaviour, LineEnv())
+    train(first, [StopAt()])
+    second = make_learner(behaviour, LineEnv())
+    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
+    train(second)
+    assert second.state_dict()["population"] == whole.state_dict()["population"]
+    assert second.state_dict()["q"] == whole.state_dict()["q"]
