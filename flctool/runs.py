@@ -61,9 +61,9 @@ from flctool.dirlock import DirectoryLock, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
-from flctool.learners.budget import Usage
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
 from flctool.learners.confirmation import Confirmed
+from flctool.learners.metrics import Usage
 from flctool.rollout import Estimate
 from flctool.sets.codec import set_gene_count, with_set_genes
 from flctool.version import __version__

@@ -77,7 +77,7 @@ def handmade_rules(behaviour: Behaviour) -> Behaviour:
 def sim_robot(namespace: str = "/robot", **options: Any) -> Iterator[Any]:
     """The reference robot (the handmade file's simulator) in this process."""
     require_ros2()
-    from flctool.ros2.robot import SimRobot
+    from flctool.envs.ros2_robot import SimRobot
 
     robot = SimRobot.from_behaviour(load_behaviour(SIM_FILE), namespace=namespace, **options)
     try:

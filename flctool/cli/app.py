@@ -516,11 +516,11 @@ def output_format(path: Path | None, given: str | None, suffixes: Mapping[str, s
 # `flctool --help` shows them, each with its module and the first paragraph of its help (a
 # test checks these against the commands themselves). A new command: its module, one line here.
 COMMANDS: dict[str, tuple[str, str]] = {
-    "validate": ("flctool.cli.spec_commands", "Check behaviour files and report every problem "
+    "validate": ("flctool.cli.behaviour_commands", "Check behaviour files and report every problem "
                  "in each (exit 1 if any is invalid)."),
-    "show": ("flctool.cli.spec_commands", "Show a behaviour: its inputs and sets, M and K, "
+    "show": ("flctool.cli.behaviour_commands", "Show a behaviour: its inputs and sets, M and K, "
              "and the rule table."),
-    "schema": ("flctool.cli.spec_commands", "Write the behaviour JSON Schema generated from "
+    "schema": ("flctool.cli.behaviour_commands", "Write the behaviour JSON Schema generated from "
                "the models (or check it is current)."),
     "evaluate": ("flctool.cli.evaluate", "Run a controller in its environment: success rate, "
                  "steps to success and fitness, each with a 95 % confidence interval. Success "

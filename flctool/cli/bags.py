@@ -10,7 +10,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import Annotated
 
 import typer
 
@@ -24,12 +24,8 @@ from flctool.cli.app import (
     user_errors,
     write_output,
 )
-from flctool.cli.spec_commands import ControllerArgument
+from flctool.cli.behaviour_commands import ControllerArgument
 from flctool.errors import FlcError
-
-if TYPE_CHECKING:
-    from flctool.behaviour import Behaviour
-    from flctool.behaviour.ros2 import Ros2Config
 
 RobotOption = Annotated[Path | None, typer.Option(
     help="A behaviour file whose environment: {adapter: ros2} section names the topics "
@@ -38,25 +34,6 @@ RobotOption = Annotated[Path | None, typer.Option(
 
 def _log(text: str) -> None:
     print(f"flctool record: {text}", file=sys.stderr, flush=True)
-
-
-def _ros2_config(behaviour: Behaviour, robot: Path | None) -> Ros2Config:
-    """The ros2 section of ``robot`` (checked against the behaviour), else the behaviour's."""
-    from flctool.behaviour import load_behaviour
-    from flctool.behaviour.ros2 import Ros2Config
-    from flctool.errors import SpecError
-
-    config = behaviour.environment
-    where = "the controller"
-    if robot is not None:
-        config, where = load_behaviour(robot).environment, str(robot)
-    if not isinstance(config, Ros2Config):
-        raise FlcError(f"{where} has no 'environment: {{adapter: ros2, ...}}' section",
-                       hint="name a robot file with --robot (docs/ros2.md)")
-    problems = config.fit_problems(behaviour.input_names, tuple(behaviour.output.commands))
-    if problems:
-        raise SpecError(problems, where)
-    return config
 
 
 def _topic(text: str) -> tuple[str, str]:
@@ -93,9 +70,10 @@ def record(
 
     with user_errors():
         from flctool.ros2.bags import BagRecorder, session_topics
+        from flctool.ros2.section import ros2_section
 
         behaviour = load_behaviour(file)
-        config = _ros2_config(behaviour, None)
+        config, _ = ros2_section(behaviour, str(file))
         topics = session_topics(config, [_topic(t) for t in topic or []])
         recorder = BagRecorder(out, topics)
         try:
@@ -146,9 +124,10 @@ def replay(
 
         from flctool.compile import compile_behaviour
         from flctool.ros2.bags import replay as replay_bag
+        from flctool.ros2.section import ros2_section
 
-        behaviour, _ = load_controller(file)
-        config = _ros2_config(behaviour, robot)
+        behaviour, source = load_controller(file)
+        config, _ = ros2_section(behaviour, str(source), robot)
         if out is not None:
             check_output(out, "replay CSV", force=force)
         flc = compile_behaviour(behaviour)
@@ -201,9 +180,10 @@ def fit_sim(
 
         from flctool.behaviour import behaviour_to_data, load_behaviour
         from flctool.ros2.bags import environment_section, fit_motion
+        from flctool.ros2.section import ros2_section
 
         robot_behaviour = load_behaviour(robot)
-        config = _ros2_config(robot_behaviour, None)
+        config, _ = ros2_section(robot_behaviour, str(robot))
         simulator = load_behaviour(sim)
         if simulator.environment is None or simulator.environment.adapter not in (
                 "ballchase-sim", "pitch"):

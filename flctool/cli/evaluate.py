@@ -24,8 +24,8 @@ from flctool.cli.app import (
     user_errors,
     write_output,
 )
+from flctool.cli.behaviour_commands import ControllerArgument
 from flctool.cli.progress import Progress, compiling
-from flctool.cli.spec_commands import ControllerArgument
 
 if TYPE_CHECKING:
     from rich.table import Table

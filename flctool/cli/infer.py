@@ -23,8 +23,8 @@ from typing import TYPE_CHECKING, Annotated, TextIO
 import typer
 
 from flctool.cli.app import Force, app, check_output, example, load_controller, user_errors
+from flctool.cli.behaviour_commands import ControllerArgument
 from flctool.cli.progress import compiling
-from flctool.cli.spec_commands import ControllerArgument
 from flctool.errors import FlcError
 from flctool.inputs import open_error
 

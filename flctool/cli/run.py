@@ -70,27 +70,10 @@ def run(
 
 def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: int | None,
               duration: float | None, rate: float | None) -> None:
-    from flctool.behaviour import load_behaviour
-    from flctool.behaviour.ros2 import Ros2Config
     from flctool.compile import compile_behaviour
+    from flctool.ros2.section import ros2_section
 
-    config = behaviour.environment
-    where = str(source)
-    if robot is not None:
-        robot_behaviour = load_behaviour(robot)
-        config, where = robot_behaviour.environment, str(robot)
-        if not isinstance(config, Ros2Config):
-            raise FlcError(f"{robot} has no 'environment: {{adapter: ros2, ...}}' section",
-                           hint="see docs/ros2.md for the topics a robot file maps")
-        problems = config.fit_problems(behaviour.input_names, tuple(behaviour.output.commands))
-        if problems:
-            from flctool.errors import SpecError
-
-            raise SpecError(problems, where)
-    if not isinstance(config, Ros2Config):
-        raise FlcError(f"{source}'s environment is not a ROS 2 robot",
-                       hint="name the robot's topics with --robot ROBOT.yaml (a behaviour "
-                       "with environment: {adapter: ros2, ...})")
+    config, where = ros2_section(behaviour, str(source), robot)
     if rate is not None:
         config = config.model_copy(update={"rate": rate})
     if episodes is not None and config.episode.status is None:

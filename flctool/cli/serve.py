@@ -73,7 +73,7 @@ def _serve_ros2(file: Path, namespace: str, auto_reset: bool, seed: int,
     from flctool.envs.robot_server import print_log
 
     with user_errors():
-        from flctool.ros2.robot import SimRobot
+        from flctool.envs.ros2_robot import SimRobot
 
         behaviour = load_behaviour(file)
         robot = SimRobot.from_behaviour(behaviour, namespace=namespace, auto_reset=auto_reset,

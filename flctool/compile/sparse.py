@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.shapes import set_row
@@ -22,7 +22,29 @@ from flctool.compile.membership import firing_sets
 from flctool.errors import InferenceError
 
 if TYPE_CHECKING:
-    from flctool.compile.controller import Controller
+    import numpy as np
+    from numpy.typing import NDArray
+
+
+class CompiledRules(Protocol):
+    """What a rule base is read from: the arrays of a compiled
+    :class:`~flctool.compile.controller.Controller` (which holds its rule base as a
+    ``SparseRules``, so this module names no controller)."""
+
+    @property
+    def input_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def ranges(self) -> NDArray[np.float64]: ...
+
+    @property
+    def quadruples(self) -> tuple[NDArray[np.float64], ...]: ...
+
+    @property
+    def singletons(self) -> NDArray[np.float64]: ...
+
+    @property
+    def kinds(self) -> tuple[tuple[int, ...], ...] | None: ...
 
 
 class SparseRules:
@@ -32,7 +54,7 @@ class SparseRules:
     floating-point operations), normalised to phi_m = alpha_m / sum(alpha) (eq. 7).
     """
 
-    def __init__(self, controller: Controller) -> None:
+    def __init__(self, controller: CompiledRules) -> None:
         """The rule base of a compiled controller (see also :meth:`from_behaviour`)."""
         self._build(controller.input_names, controller.ranges.tolist(),
                     [quads.tolist() for quads in controller.quadruples],

@@ -11,7 +11,8 @@ One step, in this order (docs/environments.md gives every formula):
    deviation times a standard normal (the paper's "statistical model measured from real robot
    motion");
 2. moving obstacles advance and bounce off the pitch's edges; opponents act on the ball's
-   position (stand, track it along y, chase it);
+   position (stand, track it along y, chase it), then move the robot out of their bodies
+   (contact: the robot cannot walk through them);
 3. the ball rolls (velocity decays by ``ball.friction``); if the robot's body (then an
    opponent's) touches it, it is pushed out of the body and takes ``ball.kick`` times that
    body's step as its velocity; at the pitch's edge it stops, unless it crosses a goal line
@@ -36,10 +37,9 @@ ballchase's draws are the first two of these.
 
 from __future__ import annotations
 
-import bisect
 import math
 from collections.abc import Sequence
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,6 +47,7 @@ from numpy.typing import NDArray
 from flctool.behaviour.environment import PITCH_CHANNELS, Motion, MotionNoise, PitchConfig
 from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
+from flctool.envs.pitch_drive import CommandDrive, Drive
 from flctool.envs.pitch_dynamics import (
     ARRAYS,
     FLOATS,
@@ -73,73 +74,6 @@ _RAD = math.pi / 180.0
 _DEG = 180.0 / math.pi
 _MOTION_COLUMNS = 3
 _UNIFORMS = 5  # robot and ball placement; then 3 per obstacle, 2 per opponent, 2 for a launch
-
-
-class Drive(Protocol):
-    """How the crisp output becomes the robot's motion (mean and std of forward, sideways,
-    rotation), for one episode or B."""
-
-    order: tuple[str, ...]
-    values: FloatArray
-    reads: bool  # whether it reads the channels' readings (a composition's parts do)
-
-    def one(self, action: float, readings: Sequence[float] = (),
-            ) -> tuple[list[float], list[float]]: ...
-
-    def batch(self, actions: FloatArray, readings: Sequence[FloatArray] = (),
-              ) -> tuple[list[FloatArray], list[FloatArray]]: ...
-
-
-class _Drive:
-    """How the crisp output ``a`` becomes the robot's motion: the sorted singletons' motions
-    blended piecewise linearly (crisp), or the nearest one's."""
-
-    def __init__(self, commands: dict[str, float], motion: dict[str, Motion],
-                 noise: dict[str, MotionNoise], nearest: bool) -> None:
-        order = sorted(commands, key=lambda name: commands[name])
-        self.order = tuple(order)  # commands by increasing singleton
-        self.values = np.array([commands[n] for n in order], dtype=np.float64)
-        self.values_list: list[float] = self.values.tolist()
-        # Columns of the motion table by increasing singleton, the last row repeated so that
-        # "nearest" (weight 0 on the row above) blends like "crisp" without a special case.
-        rows = [*order, order[-1]]
-        self.mean = [[motion[n].forward for n in rows], [motion[n].sideways for n in rows],
-                     [motion[n].rotation * _RAD for n in rows]]
-        self.std = [[noise[n].forward for n in rows], [noise[n].sideways for n in rows],
-                    [noise[n].rotation * _RAD for n in rows]]
-        self.mean_arrays = [np.array(column) for column in self.mean]
-        self.std_arrays = [np.array(column) for column in self.std]
-        self.nearest = nearest or len(order) == 1
-        self.reads = False
-
-    def batch(self, actions: FloatArray, readings: Sequence[FloatArray] = (),
-              ) -> tuple[list[FloatArray], list[FloatArray]]:
-        """Mean and std columns, each (B,), for actions (B,) (a composition's parts read
-        ``readings``, the channels' readings before the step)."""
-        values = self.values
-        a = np.clip(actions, values[0], values[-1])
-        if self.nearest:
-            j = np.argmin(np.abs(a[:, None] - values[None, :]), axis=1)
-            w = np.zeros_like(a)
-        else:
-            j = np.clip(np.searchsorted(values, a, side="right") - 1, 0, values.shape[0] - 2)
-            gap = values[j + 1] - values[j]
-            w = np.where(gap > 0, (a - values[j]) / np.where(gap > 0, gap, 1.0), 0.0)
-        return _blend(self.mean_arrays, self.std_arrays, j, w)
-
-    def one(self, action: float, readings: Sequence[float] = (),
-            ) -> tuple[list[float], list[float]]:
-        values = self.values_list
-        count = len(values)
-        # a Python float: numpy scalars would make every operation below several times slower
-        a = min(max(float(action), values[0]), values[-1])
-        if self.nearest:
-            j, w = min(range(count), key=lambda i: abs(a - values[i])), 0.0
-        else:
-            j = min(max(bisect.bisect_right(values, a) - 1, 0), count - 2)
-            gap = values[j + 1] - values[j]
-            w = (a - values[j]) / gap if gap > 0 else 0.0
-        return _blend(self.mean, self.std, j, w)
 
 
 class _Rules:
@@ -201,7 +135,7 @@ class PitchSim(BatchEnv):
         self.channels = channels
         self.observation_names = observation_names or channels
         self.max_steps = world.max_steps
-        self.drive: Drive = drive or _Drive(commands, motion, noise, world.nearest)
+        self.drive: Drive = drive or CommandDrive(commands, motion, noise, world.nearest)
         self.command_order = self.drive.order
         self.action_bounds = (float(self.drive.values[0]), float(self.drive.values[-1]))
         derived = {d.name: d for d in world.derived}
@@ -526,14 +460,6 @@ class _Batch:
 
 def _stack(columns: list[FloatArray], batch: int) -> FloatArray:
     return np.stack(columns, axis=1) if columns else np.zeros((batch, 0))
-
-
-def _blend(mean: Sequence[Any], std: Sequence[Any], j: Any, w: Any,
-           ) -> tuple[list[Any], list[Any]]:
-    """Rows j and j + 1 of the motion table's columns, weighted (1 - w, w): crisp blending;
-    nearest passes w = 0, which gives row j exactly."""
-    keep = 1.0 - w
-    return ([keep * c[j] + w * c[j + 1] for c in mean], [keep * c[j] + w * c[j + 1] for c in std])
 
 
 def timed_fitness(lengths: NDArray[np.int64], success: BoolArray, max_steps: int) -> FloatArray:

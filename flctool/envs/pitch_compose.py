@@ -21,7 +21,7 @@ from flctool.behaviour.environment import PitchConfig
 from flctool.behaviour.models import Behaviour
 from flctool.compile import Controller, compile_behaviour
 from flctool.envs.base import FloatArray
-from flctool.envs.pitch import Drive, _Drive
+from flctool.envs.pitch_drive import CommandDrive, Drive
 from flctool.errors import Problem, SpecError
 
 
@@ -30,7 +30,7 @@ class Part:
     name: str
     controller: Controller
     indices: tuple[int, ...]  # where each of its inputs' channels is among the readings
-    drive: _Drive
+    drive: CommandDrive
 
 
 class ComposedDrive:
@@ -109,7 +109,7 @@ def composed_drive(behaviour: Behaviour, config: PitchConfig, channels: tuple[st
                 read.append(channel)
             indices.append(read.index(channel))
         parts[name] = Part(name, compile_behaviour(part), tuple(indices),
-                           _Drive(dict(part.output.commands), config.motion, config.noise,
+                           CommandDrive(dict(part.output.commands), config.motion, config.noise,
                                   part_env.action == "nearest"))
     if problems:
         raise SpecError(problems)

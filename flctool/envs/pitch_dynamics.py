@@ -24,6 +24,8 @@ from flctool.envs.base import BoolArray, FloatArray
 from flctool.envs.pitch_world import Derived, Test, World
 
 _RAD = math.pi / 180.0
+#: Bodies this close (mm) are in contact: the ``collision`` outcome's tolerance.
+CONTACT_MM = 1e-6
 _DEG = 180.0 / math.pi
 
 #: A number per episode: a float for one, a (B,) array for B.
@@ -118,6 +120,7 @@ def advance(ops: Ops[V], w: World, s: State[V], mean: Sequence[V | float],
     x = s.x + forward * cos_h - sideways * sin_h  # (s.x + a) - b: the order is part of the
     y = s.y + forward * sin_h + sideways * cos_h  # bits ballchase's seeds reproduce
     step_x, step_y = x - s.x, y - s.y
+    x_before, y_before = s.x, s.y
     s.x, s.y, s.heading = x, y, heading
     s.step_x, s.step_y = step_x, step_y
     for (*_, radius, speed), ob in zip(w.obstacles, s.obstacles, strict=True):
@@ -131,9 +134,36 @@ def advance(ops: Ops[V], w: World, s: State[V], mean: Sequence[V | float],
                               -ob[3], ob[3])
     if w.opponents:
         _move_opponents(ops, w, s)
+        blocked = _block_robot(ops, w, s, cos_h, sin_h)
+        # the ball takes the robot's step as it happened, contact included
+        step_x = ops.where(blocked, s.x - x_before, step_x)
+        step_y = ops.where(blocked, s.y - y_before, step_y)
+        s.step_x, s.step_y = step_x, step_y
     if w.ball_movable:
         _roll_ball(ops, w, s, step_x, step_y)
     return cos_h, sin_h
+
+
+def _block_robot(ops: Ops[V], w: World, s: State[V], cos_h: V, sin_h: V) -> Mask:
+    """Contact with the other players: the robot's body (a circle) cannot overlap an
+    opponent's. After everyone has moved, each opponent in file order moves the robot out of
+    its body along the line between their centres, to touching; the opponent does not yield.
+    Centres that coincide move the robot straight back along its heading. Returns whether
+    any opponent moved it."""
+    blocked: Mask = s.x != s.x  # False, of the engine's type
+    for spec, op in zip(w.opponents, s.opponents, strict=True):
+        dx, dy = s.x - op[0], s.y - op[1]
+        gap = ops.sqrt(dx * dx + dy * dy)
+        reach = w.robot_radius + spec.radius
+        apart = gap > 1e-9
+        scale = reach / ops.maximum(gap, 1e-9)
+        out_x = ops.where(apart, dx * scale, -reach * cos_h)
+        out_y = ops.where(apart, dy * scale, -reach * sin_h)
+        touch = gap < reach
+        s.x = ops.where(touch, op[0] + out_x, s.x)
+        s.y = ops.where(touch, op[1] + out_y, s.y)
+        blocked = ops.either(blocked, touch)
+    return blocked
 
 
 def _move_opponents(ops: Ops[V], w: World, s: State[V]) -> None:
@@ -409,6 +439,7 @@ def condition_test(w: World, test: Test) -> ConditionTest[V]:
     if kind == "ball_off_pitch":
         return lambda ops, s, t: s.ball_out
     if kind == "collision":
-        return lambda ops, s, t: t["obstacle_distance"] <= 0.0
+        # touching counts (within a micrometre): contact leaves an opponent exactly touching
+        return lambda ops, s, t: t["obstacle_distance"] <= CONTACT_MM
     channel, low, high = test.channel, test.low, test.high  # a threshold on a true value
     return lambda ops, s, t: ops.both(t[channel] >= low, t[channel] <= high)

@@ -10,9 +10,10 @@ from __future__ import annotations
 from flctool.behaviour.located import located
 from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv
-from flctool.learners.base import GenerationResult, Learner, train
+from flctool.learners.base import Learner
 from flctool.learners.callbacks import Callback, CallbackList, FunctionCallback, StopAtFitness
-from flctool.learners.metrics import GenerationMetrics
+from flctool.learners.loop import train
+from flctool.learners.metrics import GenerationMetrics, GenerationResult
 from flctool.plugins import blamed, registry
 from flctool.registry import Registry
 from flctool.rollout import TRAIN_SEED_LOW

@@ -1,10 +1,10 @@
-"""The learner protocol and the one training loop every learner runs.
+"""The learner base: what every learner is, and the run it keeps.
 
 A learner keeps a population of controllers (chromosomes of M consequent indices, paper
 Sec. IV; ``fuzzy_q`` keeps one, its greedy controller) with their fitness, and supplies two
 steps: :meth:`Learner.evaluate` runs a generation's trials, :meth:`Learner.advance` makes the
-next generation. :func:`train` does the rest -- timing, metrics, callbacks, stopping -- the
-same way for all of them.
+next generation. :func:`~flctool.learners.loop.train` does the rest -- timing, metrics,
+callbacks, stopping -- the same way for all of them.
 
 Randomness: the run's seed feeds one ``SeedSequence`` that spawns three generators, ``ga``
 (initialisation, selection, crossover, mutation), ``env`` (episode start seeds) and
@@ -16,10 +16,7 @@ from 0) never replays a training start.
 
 from __future__ import annotations
 
-import time
 from abc import ABC, abstractmethod
-from collections.abc import Iterable
-from dataclasses import dataclass
 from functools import partial
 from typing import Any, ClassVar, Protocol
 
@@ -33,11 +30,14 @@ from flctool.compile import compile_behaviour
 from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError, Problem, SpecError
 from flctool.learners.baselines import BaselineCheck
-from flctool.learners.budget import Budget, Usage
-from flctool.learners.callbacks import Callback, CallbackList, RunCallback
+from flctool.learners.budget import Budget
 from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.confirmation import Confirmation
-from flctool.learners.metrics import GenerationMetrics
+from flctool.learners.metrics import FloatArray as FloatArray
+from flctool.learners.metrics import GenerationResult as GenerationResult
+from flctool.learners.metrics import IntArray as IntArray
+from flctool.learners.metrics import Usage
+from flctool.learners.run_callback import RunCallback
 from flctool.learners.selection import Candidate, ModelSelection
 from flctool.learners.trial import SparseRules
 from flctool.rollout import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
@@ -54,19 +54,6 @@ class RuleStrengths(Protocol):
     def state_dict(self) -> dict[str, Any]: ...
 
     def load_state_dict(self, state: dict[str, Any]) -> None: ...
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.intp]
-
-
-
-@dataclass(frozen=True)
-class GenerationResult:
-    """What :meth:`Learner.evaluate` measured."""
-
-    fitness: FloatArray  # (P,) per individual, or (E,) per episode for fuzzy_q
-    episodes: int
-    steps: int
 
 
 class Learner(ABC):
@@ -138,7 +125,7 @@ class Learner(ABC):
                                                                  confirming)
 
     @property
-    def run_callbacks(self) -> list[RunCallback]:
+    def run_callbacks(self) -> list[RunCallback[Learner]]:
         """The parts of the run that act between generations, in order: model selection,
         the budget (which looks at what selection chose, and may have it confirmed), the
         confirmation of the controller the run returns, and its comparison with baselines."""
@@ -370,8 +357,9 @@ class Learner(ABC):
         for name, generator in self.rngs.items():
             generator.bit_generator.state = checkpoint.rng[name]
         if checkpoint.selection is not None:  # None: a checkpoint of a run without one
-            self.selection.restore(checkpoint.selection)
-            self.budget.restore(checkpoint.selection)
+            saved = checkpoint.selection
+            self.selection.restore(saved.hall, saved.best, saved.finalized, saved.validated)
+            self.budget.restore(saved.usage, saved.stop_reason)
             self.confirmation.restore(checkpoint.selection.confirmations)
             self.baseline_check.restore(checkpoint.selection.baselines,
                                         checkpoint.selection.verdict)
@@ -418,61 +406,3 @@ def fixed_consequents(behaviour: Behaviour) -> tuple[IntArray, IntArray]:
         rules.append(rule_index(index, shape))
         chosen.append(commands.index(rule.then))
     return np.array(rules, dtype=np.intp), np.array(chosen, dtype=np.intp)
-
-
-def train(learner: Learner, callbacks: Iterable[Callback] = ()) -> list[GenerationMetrics]:
-    """Run generations from the learner's current one until the run ends: at
-    ``learning.generations``, or when a run callback (a ``learning.stop`` budget or target)
-    ends it.
-
-    A fresh learner starts at generation 0; one restored from a checkpoint continues after
-    it. Each generation is advance (breed), evaluate (the trials), then the run callbacks
-    (:attr:`Learner.run_callbacks`: model selection validates, the budget decides whether to
-    stop; when the run ends, selection validates its remaining candidates), then the report:
-    the generation's metrics to ``callbacks``. So the metrics -- and the checkpoint a run
-    directory writes of them -- already hold the run's final choice. Returns this session's
-    metrics, one per generation.
-    """
-    callback = CallbackList(callbacks)
-    history: list[GenerationMetrics] = []
-    usage = learner.usage
-    # on_end runs however training ends -- finished, stopped early, an error or Ctrl-C -- so
-    # that a run directory never claims to be running after its process has gone.
-    try:
-        callback.on_start(learner)
-        started = time.perf_counter()
-        before = learner.elapsed
-
-        def clock() -> None:
-            learner.elapsed = before + time.perf_counter() - started
-
-        generation = learner.generation + 1
-        while not learner.finished:
-            spent = (usage.selection_episodes, usage.selection_steps,
-                     usage.confirmation_episodes, usage.confirmation_steps)
-            if generation > 0:
-                learner.advance()
-            result = learner.evaluate(generation)
-            learner.generation = generation
-            usage.training_episodes += result.episodes
-            usage.training_steps += result.steps
-            for part in learner.run_callbacks:
-                part.on_trials(learner, result)
-                clock()
-            if learner.finished:
-                for part in learner.run_callbacks:
-                    part.on_finish(learner)
-                clock()
-            best = learner.selection.best
-            metrics = GenerationMetrics.from_fitness(
-                generation, result.fitness, result.episodes, result.steps, learner.elapsed,
-                usage.selection_episodes - spent[0], usage.selection_steps - spent[1],
-                best.validation_value() if best else float("nan"),
-                usage.confirmation_episodes - spent[2], usage.confirmation_steps - spent[3])
-            history.append(metrics)
-            generation += 1
-            if not callback.on_generation(metrics):
-                break
-    finally:
-        callback.on_end()
-    return history

@@ -18,18 +18,19 @@ what to try. Every baseline episode counts in the run's usage (``baseline_episod
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from flctool.learners.budget import Usage
-from flctool.learners.callbacks import RunCallback
-from flctool.learners.trial import run_trial
+from flctool.envs.base import BatchEnv
+from flctool.learners.metrics import IntArray, Usage
+from flctool.learners.run_callback import RunCallback
+from flctool.learners.trial import SparseRules, run_trial
 from flctool.rollout import Estimate, mean_interval
 
 if TYPE_CHECKING:
-    from flctool.learners.base import IntArray, Learner
+    from flctool.compile.controller import Controller
     from flctool.learners.confirmation import Confirmation
 
 #: Random rule tables among the baselines.
@@ -83,7 +84,23 @@ NOT_LEARNED_HINT = ("give it more budget (--generations, --set trials=2, --set "
                     "use coarser sets (fewer rules to learn)")
 
 
-class BaselineCheck(RunCallback):
+class ComparedRun(Protocol):
+    """What the comparison with baselines reads of the run it is part of (a
+    :class:`~flctool.learners.base.Learner` is one)."""
+
+    @property
+    def controller(self) -> Controller: ...
+
+    @property
+    def rules(self) -> SparseRules: ...
+
+    @property
+    def env(self) -> BatchEnv: ...
+
+    def keep_fixed(self, population: IntArray) -> IntArray: ...
+
+
+class BaselineCheck(RunCallback[ComparedRun]):
     """Compares the run's confirmed controller with baselines when the run ends (see the
     module docstring). ``given`` are hand-made rule tables: (name, consequents (M,))."""
 
@@ -101,7 +118,7 @@ class BaselineCheck(RunCallback):
         screen = min(SCREEN_EPISODES, confirmed)
         return (n_commands + RANDOM_TABLES + len(self.given)) * screen + confirmed - screen
 
-    def on_finish(self, learner: Learner) -> None:
+    def on_finish(self, learner: ComparedRun) -> None:
         final = self.confirmation.final
         self.verdict = None
         if final is None or len(final.episode_fitness) < 2:
@@ -130,7 +147,7 @@ class BaselineCheck(RunCallback):
         self.verdict = Verdict(bool(difference.low > 0.0), strongest, difference,
                                float(baseline.mean()), means)
 
-    def baselines(self, learner: Learner) -> list[tuple[str, IntArray]]:
+    def baselines(self, learner: ComparedRun) -> list[tuple[str, IntArray]]:
         """The baselines, in order: each constant command, the random tables, the given
         tables; rules the file gives are as given in all of them."""
         controller = learner.controller
@@ -146,7 +163,7 @@ class BaselineCheck(RunCallback):
         tables += [(name, np.asarray(genes, dtype=np.intp)) for name, genes in self.given]
         return [(name, learner.keep_fixed(genes[None, :].copy())[0]) for name, genes in tables]
 
-    def _fitness(self, learner: Learner, genes: IntArray,
+    def _fitness(self, learner: ComparedRun, genes: IntArray,
                  seeds: NDArray[np.int64]) -> NDArray[np.float64]:
         """Fitness per episode of the controller ``genes`` on ``seeds``, counted in usage."""
         env, consequents = learner.env, genes.tolist()

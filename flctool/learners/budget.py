@@ -1,9 +1,9 @@
 """What a run spends, and the budget that ends it: episodes, steps, seconds, a target.
 
-:class:`Usage` counts every episode and environment step a run spends, training and
-selection apart; :class:`Budget` is the run callback that ends a run when the next generation
-would break ``learning.stop`` or once the selected controller's confirmation reaches
-``stop.target`` (:mod:`flctool.learners.confirmation`). Budgets count
+:class:`~flctool.learners.metrics.Usage` counts every episode and environment step a run
+spends, training and selection apart; :class:`Budget` is the run callback that ends a run
+when the next generation would break ``learning.stop`` or once the selected controller's
+confirmation reaches ``stop.target`` (:mod:`flctool.learners.confirmation`). Budgets count
 training and selection episodes alike and are checked between generations, from counts saved
 in every checkpoint, so that a run stopped by ``episodes``, ``steps`` or ``target`` is as
 reproducible as one that runs all its generations; only ``seconds`` depends on the machine.
@@ -12,56 +12,56 @@ reproducible as one that runs all its generations; only ``seconds`` depends on t
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Any
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any, Protocol
 
-from flctool.behaviour.learning import StopConfig
-from flctool.learners.callbacks import RunCallback
+from flctool.behaviour.learning import LearningConfig, StopConfig
+from flctool.learners.confirmation import ConfirmedRun
+from flctool.learners.metrics import GenerationResult, IntArray, Usage
+from flctool.learners.run_callback import RunCallback
 
 if TYPE_CHECKING:
-    from flctool.learners.base import GenerationResult, Learner
-    from flctool.learners.checkpoint import SelectionState
+    from flctool.behaviour.models import Behaviour
+    from flctool.compile.controller import Controller
     from flctool.learners.confirmation import Confirmation
     from flctool.learners.selection import ModelSelection
 
 
-@dataclass
-class Usage:
-    """Episodes and environment steps spent: training, selection (validation),
-    confirmation and the baselines' comparison apart."""
-
-    training_episodes: int = 0
-    training_steps: int = 0
-    selection_episodes: int = 0
-    selection_steps: int = 0
-    confirmation_episodes: int = 0
-    confirmation_steps: int = 0
-    baseline_episodes: int = 0  # the end-of-run comparison (flctool.learners.baselines)
-    baseline_steps: int = 0
+class BudgetedRun(ConfirmedRun, Protocol):
+    """What the budget reads of the run it is part of (a
+    :class:`~flctool.learners.base.Learner` is one); a target is checked by confirming."""
 
     @property
-    def episodes(self) -> int:
-        return (self.training_episodes + self.selection_episodes + self.confirmation_episodes
-                + self.baseline_episodes)
+    def config(self) -> LearningConfig: ...
 
     @property
-    def steps(self) -> int:
-        return (self.training_steps + self.selection_steps + self.confirmation_steps
-                + self.baseline_steps)
+    def elapsed(self) -> float: ...
 
-    def to_dict(self) -> dict[str, int]:
-        return {"training_episodes": self.training_episodes,
-                "training_steps": self.training_steps,
-                "selection_episodes": self.selection_episodes,
-                "selection_steps": self.selection_steps,
-                "confirmation_episodes": self.confirmation_episodes,
-                "confirmation_steps": self.confirmation_steps,
-                "baseline_episodes": self.baseline_episodes,
-                "baseline_steps": self.baseline_steps,
-                "episodes": self.episodes, "steps": self.steps}
+    def episodes_per_generation(self) -> int: ...
 
 
-class Budget(RunCallback):
+class PlannedRun(Protocol):
+    """What :func:`describe_budget` reads of a run before it starts."""
+
+    @property
+    def config(self) -> LearningConfig: ...
+
+    @property
+    def behaviour(self) -> Behaviour: ...
+
+    @property
+    def controller(self) -> Controller: ...
+
+    @property
+    def fixed_rules(self) -> IntArray: ...
+
+    @property
+    def confirmation(self) -> Confirmation: ...
+
+    def episodes_at_end(self) -> int: ...
+
+
+class Budget(RunCallback[BudgetedRun]):
     """Ends the run on ``learning.stop`` (see the module docstring): after a generation,
     ``target`` if the selected controller's confirmation reached it, else the first budget
     the next generation -- its trials, its leader's validation, the final selection and the
@@ -79,7 +79,7 @@ class Budget(RunCallback):
         self.usage = usage
         self.stop_reason: str | None = None  # "target", "episodes", "steps" or "seconds"
 
-    def on_trials(self, learner: Learner, result: GenerationResult) -> None:
+    def on_trials(self, learner: BudgetedRun, result: GenerationResult) -> None:
         del result
         if self.target is not None and self.confirmation.reaches(learner, self.target):
             self.stop_reason = "target"
@@ -107,13 +107,14 @@ class Budget(RunCallback):
     def state_dict(self) -> dict[str, Any]:
         return {"usage": self.usage.to_dict(), "stop_reason": self.stop_reason}
 
-    def restore(self, state: SelectionState) -> None:
+    def restore(self, usage: Usage, stop_reason: str | None) -> None:
+        """Restore what :meth:`state_dict` saved, as the checkpoint reader checked it."""
         for counter in fields(Usage):
-            setattr(self.usage, counter.name, getattr(state.usage, counter.name))
-        self.stop_reason = state.stop_reason
+            setattr(self.usage, counter.name, getattr(usage, counter.name))
+        self.stop_reason = stop_reason
 
 
-def describe_budget(learner: Learner) -> str:
+def describe_budget(learner: PlannedRun) -> str:
     """What the run will spend and why, in one line for ``flctool learn`` to say: its
     training episodes (generations x population x trials, from the file or the defaults, the
     paper's protocol), for how many rules and commands, and what selection, confirmation

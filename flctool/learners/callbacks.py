@@ -1,25 +1,20 @@
 """Callbacks of the training loop: progress, run-directory records, early stop.
 
-A callback sees the learner at the start, every generation's metrics, and the end; returning
-False from :meth:`Callback.on_generation` stops training after that generation.
-
-A :class:`RunCallback` is part of the run itself: model selection
-(:class:`~flctool.learners.selection.ModelSelection`) and the budget
-(:class:`~flctool.learners.budget.Budget`) are two. It sees each generation's trials before
-the generation's metrics are made, may run episodes of its own (counted in the run's usage),
-may end the run, and keeps state that every checkpoint holds -- so :func:`~flctool.learners.
-base.train` reads as advance, evaluate, report, and a resumed run continues bit for bit.
+A callback watches a run from outside: it sees the learner at the start, every generation's
+metrics, and the end; returning False from :meth:`Callback.on_generation` stops training
+after that generation. The parts of the run itself (model selection, the budget) are run
+callbacks (:mod:`flctool.learners.run_callback`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from flctool.learners.metrics import GenerationMetrics
 
 if TYPE_CHECKING:
-    from flctool.learners.base import GenerationResult, Learner
+    from flctool.learners.base import Learner
 
 
 class Callback:
@@ -39,24 +34,6 @@ class Callback:
     def on_end(self) -> None:
         """Called once when training ends: finished, stopped early, or on an error or Ctrl-C
         (then also if :meth:`on_start` raised, so :attr:`learner` may still be None)."""
-
-
-class RunCallback:
-    """Part of a run (see the module docstring). The learner builds its own from its
-    ``learning:`` section (:attr:`~flctool.learners.base.Learner.run_callbacks`)."""
-
-    #: Why the run should end now ("target", "episodes", ...); None to go on.
-    stop_reason: str | None = None
-
-    def on_trials(self, learner: Learner, result: GenerationResult) -> None:
-        """After the trials of generation ``learner.generation`` (``result``)."""
-
-    def on_finish(self, learner: Learner) -> None:
-        """The run ends after this generation (all its generations done, or stopped)."""
-
-    def state_dict(self) -> dict[str, Any]:
-        """This callback's part of the checkpoint (JSON-compatible)."""
-        return {}
 
 
 class CallbackList(Callback):

@@ -21,9 +21,8 @@ from numpy.typing import NDArray
 
 from flctool.errors import LearnError
 from flctool.learners.baselines import Verdict
-from flctool.learners.budget import Usage
 from flctool.learners.confirmation import Confirmed
-from flctool.learners.metrics import GenerationMetrics
+from flctool.learners.metrics import GenerationMetrics, Usage
 from flctool.learners.selection import Candidate
 
 IntArray = NDArray[np.intp]

@@ -20,15 +20,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.behaviour.learning import TargetConfig
-from flctool.learners.budget import Usage
-from flctool.learners.callbacks import RunCallback
-from flctool.learners.trial import run_trial
+from flctool.envs.base import BatchEnv
+from flctool.learners.metrics import FloatArray, GenerationResult, IntArray, Usage
+from flctool.learners.run_callback import RunCallback
+from flctool.learners.trial import SparseRules, run_trial
 from flctool.rollout import (
     CONFIRMATION_SEED_LOW,
     T975,
@@ -41,7 +42,7 @@ from flctool.rollout import (
 )
 
 if TYPE_CHECKING:
-    from flctool.learners.base import FloatArray, GenerationResult, IntArray, Learner
+    from flctool.learners.selection import Candidate, ModelSelection
 
 #: Index of the confirmation seeds' child in the run's SeedSequence (after ga, env, explore
 #: and validation).
@@ -152,7 +153,27 @@ def _exact(estimate: Estimate) -> list[float | int]:
     return [estimate.value, estimate.low, estimate.high, estimate.n]
 
 
-class Confirmation(RunCallback):
+class ConfirmedRun(Protocol):
+    """What confirmation reads of the run it is part of (a
+    :class:`~flctool.learners.base.Learner` is one)."""
+
+    @property
+    def generation(self) -> int: ...
+
+    @property
+    def env(self) -> BatchEnv: ...
+
+    @property
+    def selection(self) -> ModelSelection: ...
+
+    def selected(self) -> tuple[int, int, IntArray, float, Candidate | None]: ...
+
+    def selected_sets(self) -> FloatArray | None: ...
+
+    def rules_for(self, genes: FloatArray | None) -> SparseRules: ...
+
+
+class Confirmation(RunCallback[ConfirmedRun]):
     """Confirms the run's controller on fresh episodes when the run ends (see the module
     docstring); ``episodes`` 0 turns it off. ``episode_limit`` is ``stop.episodes``: a
     confirmation takes only what is left of it."""
@@ -173,16 +194,16 @@ class Confirmation(RunCallback):
         """The confirmation of the controller the run returns (once the run has ended)."""
         return self.confirmed[-1] if self.confirmed else None
 
-    def on_finish(self, learner: Learner) -> None:
+    def on_finish(self, learner: ConfirmedRun) -> None:
         generation, individual, consequents, _, _ = learner.selected()
         sets = learner.selected_sets()
         if self.final is None or not self.final.is_of(consequents, sets):
             self.confirm(learner, consequents, generation, individual, sets)
 
-    def on_trials(self, learner: Learner, result: GenerationResult) -> None:
+    def on_trials(self, learner: ConfirmedRun, result: GenerationResult) -> None:
         del learner, result  # confirmations run when the run ends, or when a target asks
 
-    def reaches(self, learner: Learner, target: TargetConfig) -> bool:
+    def reaches(self, learner: ConfirmedRun, target: TargetConfig) -> bool:
         """Whether the selected controller reaches ``target``: its validated figure first
         (no episodes), then a confirmation of it (once per controller)."""
         best = learner.selection.best
@@ -194,7 +215,7 @@ class Confirmation(RunCallback):
                                  best.sets)
         return final is not None and final.value_in(target.unit) >= target.value
 
-    def confirm(self, learner: Learner, consequents: IntArray, generation: int,
+    def confirm(self, learner: ConfirmedRun, consequents: IntArray, generation: int,
                 individual: int, sets: FloatArray | None = None) -> Confirmed | None:
         """Run ``consequents (M,)`` (with the set genome ``sets``, if the run learns the sets)
         on the confirmation episodes the budget leaves (None if it leaves none, or

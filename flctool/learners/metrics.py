@@ -1,8 +1,11 @@
-"""What one generation of training measured: one row of a run's metrics.csv.
+"""What training measures: a generation's trials, its row of metrics.csv, a run's spending.
 
-Training and validation (model selection) are counted apart: ``episodes`` and ``steps`` are
-the generation's training trials, ``selection_episodes`` and ``selection_steps`` the
-validation episodes run after it; the run used the sum of both.
+:class:`GenerationResult` is what a learner's trials of one generation gave;
+:class:`GenerationMetrics` is the row of a run's metrics.csv made of it. Training and
+validation (model selection) are counted apart: ``episodes`` and ``steps`` are the
+generation's training trials, ``selection_episodes`` and ``selection_steps`` the validation
+episodes run after it; the run used the sum of both. :class:`Usage` counts all a run has
+spent. This module imports no other part of the learners, so every part can use it.
 """
 
 from __future__ import annotations
@@ -15,6 +18,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class GenerationResult:
+    """What :meth:`~flctool.learners.base.Learner.evaluate` measured."""
+
+    fitness: FloatArray  # (P,) per individual, or (E,) per episode for fuzzy_q
+    episodes: int
+    steps: int
 
 
 @dataclass(frozen=True)
@@ -63,3 +76,39 @@ class GenerationMetrics:
                    # absent from the records of runs made before confirmation
                    int(row.get("confirmation_episodes", 0)),
                    int(row.get("confirmation_steps", 0)))
+
+
+@dataclass
+class Usage:
+    """Episodes and environment steps spent: training, selection (validation),
+    confirmation and the baselines' comparison apart."""
+
+    training_episodes: int = 0
+    training_steps: int = 0
+    selection_episodes: int = 0
+    selection_steps: int = 0
+    confirmation_episodes: int = 0
+    confirmation_steps: int = 0
+    baseline_episodes: int = 0  # the end-of-run comparison (flctool.learners.baselines)
+    baseline_steps: int = 0
+
+    @property
+    def episodes(self) -> int:
+        return (self.training_episodes + self.selection_episodes + self.confirmation_episodes
+                + self.baseline_episodes)
+
+    @property
+    def steps(self) -> int:
+        return (self.training_steps + self.selection_steps + self.confirmation_steps
+                + self.baseline_steps)
+
+    def to_dict(self) -> dict[str, int]:
+        return {"training_episodes": self.training_episodes,
+                "training_steps": self.training_steps,
+                "selection_episodes": self.selection_episodes,
+                "selection_steps": self.selection_steps,
+                "confirmation_episodes": self.confirmation_episodes,
+                "confirmation_steps": self.confirmation_steps,
+                "baseline_episodes": self.baseline_episodes,
+                "baseline_steps": self.baseline_steps,
+                "episodes": self.episodes, "steps": self.steps}

@@ -37,24 +37,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.behaviour.learning import SelectionConfig
 from flctool.envs.base import BatchEnv
-from flctool.learners.budget import Usage
-from flctool.learners.callbacks import RunCallback
+from flctool.learners.metrics import FloatArray, GenerationResult, IntArray, Usage
+from flctool.learners.run_callback import RunCallback
 from flctool.learners.trial import SparseRules, Trial, run_trial
 from flctool.rollout import Estimate, clip_estimate, distinct_run_seeds, mean_interval
 
-if TYPE_CHECKING:
-    from flctool.learners.base import GenerationResult, Learner
-    from flctool.learners.checkpoint import SelectionState
-
-IntArray = NDArray[np.intp]
-FloatArray = NDArray[np.float64]
 #: A rule base, or what gives each candidate's (its own sets when a run learns them).
 RulesOf = SparseRules | Callable[["Candidate"], SparseRules]
 
@@ -169,7 +163,34 @@ class _KnownEpisode:
     trial: Trial
 
 
-class ModelSelection(RunCallback):
+class SelectionRun(Protocol):
+    """What model selection reads of the run it is part of (a
+    :class:`~flctool.learners.base.Learner` is one)."""
+
+    @property
+    def population(self) -> IntArray: ...
+
+    @property
+    def fitness(self) -> FloatArray: ...
+
+    @property
+    def set_genes(self) -> FloatArray | None: ...
+
+    @property
+    def generation(self) -> int: ...
+
+    @property
+    def env(self) -> BatchEnv: ...
+
+    @property
+    def stop_reason(self) -> str | None: ...
+
+    def rules_of(self, candidate: Candidate) -> SparseRules: ...
+
+    def elite_candidates(self) -> list[Candidate]: ...
+
+
+class ModelSelection(RunCallback[SelectionRun]):
     """The run's hall of fame and its validation (see the module docstring): the run
     callback that decides which controller a run returns.
 
@@ -202,13 +223,13 @@ class ModelSelection(RunCallback):
         return self.config.candidates > 0
 
     # -- as a run callback -------------------------------------------------------------------
-    def on_trials(self, learner: Learner, result: GenerationResult) -> None:
+    def on_trials(self, learner: SelectionRun, result: GenerationResult) -> None:
         """Offer the generation to the hall of fame, and validate its leader."""
         del result
         self.offer(learner.population, learner.fitness, learner.generation, learner.set_genes)
         self.validate_leader(learner.rules_of, learner.env, learner.generation)
 
-    def on_finish(self, learner: Learner) -> None:
+    def on_finish(self, learner: SelectionRun) -> None:
         """Validate the remaining candidates, unless a target ended the run."""
         if learner.stop_reason != "target":
             self.finalize(learner.rules_of, learner.env, learner.generation,
@@ -339,14 +360,14 @@ class ModelSelection(RunCallback):
                 "best": None if self.best is None else self.best.to_dict(),
                 "finalized": self.finalized, "validated": self.validated}
 
-    def restore(self, state: SelectionState) -> None:
+    def restore(self, hall: list[Candidate], best: Candidate | None, finalized: bool,
+                validated: list[dict[str, Any]]) -> None:
         """Restore what :meth:`state_dict` saved, as :func:`~flctool.learners.checkpoint.
-        read_checkpoint` validated it."""
-        self.hall = {c.key(): c for c in state.hall}
-        best = state.best
+        read_checkpoint` validated it (its ``SelectionState``)."""
+        self.hall = {c.key(): c for c in hall}
         # the best is the same object as its hall entry, so later validations update both
         self.best = self.hall.get(best.key(), best) if best is not None else None
-        self.finalized, self.validated = state.finalized, state.validated
+        self.finalized, self.validated = finalized, validated
 
     def record(self) -> dict[str, Any]:
         """What run.json shows of selection: the validation scheme, every candidate validated

@@ -1,5 +1,7 @@
-"""ROS 2 for flctool: the graph a node lives in, reading and writing message fields, the served
-simulator robot, the deployment node and its watchdog, and bags (docs/ros2.md).
+"""ROS 2 for flctool: the graph a node lives in, reading and writing message fields, which
+robot file's topics a controller uses (:mod:`~flctool.ros2.section`), the deployment node
+and its watchdog, and bags (docs/ros2.md). The simulator served as a ROS 2 robot is an
+environment's job: :mod:`flctool.envs.ros2_robot`.
 
 Everything here needs the optional extra ``flctool[ros2]`` (rclpy and the message packages from
 PyPI's ROS 2 wheels; rosbags and mcap for bags), imported only when used: :func:`import_rclpy`

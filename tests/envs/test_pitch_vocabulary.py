@@ -130,6 +130,62 @@ def test_a_chaser_walks_to_the_ball_and_pushes_it() -> None:
     assert opponent is not None and opponent[0] < 1000.0
 
 
+CONTACT = """  adapter: pitch
+  max_steps: 60
+  start:
+    robot: {x: [-1000, -1000], y: [-250, 250], heading: [0, 0]}
+    ball: {x: [1500, 1500], y: [900, 900]}
+  opponents: [{x: [-400, -400], y: [0, 0], behaviour: stand, radius: 120}]
+  outcomes: [{when: timeout, success: true}]
+"""
+
+
+def test_the_robot_cannot_walk_through_an_opponent() -> None:
+    env = make_env(_behaviour(CONTACT))
+    assert isinstance(env, PitchSim)
+    passed = 0
+    for seed in range(10):
+        env.reset_one(seed)
+        for _ in range(60):
+            env.step_one(0.0)  # forward, at the opponent
+            gap = math.hypot(env.x[0] + 400.0, env.y[0])
+            assert gap >= 150.0 + 120.0 - 1e-9, seed  # the bodies touch at most
+        passed += env.x[0] > -400.0  # slid round it
+    assert passed > 0
+    # head on and without motion noise, the robot is held at touching
+    still = CONTACT.replace("y: [-250, 250]", "y: [0, 0]") + (
+        "  noise: {forward: {forward: 0, sideways: 0, rotation: 0}}\n")
+    env = make_env(_behaviour(still))
+    assert isinstance(env, PitchSim)
+    env.reset_one(0)
+    for _ in range(30):
+        env.step_one(0.0)
+    assert (env.x[0], env.y[0]) == (pytest.approx(-400.0 - 270.0), 0.0)
+    # a declared collision outcome ends the episode when the bodies touch
+    collide = still.replace("outcomes: [", "outcomes: [{when: collision, reward: -1}, ")
+    _, reward, terminated, _, steps = _run(collide, 0.0)
+    assert (reward, terminated) == (-1.0, True) and steps == 6  # 330 mm at 60 mm a step
+
+
+def test_contact_is_the_same_batched_and_one_at_a_time() -> None:
+    behaviour = _behaviour(CONTACT.replace("stand, radius: 120", "chase, speed: 30"),
+                           ("opponent_distance", "opponent_bearing", "pan"))
+    actions = np.random.default_rng(3).uniform(-0.6, 0.6, (60, 8))
+    batch = make_env(behaviour, 8)
+    batch.reset(np.arange(8, dtype=np.int64))
+    singles = [make_env(behaviour) for _ in range(8)]
+    for b, env in enumerate(singles):
+        env.reset_one(b)
+    for t in range(60):
+        step = batch.step(actions[t])
+        for b, env in enumerate(singles):
+            obs = env.step_one(float(actions[t, b]))[0]
+            assert np.array_equal(obs, step.observations[b]), (t, b)
+    assert isinstance(batch, PitchSim)
+    assert np.array_equal(batch.x, np.array([e.x[0] for e in singles]))
+    assert np.array_equal(batch.ball_x, np.array([e.ball_x[0] for e in singles]))
+
+
 def test_all_any_and_held_outcomes() -> None:
     base = """  adapter: pitch
   max_steps: 30

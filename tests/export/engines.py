@@ -1,8 +1,10 @@
 """The reference engines as the tests run them: the fuzzylite 6 command line (Debian package
-``fuzzylite``) and, where installed, Octave with its fuzzy-logic-toolkit.
+``fuzzylite``) and Octave with its fuzzy-logic-toolkit (Debian packages ``octave`` and
+``octave-fuzzy-logic-toolkit``).
 
-The fuzzylite tests skip only when the binary is absent *and* ``FLCTOOL_REQUIRE_FUZZYLITE``
-is unset; CI sets it, so there a missing binary fails the tests instead of skipping them.
+Each engine's tests skip only when it is absent *and* its ``FLCTOOL_REQUIRE_FUZZYLITE`` /
+``FLCTOOL_REQUIRE_OCTAVE`` is unset; CI sets both, so there a missing engine fails the tests
+instead of skipping them.
 """
 
 from __future__ import annotations
@@ -98,12 +100,19 @@ def assert_fuzzylite_agrees(behaviour: Behaviour, text: str, format: str, states
     return worst
 
 
+def _missing_octave(what: str) -> None:
+    hint = "apt-get install octave octave-fuzzy-logic-toolkit"
+    if os.environ.get("FLCTOOL_REQUIRE_OCTAVE"):
+        pytest.fail(f"FLCTOOL_REQUIRE_OCTAVE is set but {what} ({hint})")
+    pytest.skip(f"{what} ({hint})")
+
+
 def octave_outputs(fis_text: str, states: np.ndarray, folder: Path) -> np.ndarray:
     """Octave's fuzzy-logic-toolkit ``evalfis`` on (S, N) ``states`` (it refuses states
     outside the ranges, so clip them first); skips when Octave or the toolkit is missing."""
     octave = shutil.which("octave")
     if octave is None:
-        pytest.skip("Octave is not installed (an optional check)")
+        _missing_octave("Octave is not installed")
     (folder / "system.fis").write_text(fis_text, encoding="utf-8")
     np.savetxt(folder / "states.txt", states, fmt="%.17g")
     script = ("pkg load fuzzy-logic-toolkit; fis = readfis('system.fis'); "
@@ -112,7 +121,7 @@ def octave_outputs(fis_text: str, states: np.ndarray, folder: Path) -> np.ndarra
                             cwd=folder, capture_output=True, text=True, timeout=300,
                             check=False)
     if "package" in result.stderr and "not installed" in result.stderr:
-        pytest.skip("Octave's fuzzy-logic-toolkit is not installed (an optional check)")
+        _missing_octave("Octave's fuzzy-logic-toolkit is not installed")
     assert result.returncode == 0, result.stderr + result.stdout
     return np.array([float(v) for v in result.stdout.split()])
 

@@ -16,8 +16,8 @@ from flctool.behaviour.learning import SelectionConfig, StopConfig
 from flctool.errors import LearnError
 from flctool.learners import Callback, GenerationMetrics, make_learner, train
 from flctool.learners.base import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
-from flctool.learners.budget import Usage
 from flctool.learners.confirmation import confirmation_seeds
+from flctool.learners.metrics import Usage
 from flctool.learners.selection import (
     VALIDATION_SEED_LOW,
     ModelSelection,

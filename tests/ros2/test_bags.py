@@ -64,8 +64,8 @@ def _simulator(tmp_path: Path) -> Path:
 def _record(tmp_path: Path, sim: Path, namespace: str, steps: int, drive: Any) -> Path:
     """A session of ``steps`` steps on the served ``sim``, driven by ``drive(env, obs, rng)
     -> action``, recorded as a bag (the robot file's topics and the odometry)."""
+    from flctool.envs.ros2_robot import SimRobot
     from flctool.ros2.bags import BagRecorder, session_topics
-    from flctool.ros2.robot import SimRobot
 
     behaviour = robot_behaviour(namespace, step_timeout=5.0)
     config = behaviour.environment
@@ -179,8 +179,8 @@ def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path
 
 
 def test_record_writes_a_session_bag_and_refuses_an_existing_one(tmp_path: Path) -> None:
+    from flctool.envs.ros2_robot import SimRobot
     from flctool.ros2.bags import read_messages
-    from flctool.ros2.robot import SimRobot
 
     robot_file = tmp_path / "robot.yaml"
     robot_file.write_text(behaviour_to_yaml(robot_behaviour("/recorded")), encoding="utf-8")

@@ -73,7 +73,7 @@ class _Spy:
 
 def _faulty(fault: str) -> Any:
     """A reference robot that misbehaves from its 5th step on."""
-    from flctool.ros2.robot import SimRobot
+    from flctool.envs.ros2_robot import SimRobot
 
     class FaultyRobot(SimRobot):
         def _publish_observation(self, observation: Any) -> None:
@@ -103,7 +103,7 @@ FAULTS = {
 
 @pytest.mark.parametrize("fault", list(FAULTS))
 def test_a_faulty_input_stops_the_robot_within_the_bound(fault: str) -> None:
-    from flctool.ros2.robot import SimRobot
+    from flctool.envs.ros2_robot import SimRobot
 
     robot_class = _faulty(fault)
     robot = robot_class(SimRobot.from_behaviour(

@@ -62,16 +62,16 @@ def test_validate_reports_every_problem_and_exits_1(tmp_path: Path) -> None:
 
 def test_validate_goes_on_after_a_file_that_crashes(tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
-    from flctool.cli import spec_commands
+    from flctool.cli import behaviour_commands
 
-    real = spec_commands.validate_file
+    real = behaviour_commands.validate_file
 
     def crash_on_first(path: Path) -> object:
         if path.name == "ballchase.yaml":
             raise RecursionError("maximum recursion depth exceeded")
         return real(path)
 
-    monkeypatch.setattr(spec_commands, "validate_file", crash_on_first)
+    monkeypatch.setattr(behaviour_commands, "validate_file", crash_on_first)
     result = runner.invoke(app, ["validate", str(BEHAVIOURS / "ballchase.yaml"),
                                  str(BEHAVIOURS / "cartpole.yaml")])
     assert result.exit_code == 1
