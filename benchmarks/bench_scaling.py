@@ -109,12 +109,8 @@ def measure(name: str, controller: Controller, batch: int, singles: int,
 def walk_ns(controller: Controller, states: np.ndarray, dense: bool, repeats: int) -> float:
     """CPU ns per state of the batched kernel on one walk (every rule, or the fired rules)."""
     layout = controller._layout
-    if dense and not layout.dense:  # keep the grid the default layout leaves out
-        offsets = np.concatenate([[0], np.cumsum(controller.shape)])
-        grid = controller.rule_grid + offsets[:-1]
-        ints = np.concatenate([[controller.n_inputs, offsets[-1], max(controller.shape),
-                                len(grid)], layout.ints[4:], grid.ravel()]).astype(np.intp)
-        layout = kernels.Layout(layout.floats, ints, True)
+    if dense:  # keep the grid the default layout leaves out
+        layout = kernels.keep_grid(layout, controller.rule_grid)
     tables = np.array(controller.consequents, dtype=np.intp)[None, :]
     out = np.empty(len(states))
     infer = kernels.entry("infer")
@@ -174,13 +170,13 @@ def cpu_per_call(run: Any, repeats: int, at_least: float = 0.02) -> float:
     return best
 
 
-def sweep(repeats: int) -> dict[str, Any]:
+def sweep(repeats: int, only: set[tuple[int, int]] | None = None) -> dict[str, Any]:
     """output against the naive kernel at every N <= 8, L <= 9 (M <= MAX_RULES) and batch of
     SWEEP_BATCHES, and the walk output takes at 1,000 states against both walks."""
     rows = []
     for n_inputs in range(1, 9):
         for n_sets in range(2, 10):
-            if n_sets ** n_inputs > MAX_RULES:
+            if n_sets ** n_inputs > MAX_RULES or (only and (n_inputs, n_sets) not in only):
                 continue
             controller = overlapping_controller(n_inputs, n_sets, seed=n_inputs * 10 + n_sets)
             naive = naive_output(controller)
@@ -206,10 +202,13 @@ def sweep(repeats: int) -> dict[str, Any]:
                 rows.append(row)
             worst = min(r["vs_naive"] for r in rows if r["rules"] == controller.n_rules
                         and r["inputs"] == n_inputs)
+            by_batch = " ".join(f"{r['batch']}:{r['vs_naive']:.2f}" for r in rows
+                                if r["rules"] == controller.n_rules
+                                and r["inputs"] == n_inputs)
             print(f"N = {n_inputs}, L = {n_sets}, M = {controller.n_rules:>7,} "
-                  f"({'every rule' if controller._layout.dense else 'fired rules'}): worst "
-                  f"{worst:.2f}x the naive kernel over batches {SWEEP_BATCHES[0]}-"
-                  f"{SWEEP_BATCHES[-1]}", flush=True)
+                  f"({'every rule' if controller._layout.dense else 'fired rules'}"
+                  f"{', a few states interleaved' if controller._layout.ints[4] else ''}): "
+                  f"worst {worst:.2f}x the naive kernel ({by_batch})", flush=True)
     worst_row = min(rows, key=lambda r: r["vs_naive"])
     choice = [r for r in rows if "over_cheaper" in r]
     worst_choice = max(r["over_cheaper"] for r in choice)
@@ -228,10 +227,14 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="fewer states and repeats")
     parser.add_argument("--sweep", action="store_true",
                         help="every N <= 8, L <= 9 against the naive kernel instead")
+    parser.add_argument("--only", metavar="NxL,...",
+                        help="--sweep: only these rule bases (inputs x sets), e.g. 8x2,6x2")
     args = parser.parse_args()
     controller_module.set_inference("kernels")  # the compiled walks are measured here
     if args.sweep:
-        result = sweep(3 if args.quick else 5)
+        only = ({tuple(int(v) for v in shape.split("x")) for shape in args.only.split(",")}
+                if args.only else None)
+        result = sweep(3 if args.quick else 5, only)  # type: ignore[arg-type]
         common.write_json(args.json.with_name(args.json.stem + "_sweep.json"), {
             "benchmark": "bench_scaling --sweep", "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
             "machine": common.machine(), "timing": "CPU time, least of the repeats",

@@ -369,6 +369,14 @@ def table(records: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def write_results(args: argparse.Namespace, records: list[dict[str, Any]],
+                  skipped: list[str]) -> None:
+    args.json.write_text(json.dumps({
+        "benchmark": "vs_sb3", "side": args.side, "zoo_commit": ZOO_COMMIT,
+        "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "argv": sys.argv[1:],
+        "runs": records, "not_started": skipped}, indent=1) + "\n")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("side", choices=("sb3", "flctool", "table"))
@@ -382,24 +390,35 @@ def main() -> None:
     parser.add_argument("--max-cpu", type=float, default=math.inf,
                         help="SB3: stop training after this many CPU seconds")
     parser.add_argument("--json", type=Path, default=Path("vs_sb3.json"))
+    parser.add_argument("--until", metavar="HH:MM",
+                        help="start no new run after this UTC time today (runs not started "
+                             "are listed as skipped)")
     args = parser.parse_args()
     if args.side == "table":
         records = [r for f in args.files for r in json.loads(f.read_text())["runs"]]
         print(table(records))
         return
-    records = []
+    deadline = math.inf
+    if args.until:
+        hours, minutes = (int(part) for part in args.until.split(":"))
+        deadline = time.time() - time.time() % 86400 + 3600 * hours + 60 * minutes
+    records: list[dict[str, Any]] = []
+    skipped: list[str] = []
     for name in args.tasks.split(","):
         task = TASKS[name]
         for algo in args.algos.split(",") if args.side == "sb3" else ["file's learner"]:
             for seed in range(args.seeds):
+                if time.time() > deadline:
+                    skipped.append(f"{name} {algo} seed {seed}")
+                    continue
                 record = (sb3_run(task, algo, seed, args.max_steps, args.max_cpu)
                           if args.side == "sb3" else flctool_run(task, seed))
                 records.append(record)
                 print(json.dumps(record), flush=True)
-                args.json.write_text(json.dumps({
-                    "benchmark": "vs_sb3", "side": args.side, "zoo_commit": ZOO_COMMIT,
-                    "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "argv": sys.argv[1:],
-                    "runs": records}, indent=1) + "\n")
+                write_results(args, records, skipped)
+    write_results(args, records, skipped)
+    if skipped:
+        print(f"not started (past --until {args.until}): {', '.join(skipped)}")
     print(table(records))
 
 

@@ -9,9 +9,10 @@ Four ways through, each chosen where it is cheapest:
   input's non-zero sets found (with overlapping trapezoids 1 to 3 of an input's sets), then
   only the rules combining them summed -- an odometer over the fired sets, last input
   fastest, which is increasing rule order;
-- **a few states of a tiny rule base** (:func:`_tiny_states`, with the own consequents; see
-  ``TINY_BATCH``): the memberships of the block, then every rule of each state -- the naive
-  loop, cheaper there than finding the fired rules or setting up the blocks;
+- **a few states of a small rule base** (:func:`_interleaved_states`, with the own
+  consequents; see ``TINY_BATCH``): every rule of each state -- the naive loop, four states
+  at a time -- cheaper there than finding the fired rules (when most rules fire, as with
+  many inputs of 2 sets) or setting up the blocks;
 - **blocks of states, every rule**: for small rule bases (:func:`walks_every_rule`), the
   memberships and then eq. 2-3 of every rule for ``_BLOCK`` states at once, in loops over
   the states that vectorise;
@@ -216,6 +217,10 @@ def _capacity(counts: IntArray) -> int:
     return total
 
 
+# Layout.ints starts with N, S, max L_i, M if the rule grid is kept (else 0), and whether
+# a few states are walked every rule four at a time (interleaves_states), then the offsets.
+_HEADER = 5
+
 _BLOCK = 64  # states whose memberships are computed together (fits in L1 with ~40 sets)
 
 
@@ -261,8 +266,8 @@ def _compact(mu: FloatArray, b: int, ints: IntArray, scratch: IntArray,
     n, max_sets = ints[0], ints[2]
     for i in range(n):
         count = 0
-        first = ints[4 + i]
-        for j in range(first, ints[5 + i]):
+        first = ints[_HEADER + i]
+        for j in range(first, ints[_HEADER + 1 + i]):
             value = mu[j, b]
             scratch[i * max_sets + count] = j - first
             mus[i * max_sets + count] = value
@@ -364,10 +369,11 @@ def _unpack(floats: FloatArray, ints: IntArray) -> tuple[FloatArray, FloatArray,
     # unboxing each argument is a good part of a small call.
     n, sets, max_sets, dense_rules = ints[0], ints[1], ints[2], ints[3]
     quads = floats[2 * n : 2 * n + 4 * sets].reshape((sets, 4))
-    kinds = 5 + 2 * n  # where the sets' shape codes start in ints
+    kinds = _HEADER + 1 + 2 * n  # where the sets' shape codes start in ints
     grid = ints[kinds + sets : kinds + sets + dense_rules * n].reshape((dense_rules, n))
     return (floats[:n], floats[n : 2 * n], quads, floats[2 * n + 4 * sets :], max_sets,
-            ints[4 : 5 + n], ints[5 + n : 5 + 2 * n], grid, ints[kinds : kinds + sets])
+            ints[_HEADER : _HEADER + 1 + n], ints[_HEADER + 1 + n : _HEADER + 1 + 2 * n], grid,
+            ints[kinds : kinds + sets])
 
 
 @_jit
@@ -468,8 +474,8 @@ def _state_sets(floats: FloatArray, ints: IntArray, state: FloatArray, scratch: 
     """
     n, max_sets = ints[0], ints[2]
     quads = 2 * n  # where the quadruples start in floats
-    offsets = 4  # where the offsets start in ints
-    kinds = 5 + 2 * n  # where the sets' shape codes start in ints
+    offsets = _HEADER  # where the offsets start in ints
+    kinds = _HEADER + 1 + 2 * n  # where the sets' shape codes start in ints
     for i in range(n):
         s = state[i]
         if s != s:
@@ -508,7 +514,7 @@ def _state_sums(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: Floa
     singletons = 2 * n + 4 * ints[1]
     counts = n * max_sets
     digits = counts + n
-    strides = 4 + n + 1
+    strides = _HEADER + n + 1
     numerator = 0.0
     denominator = 0.0
     if n == 2:  # the common case, without the odometer's bookkeeping
@@ -562,7 +568,7 @@ def _expand_fired(ints: IntArray, scratch: IntArray, mus: FloatArray, rules: Int
     from the back so that it happens in place), so each fired rule costs one min, not N.
     """
     n, max_sets = ints[0], ints[2]
-    strides = 4 + n + 1
+    strides = _HEADER + n + 1
     size = 1
     rules[0] = 0
     alphas[0] = np.inf
@@ -637,19 +643,58 @@ OWN_SMALL_BATCH_FEW_INPUTS = 16  # N <= 2, and any N walked every rule in blocks
 OWN_SMALL_BATCH = 8
 # (Walked every rule, blocks of 9 states cost about what 16 do: 4 x 4 and 5 x 3 sets were
 # 0.90-0.94x the naive kernel at 9 states through the blocks, 1.4x at 16 and 1.7x at 8.)
-# ... except for a small rule base walked every rule, which goes through _tiny_states (a
-# naive loop over every rule of each state, 1-1.5 ns a rule-input) where that costs less than
-# finding each state's fired rules (by N, about 1.5x the blocks' _SPARSE_NS_BY_INPUTS state
-# by state) or the blocks' set-up: with one or two inputs (fired rules found in 15-45 ns),
-# bases of at most TINY_RULES_FEW_INPUTS rules from OWN_SMALL_BATCH + 1 to TINY_BATCH states;
-# with more inputs, up to OWN_SMALL_BATCH_FEW_INPUTS states, bases whose M x N rule-inputs at
-# TINY_NS_PER_RULE_INPUT cost at most TINY_OVER_FIRED times _SPARSE_NS_BY_INPUTS[N].
-# Measured against the naive kernel at 1-65 states: one input of 2-9 sets, 2 x 2, 3 x 2,
-# 3 x 3, 4 x 2, 5 x 2 and 6 x 2 sets were 0.60-0.98x through the other walks.
+# ... except for a small rule base walked every rule, which goes through _interleaved_states
+# (the naive loop over every rule, four states at a time) where that costs less than finding
+# each state's fired rules or setting up the blocks:
+# - with one or two inputs (fired rules found in 15-45 ns a state), bases of at most
+#   TINY_RULES_FEW_INPUTS rules, from OWN_SMALL_BATCH + 1 to TINY_BATCH states;
+# - with more inputs, up to OWN_SMALL_BATCH_FEW_INPUTS states, where the layout found it
+#   cheaper (interleaves_states): the interleaved walk costs about INTERLEAVED_NS_PER_STATE +
+#   INTERLEAVED_NS_PER_RULE_INPUT x M x N a state, the state-by-state walk of the fired rules
+#   about FIRED_NS_PER_INPUT x N + FIRED_NS_PER_RULE x F, F the most rules that can fire at
+#   once (fired_rules_bound: 2^N for overlapping neighbours, M when every set of every input
+#   fires, as with 2 sets an input). Measured at 4, 8 and 16 states on every N = 3-8 and L <= 9
+#   whose blocks walk every rule (a loaded 2-core Xeon, December 2026): with every rule
+#   firing (6-8 inputs x 2 sets) the fired walk was 0.4-0.8x the naive kernel and the
+#   interleaved 1.5-2.5x; with few of many rules firing (3 x 6, 4 x 4) the fired walk is the
+#   cheaper.
 TINY_BATCH = 2 * _BLOCK
 TINY_RULES_FEW_INPUTS = 16
-TINY_NS_PER_RULE_INPUT = 1.2
-TINY_OVER_FIRED = 1.5
+INTERLEAVED_NS_PER_STATE = 100.0
+INTERLEAVED_NS_PER_RULE_INPUT = 0.4
+FIRED_NS_PER_INPUT = 60.0
+FIRED_NS_PER_RULE = 10.0
+
+
+def interleaves_states(n_rules: int, n_inputs: int, fired_bound: int) -> bool:
+    """Whether a few states of a base whose blocks walk every rule are walked every rule
+    four at a time (else each state's fired rules): the estimated cheaper, for M rules, N
+    inputs and at most ``fired_bound`` rules firing at once (see the constants above)."""
+    interleaved = INTERLEAVED_NS_PER_STATE + INTERLEAVED_NS_PER_RULE_INPUT * n_rules * n_inputs
+    fired = FIRED_NS_PER_INPUT * n_inputs + FIRED_NS_PER_RULE * min(fired_bound, n_rules)
+    return n_inputs > 2 and interleaved <= fired
+
+
+def fired_rules_bound(ranges: FloatArray, quadruples: tuple[FloatArray, ...],
+                      kinds: tuple[tuple[int, ...], ...] | None) -> int:
+    """The most rules that can fire for one state: the product over the inputs of the most
+    sets with a non-zero membership at one point of the input's range.
+
+    Where a trapezoid's membership turns non-zero or zero is one of its corners, so the
+    count at every corner and midway between consecutive corners finds each input's most
+    (for the other shapes, whose parameters are not where they start, it is a good
+    estimate: a cost model reads it, never the arithmetic).
+    """
+    from flctool.compile.membership import memberships
+
+    bound = 1
+    for i, quads in enumerate(quadruples):
+        low, high = float(ranges[i, 0]), float(ranges[i, 1])
+        corners = np.unique(np.clip(np.concatenate([quads.ravel(), [low, high]]), low, high))
+        points = np.concatenate([corners, (corners[:-1] + corners[1:]) / 2])
+        mu = memberships(points, quads, None if kinds is None else kinds[i])
+        bound *= max(1, int((mu > 0.0).sum(axis=1).max()))
+    return bound
 
 
 @_jit
@@ -680,7 +725,7 @@ def _infer_small(states: FloatArray, floats: FloatArray, ints: IntArray, tables:
 def _own_table(ints: IntArray) -> IntArray:
     # The consequents that follow the layout's ints in infer_one's / infer_own's ``ints``,
     # as the (1, M) table the shared walks take.
-    table = 5 + 2 * ints[0] + ints[1] + ints[3] * ints[0]
+    table = _HEADER + 1 + 2 * ints[0] + ints[1] + ints[3] * ints[0]
     return ints[table:].reshape((1, ints.shape[0] - table))
 
 
@@ -737,49 +782,93 @@ def _own_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Flo
 
 
 @_jit
-def _tiny_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: FloatArray,
-                 tables: IntArray) -> int:
-    # infer_own for a few states of a tiny rule base (see TINY_BATCH): each block's
-    # memberships, then every rule of each state in rule order -- the naive loop, whose few
-    # nanoseconds a state beat both other walks' set-up. Zeros add nothing (module doc).
+def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
+                        out: FloatArray, tables: IntArray) -> int:
+    """infer_own for a few states of a small base (see TINY_BATCH): every rule of each state
+    in rule order, the naive loop, but four states at a time.
+
+    Each state's eq. 2 mins and eq. 3 sums are its own chain, in rule order as the
+    reference's (zeros add nothing: module doc), so the bits are the same; four independent
+    chains keep the processor busy while one waits on its additions, and each rule's row of
+    the grid is read once for the four. A last odd state is walked alone.
+    """
     lo, hi, quads, singletons, _, offsets, _, grid, kinds = _unpack(floats, ints)
     n, sets = ints[0], ints[1]
-    work = np.empty((n + sets) * _BLOCK)
-    xs = work[: n * _BLOCK].reshape((n, _BLOCK))
-    mu = work[n * _BLOCK :].reshape((sets, _BLOCK))
+    count = states.shape[0]
+    for b in range(count):  # NaN inputs first: the first state that has one is reported
+        for i in range(n):
+            if states[b, i] != states[b, i]:
+                return b
+    rules = grid.shape[0]
+    values = np.empty(rules)  # each rule's c_m
+    for m in range(rules):
+        values[m] = singletons[tables[0, m]]
+    mu = np.empty((sets, 4))  # the memberships of the four states, side by side
     low, high = _singleton_bounds(floats, ints)
-    for first in range(0, states.shape[0], _BLOCK):
-        count = min(_BLOCK, states.shape[0] - first)
-        nan_state = _block_memberships(states, first, count, lo, hi, quads, kinds, offsets,
-                                       xs, mu)
-        if nan_state >= 0:
-            return nan_state
-        for b in range(count):
-            numerator = 0.0
-            denominator = 0.0
-            for m in range(grid.shape[0]):
-                alpha = mu[grid[m, 0], b]
+    first = 0
+    while first < count:
+        lanes = 1 if count - first == 1 else 4
+        for k in range(lanes):
+            b = min(first + k, count - 1)  # past the last state: it again, never written
+            for i in range(n):
+                s = min(max(states[b, i], lo[i]), hi[i])  # clipped, as np.clip does
+                for j in range(offsets[i], offsets[i + 1]):
+                    if kinds[j]:  # a shape other than the trapezoid (behaviour.shapes)
+                        mu[j, k] = _shaped(kinds[j], quads[j, 0], quads[j, 1], quads[j, 2],
+                                           quads[j, 3], s)
+                    else:
+                        mu[j, k] = _membership_free(s, quads[j, 0], quads[j, 1],
+                                                    quads[j, 2], quads[j, 3])
+        if lanes == 1:
+            numerator = denominator = 0.0
+            for m in range(rules):
+                alpha = mu[grid[m, 0], 0]
                 for i in range(1, n):
-                    alpha = min(alpha, mu[grid[m, i], b])  # eq. 2
-                numerator += alpha * singletons[tables[0, m]]
+                    alpha = min(alpha, mu[grid[m, i], 0])  # eq. 2
+                numerator += alpha * values[m]
                 denominator += alpha
             if denominator == 0.0:  # no rule fires (see infer)
-                return first + b
-            out[first + b] = _within(numerator / denominator, low, high)
+                return first
+            out[first] = _within(numerator / denominator, low, high)
+            return -1
+        n0 = n1 = n2 = n3 = d0 = d1 = d2 = d3 = 0.0
+        for m in range(rules):
+            row = grid[m, 0]
+            a0, a1, a2, a3 = mu[row, 0], mu[row, 1], mu[row, 2], mu[row, 3]
+            for i in range(1, n):  # eq. 2
+                row = grid[m, i]
+                a0 = min(a0, mu[row, 0])
+                a1 = min(a1, mu[row, 1])
+                a2 = min(a2, mu[row, 2])
+                a3 = min(a3, mu[row, 3])
+            value = values[m]
+            n0 += a0 * value
+            n1 += a1 * value
+            n2 += a2 * value
+            n3 += a3 * value
+            d0 += a0
+            d1 += a1
+            d2 += a2
+            d3 += a3
+        numerators = (n0, n1, n2, n3)
+        denominators = (d0, d1, d2, d3)
+        for k in range(min(4, count - first)):
+            if denominators[k] == 0.0:  # no rule fires (see infer)
+                return first + k
+            out[first + k] = _within(numerators[k] / denominators[k], low, high)
+        first += 4
     return -1
 
 
 @_jit
 def _tiny(ints: IntArray, count: int) -> bool:
-    # Whether infer_own takes _tiny_states (see TINY_BATCH).
+    # Whether infer_own takes _interleaved_states (see TINY_BATCH).
     n, rules = ints[0], ints[3]
     if rules == 0:
         return False
     if n <= 2:
         return rules <= TINY_RULES_FEW_INPUTS and OWN_SMALL_BATCH < count <= TINY_BATCH
-    fired = _SPARSE_NS_BY_INPUTS[min(n, len(_SPARSE_NS_BY_INPUTS) - 1)]
-    return bool(count <= OWN_SMALL_BATCH_FEW_INPUTS
-                and rules * n * TINY_NS_PER_RULE_INPUT <= TINY_OVER_FIRED * fired)
+    return bool(ints[4]) and count <= OWN_SMALL_BATCH_FEW_INPUTS
 
 
 @_jit
@@ -797,7 +886,7 @@ def infer_own(floats: FloatArray, ints: IntArray, states: FloatArray, out: Float
     tables = _own_table(ints)
     count = states.shape[0]
     if _tiny(ints, count):
-        return _tiny_states(floats, ints, states, out, tables)
+        return _interleaved_states(floats, ints, states, out, tables)
     # the blocks' walk of every rule costs M x N loops however few states: from more states
     small = OWN_SMALL_BATCH_FEW_INPUTS if ints[0] <= 2 or ints[3] > 0 else OWN_SMALL_BATCH
     if count <= small:
@@ -885,7 +974,8 @@ class Layout(NamedTuple):
     unboxes two arguments instead of eight (S = sum L_i sets in all, M rules)."""
 
     floats: FloatArray  # lo (N,), hi (N,), quads (S, 4) input after input, singletons (K,)
-    # N, S, max L_i, M if the grid is kept (else 0), offsets (N + 1,): input i's sets are
+    # N, S, max L_i, M if the grid is kept (else 0), whether a few states are walked every
+    # rule four at a time (interleaves_states), offsets (N + 1,): input i's sets are
     # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
     # last input fastest; kinds (S,): each set's shape code (0 the trapezoid, whose quad
     # holds its corners; else its parameters, flctool.behaviour.shapes); grid (M, N): each
@@ -907,10 +997,24 @@ def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: In
     dense = walks_every_rule(rule_grid.shape[0], len(sizes), sum(sizes))
     grid = rule_grid + offsets[:-1] if dense else np.empty((0, len(sizes)), dtype=np.intp)
     quads = np.concatenate(quadruples).astype(np.float64)
-    header = [len(sizes), len(quads), max(sizes), grid.shape[0]]
+    interleaves = dense and interleaves_states(
+        rule_grid.shape[0], len(sizes), fired_rules_bound(ranges, quadruples, kinds))
+    header = [len(sizes), len(quads), max(sizes), grid.shape[0], int(interleaves)]
     floats = np.concatenate([ranges[:, 0], ranges[:, 1], quads.ravel(), singletons])
     codes = (np.zeros(len(quads), dtype=np.intp) if kinds is None
              else np.array([k for input_kinds in kinds for k in input_kinds], dtype=np.intp))
     ints = np.concatenate([header, offsets, strides, codes, grid.ravel()])
     return Layout(floats=np.array(floats, dtype=np.float64), ints=np.array(ints, dtype=np.intp),
                   dense=dense)
+
+
+def keep_grid(layout: Layout, rule_grid: IntArray) -> Layout:
+    """``layout`` with the rule grid kept, so that the walk of every rule can run whatever M
+    is (for benchmarks and tests that compare the walks; the choice stays ``layout``'s)."""
+    if layout.dense:
+        return layout
+    n = rule_grid.shape[1]
+    offsets = layout.ints[_HEADER : _HEADER + n]
+    ints = np.concatenate([layout.ints[:3], [len(rule_grid), 0], layout.ints[_HEADER:],
+                           (rule_grid + offsets).ravel()]).astype(np.intp)
+    return Layout(layout.floats, ints, True)

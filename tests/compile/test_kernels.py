@@ -235,13 +235,7 @@ def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -
     and on the fired-rules walk, for ``tables (P, M)``: two (P, B) arrays."""
     layout = kernels.layout(controller.ranges, controller.quadruples, controller.rule_grid,
                             controller.singletons)
-    with_grid = layout
-    if not layout.dense:  # the same layout with the grid kept
-        offsets = np.concatenate([[0], np.cumsum(controller.shape)])
-        grid = controller.rule_grid + offsets[:-1]
-        header = [controller.n_inputs, offsets[-1], max(controller.shape), len(grid)]
-        ints = np.concatenate([header, layout.ints[4:], grid.ravel()]).astype(np.intp)
-        with_grid = kernels.Layout(layout.floats, ints, True)
+    with_grid = kernels.keep_grid(layout, controller.rule_grid)
     results = []
     for chosen, dense in ((with_grid, True), (layout, False)):
         out = np.empty(tables.shape[0] * len(states))
@@ -380,3 +374,58 @@ def test_the_walk_choice_is_measured_for_every_size_it_decides() -> None:
     # the sizes issue 29 found on the wrong walk
     assert not kernels.walks_every_rule(3 ** 6, 6, 18)
     assert kernels.walks_every_rule(7 ** 3, 3, 21)
+
+
+def strong_partition_controller(n_inputs: int, n_sets: int, seed: int) -> Controller:
+    """N inputs on [0, 1] of L trapezoids whose slopes overlap their neighbours' (at most
+    two sets of an input fire), with random consequents."""
+    step = 1.0 / (n_sets - 1)
+    sets = {}
+    for j in range(n_sets):
+        quad = [j * step - step, j * step - 0.2 * step, j * step + 0.2 * step, j * step + step]
+        if j == 0:
+            quad[:2] = [0.0, 0.0]
+        if j == n_sets - 1:
+            quad[2:] = [1.0, 1.0]
+        sets[f"s{j}"] = quad
+    data = {"flctool": 1, "name": "strong",
+            "inputs": {f"x{i}": {"range": [0, 1], "sets": sets} for i in range(n_inputs)},
+            "output": {"name": "u", "commands": {"a": -1, "b": 0.5, "c": 2}}}
+    learning = compile_behaviour(behaviour_from_data(data))
+    rng = np.random.default_rng(seed)
+    return learning.with_consequents(rng.integers(0, 3, size=learning.n_rules))
+
+
+def test_fired_rules_bound_counts_the_sets_that_overlap() -> None:
+    # Two sets of [0, 1] fire together everywhere inside it: every rule fires (M = 2^N).
+    two = strong_partition_controller(6, 2, seed=1)
+    assert kernels.fired_rules_bound(two.ranges, two.quadruples, two.kinds) == 64
+    # Neighbours overlap, never three at once: 2^N of the 5^N rules.
+    five = strong_partition_controller(3, 5, seed=1)
+    assert kernels.fired_rules_bound(five.ranges, five.quadruples, five.kinds) == 8
+    # many_overlapping_sets: at some point of each input every one of its sets fires (5, 3
+    # and 3 sets), so every rule can fire at once.
+    many = many_overlapping_sets()
+    assert kernels.fired_rules_bound(many.ranges, many.quadruples, many.kinds) == 45
+    assert many.n_rules == 45
+
+
+def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time() -> None:
+    # 6 x 2 and 8 x 2 sets (every rule fires) take the interleaved walk of every rule for up
+    # to OWN_SMALL_BATCH_FEW_INPUTS states; 3 x 6 (8 of 216 rules fire) the fired rules'.
+    assert not strong_partition_controller(3, 6, seed=2)._layout.ints[4]
+    rng = np.random.default_rng(12)
+    for n_inputs in (6, 8):
+        controller = strong_partition_controller(n_inputs, 2, seed=n_inputs)
+        assert controller._layout.ints[4] and controller.consequents is not None
+        for batch in (1, 2, 3, 4, 5, 7, kernels.OWN_SMALL_BATCH_FEW_INPUTS):
+            states = awkward_states(controller, rng, batch)
+            expected = [reference_output(controller, s, controller.consequents)
+                        for s in states]
+            np.testing.assert_array_equal(controller.output(states), expected)
+            np.testing.assert_array_equal(controller.output(np.asfortranarray(states)),
+                                          expected)
+        states = np.full((5, n_inputs), 0.3)
+        states[3, 2] = np.nan
+        with pytest.raises(InferenceError, match="input 'x2' is NaN in state 3"):
+            controller.output(states)
