@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from flctool.behaviour.environment import AdapterConfig
 from flctool.behaviour.magnitudes import magnitude_problems
 from flctool.behaviour.set_learning import set_learning_problems
-from flctool.behaviour.shapes import is_trapezoid, set_row, trapezoids
+from flctool.behaviour.shapes import evaluated_range, is_trapezoid, set_row, trapezoids
 from flctool.errors import PathPart, Problem
 from flctool.plugins import blamed
 from flctool.registry import did_you_mean
@@ -166,7 +166,8 @@ def check_input(name: str, variable: InputVariable) -> list[Problem]:
                 "move the set's feet inside the range (a shoulder at the end of the range is "
                 f"written [{lo:g}, {lo:g}, ...] or [..., {hi:g}, {hi:g}]) or widen the range"))
     if not problems:
-        gap = uncovered_gap(variable)
+        gap = uncovered_gap(variable.model_copy(
+            update={"range": evaluated_range(variable.range, variable.sets.values())}))
         if gap is not None:
             a, b = gap
             where = f"the point {a:g}" if a == b else f"the values between {a:g} and {b:g}"
@@ -242,8 +243,8 @@ def uncovered_gap(variable: InputVariable) -> tuple[float, float] | None:
             reach, reach_closed = end, end_closed
         elif end == reach:
             reach_closed = reach_closed or end_closed
-    if reach < hi or not reach_closed:
-        return reach, hi
+    if reach < hi or (reach == hi and not reach_closed):
+        return min(reach, hi), hi
     return None
 
 

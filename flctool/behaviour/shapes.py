@@ -148,3 +148,34 @@ def trapezoids(sets: Iterable[tuple[float, float, float, float] | ShapedSet]
             raise ValueError(f"a {value.kind} set where a trapezoid is required")
         quads.append(value)
     return quads
+
+
+#: How far inside a range end that no set fires the controller evaluates the input, as a
+#: share of the range's width (see :func:`evaluated_range`).
+END_MARGIN = 2.0**-30
+
+
+def evaluated_range(range_: tuple[float, float],
+                    sets: Iterable[tuple[float, float, float, float] | ShapedSet]
+                    ) -> tuple[float, float]:
+    """The interval an input's states are clipped to before its sets are evaluated.
+
+    It is the declared range, except at an end where no set fires but a set rises from it
+    (a triangle ``[0, 0.25, 0.5]`` on ``[0, 1]``, as fuzzylite's and MATLAB's examples write
+    them): there eq. 3 has no value (fuzzylite gives the output's default, often nan), so the
+    state is moved :data:`END_MARGIN` of the range's width inside, where that set fires and
+    the controller is continuous. The controller thus gives at that end its value an
+    imperceptible step inside (its limit there, within the slope times that step).
+    """
+    lo, hi = range_
+    values = list(sets)
+    if not all(is_trapezoid(v) for v in values):
+        return lo, hi  # the other shapes are checked for coverage otherwise (no exact zeros)
+    quads = trapezoids(values)
+    step = (hi - lo) * END_MARGIN
+    low_fires = any(pa == pb == lo for pa, pb, _, _ in quads)
+    low_rises = any(pa == lo < pb for pa, pb, _, _ in quads)
+    high_fires = any(pc == pd == hi for _, _, pc, pd in quads)
+    high_falls = any(pc < pd == hi for _, _, pc, pd in quads)
+    return (lo + step if low_rises and not low_fires else lo,
+            hi - step if high_falls and not high_fires else hi)

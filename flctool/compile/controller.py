@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.behaviour.models import Behaviour
-from flctool.behaviour.shapes import set_row
+from flctool.behaviour.shapes import evaluated_range, set_row
 from flctool.compile import vectorised
 from flctool.compile.membership import memberships
 from flctool.compile.rules import rule_consequents, rule_grid
@@ -474,7 +474,10 @@ def compile_behaviour(behaviour: Behaviour) -> Controller:
         set_names=set_names,
         output_name=behaviour.output.name,
         command_names=commands,
-        ranges=_frozen(np.array([v.range for v in behaviour.inputs.values()], dtype=np.float64)),
+        # (the declared ranges, moved inside an end that no set fires: evaluated_range)
+        ranges=_frozen(np.array([evaluated_range(v.range, v.sets.values())
+                                 for v in behaviour.inputs.values()],
+                                dtype=np.float64)),
         quadruples=tuple(_frozen(np.array([p for _, p in sets], dtype=np.float64))
                          for sets in rows),
         rule_grid=_frozen(grid),

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Protocol
 
 from flctool.behaviour.models import Behaviour
-from flctool.behaviour.shapes import set_row
+from flctool.behaviour.shapes import evaluated_range, set_row
 from flctool.compile.defuzzify import centre_of_area
 from flctool.compile.membership import firing_sets
 from flctool.errors import InferenceError
@@ -68,7 +68,8 @@ class SparseRules:
         inputs = behaviour.inputs.values()
         rows = [[set_row(value) for value in v.sets.values()] for v in inputs]
         kinds = tuple(tuple(code for code, _ in sets) for sets in rows)
-        rules._build(list(behaviour.inputs), [v.range for v in inputs],
+        rules._build(list(behaviour.inputs),
+                     [evaluated_range(v.range, v.sets.values()) for v in inputs],
                      [[p for _, p in sets] for sets in rows],
                      list(behaviour.output.commands.values()),
                      kinds if any(any(k) for k in kinds) else None)

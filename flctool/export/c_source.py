@@ -18,7 +18,7 @@ import numpy as np
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.base import identifier
 from flctool.behaviour.checks import uncovered_gap
-from flctool.behaviour.shapes import is_trapezoid, set_row, trapezoids
+from flctool.behaviour.shapes import evaluated_range, is_trapezoid, set_row, trapezoids
 from flctool.errors import ExportError
 from flctool.export.base import Exporter, header_lines, number
 from flctool.export.float_error import check_float_error
@@ -57,7 +57,8 @@ class CExporter(Exporter):
         end and the next ramp's start rounding to the same float): refuse that export."""
         for name, variable in behaviour.inputs.items():
             rounded = variable.model_copy(update={
-                "range": tuple(_single(v) for v in variable.range),
+                "range": tuple(_single(v) for v in
+                               evaluated_range(variable.range, variable.sets.values())),
                 "sets": {s: tuple(_single(v) for v in q) for s, q in
                          zip(variable.sets, trapezoids(variable.sets.values()), strict=True)}})
             gap = uncovered_gap(rounded)
@@ -181,9 +182,11 @@ class CExporter(Exporter):
         lines += [
             f"#define {macro}N_SETS {first[-1]}",
             f"#define {macro}N_RULES {behaviour.rule_count}L", "",
-            "/* Each input's [low, high]. */",
+            "/* Each input's [low, high], moved inside an end that no set fires (as flctool",
+            "   evaluates it there). */",
             f"static const {real} {prefix}ranges[{macro}N_INPUTS][2] = {{",
-            *(f"    {{{lit(v.range[0])}, {lit(v.range[1])}}}," for v in variables), "};", "",
+            *(f"    {{{lit(lo)}, {lit(hi)}}}," for lo, hi in
+              (evaluated_range(v.range, v.sets.values()) for v in variables)), "};", "",
             "/* Every input's sets as (pa, pb, pc, pd) (paper Sec. II); the sets of input i are",
             f"   {prefix}first_set[i] to {prefix}first_set[i + 1] - 1."
             + (f" A set whose {prefix}shapes entry is not 0 holds that shape's parameters"

@@ -253,3 +253,16 @@ def test_float_error_is_measured_and_refused_beyond_the_bound() -> None:
                        r"1e-05.*\(fix: export without --float"):
         CExporter(ExportOptions(single=True)).to_string(narrow)
     CExporter().to_string(narrow)  # double is fine
+
+
+@needs_cc
+def test_c_evaluates_an_end_no_set_fires_as_flctool_does(tmp_path: Path) -> None:
+    """Ramps rising from the range's low end (no set fires at 0): the C build clips
+    to the same interval just inside them, so it gives flctool's outputs there too."""
+    behaviour = two_set_controller([0.0, 5.0, 5.0, 10.0], [0.0, 10.0, 10.0, 10.0], 10.0)
+    program = build(tmp_path, [(behaviour, ExportOptions())])
+    states = np.array([[0.0], [-3.0], [2.5], [10.0]])
+    want = compile_behaviour(behaviour).output(states)
+    # both rise from 0, low twice as steeply: the limit is (2 * 1 + 1 * -1) / 3
+    assert want[0] == want[1] == pytest.approx(1 / 3)
+    assert run(program, 0, states).tolist() == want.tolist()
