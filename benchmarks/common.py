@@ -160,7 +160,7 @@ def skfuzzy_simulation(behaviour: Behaviour, controller: Controller) -> Any:
 
 
 def _trapezoid_samples(universe: np.ndarray, quad: Sequence[float]) -> np.ndarray:
-    from flctool.compile.membership import trapezoid
+    from flctool.membership import trapezoid
 
     return trapezoid(universe, np.array([quad], dtype=np.float64))[:, 0]
 

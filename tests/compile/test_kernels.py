@@ -20,8 +20,8 @@ from flctool import compile_behaviour, load_behaviour
 from flctool.behaviour import behaviour_from_data
 from flctool.behaviour.checks import MAX_RULES
 from flctool.compile import Controller, kernels
-from flctool.compile.membership import trapezoid_scalar
 from flctool.errors import InferenceError
+from flctool.membership import trapezoid_scalar
 
 from .reference import random_behaviour_data, reference_output
 

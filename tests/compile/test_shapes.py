@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 from flctool import compile_behaviour
 from flctool.behaviour import behaviour_from_data, parse_behaviour
 from flctool.behaviour.shapes import CODES
-from flctool.compile.membership import memberships, shape_membership
 from flctool.compile.sparse import SparseRules
 from flctool.errors import SpecError
+from flctool.membership import memberships, shape_membership
 
 #: (shape, parameters in flctool's order, scikit-fuzzy's value on x)
 REFERENCE = [

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from flctool.behaviour.load import behaviour_from_data
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.set_learning import coverage
-from flctool.compile.membership import trapezoid_scalar
+from flctool.membership import trapezoid_scalar
 from flctool.sets.codec import SetCodec
 
 
