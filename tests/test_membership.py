@@ -41,6 +41,7 @@ def test_documented_shapes(quad: tuple[float, ...], x: list[float], mu: list[flo
     np.testing.assert_allclose(trapezoid(np.array(x), np.array([quad], float))[:, 0], mu)
 
 
+@pytest.mark.slow
 def test_the_scalar_form_gives_the_vectorised_bits() -> None:
     # The learners' one-value form and the array form are the one formula: same operations,
     # so the same bits, on random sets of every shape and values at and around their corners.

@@ -122,6 +122,7 @@ def installed_copy(tmp_path: Path) -> dict[str, str]:
     return _with_package(site)
 
 
+@pytest.mark.slow
 def test_with_a_plugin_installed_the_schema_check_passes(installed_copy: dict[str, str]) -> None:
     # The committed schema describes the built-ins, wherever it is checked.
     checked = subprocess.run([sys.executable, "-m", "flctool", "schema", "--check"], cwd=ROOT,
@@ -132,6 +133,7 @@ def test_with_a_plugin_installed_the_schema_check_passes(installed_copy: dict[st
     assert "random_search" in listed.stdout  # and it is installed
 
 
+@pytest.mark.slow
 def test_a_file_naming_only_built_ins_does_not_import_an_installed_plugin(
         installed_copy: dict[str, str]) -> None:
     code = ("import sys; from flctool import load_behaviour; from flctool.envs import make_env; "
@@ -154,6 +156,7 @@ def test_with_a_plugin_installed_the_readme_runs(installed_copy: dict[str, str])
     assert "1 passed" in result.stdout
 
 
+@pytest.mark.slow
 def test_an_installed_learner_and_environment_run_from_a_behaviour_file(tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)
     validated = _flctool(tmp_path, "validate", "demo.yaml")
@@ -177,6 +180,7 @@ def test_a_plugins_own_keys_are_checked_and_located(tmp_path: Path) -> None:
             in result.stderr)
 
 
+@pytest.mark.slow
 def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
         tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO.replace("  keep: 2", "  crossover: 0.3"))
@@ -192,6 +196,7 @@ def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
     assert "keep: 1" in (tmp_path / "run" / "behaviour.yaml").read_text()
 
 
+@pytest.mark.slow
 def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)
     result = subprocess.run([sys.executable, "-m", "flctool", "validate", "demo.yaml"],
@@ -257,6 +262,7 @@ def test_an_error_inside_a_plugins_check_is_named_as_the_plugins(tmp_path: Path)
     assert "internal error" not in message and "Traceback" not in result.stderr
 
 
+@pytest.mark.slow
 def test_a_plugin_learners_own_state_is_checkpointed_and_resumed_bit_for_bit(
         tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)

@@ -107,6 +107,7 @@ def test_a_singleton_outside_a_box_action_space_is_reported(tmp_path: Path) -> N
     assert problem.line == _line_of(text, "push_right: 3.0")
 
 
+@pytest.mark.slow
 def test_the_simulators_are_checked_by_loading_without_numpy() -> None:
     # Their construction checks nothing beyond fit_problems (run by loading), so validate does
     # not build them and stays clear of numpy; building them must then never fail on a file

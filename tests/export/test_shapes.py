@@ -43,6 +43,7 @@ IMPORTERS = {"fll": FllImporter, "fis": FisImporter, "fcl": FclImporter}
 
 
 @pytest.mark.parametrize("format", list(EXPORTS))
+@pytest.mark.slow
 def test_fuzzylite6_computes_every_shape_as_flctool(format: str, tmp_path: Path) -> None:
     """Within 1e-12 wherever fuzzylite's 1e-6 tolerance cannot matter (it drops the rules
     whose activation is below 1e-6, which Gaussians' tails have over much of a range)."""
