@@ -190,7 +190,7 @@ def main(
 ) -> None:
     _state["debug"] = debug
     if import_module:
-        from flctool.envs.gym_adapter import import_user_modules
+        from flctool.behaviour.gym_registry import import_user_modules
 
         with user_errors():
             import_user_modules(import_module)

@@ -68,6 +68,7 @@ def test_parts_are_inlined_and_a_written_composition_reads_back(tmp_path: Path) 
     assert behaviour_to_data(again) == behaviour_to_data(behaviour)
 
 
+@pytest.mark.slow
 def test_both_paths_agree_bit_for_bit(tmp_path: Path) -> None:
     behaviour = load_behaviour(_write(tmp_path))
     check_env(lambda: make_env(behaviour, 4), batch_size=4)
@@ -100,6 +101,7 @@ def test_the_arbiter_chooses_the_part(tmp_path: Path) -> None:
     assert np.degrees(float(env.heading[0]) - heading) > 8 and abs(float(env.x[0]) - x) < 40
 
 
+@pytest.mark.slow
 def test_learning_the_arbiter_keeps_the_parts_fixed(tmp_path: Path) -> None:
     from flctool.training import start_run
 

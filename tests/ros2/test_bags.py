@@ -101,6 +101,7 @@ def _record(tmp_path: Path, sim: Path, namespace: str, steps: int, drive: Any) -
     return bag
 
 
+@pytest.mark.slow
 def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_steps(
         tmp_path: Path) -> None:
     from flctool.ros2.bags import fit_motion
@@ -140,6 +141,7 @@ def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_step
     assert behaviour_from_data(data).environment is not None  # a valid simulator section
 
 
+@pytest.mark.slow
 def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path) -> None:
     handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
     flc = compile_behaviour(handmade)
@@ -178,6 +180,7 @@ def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path
     assert differs.exit_code == 0 and "; 0 differ" not in differs.output, differs.output
 
 
+@pytest.mark.slow
 def test_record_writes_a_session_bag_and_refuses_an_existing_one(tmp_path: Path) -> None:
     from flctool.envs.ros2_robot import SimRobot
     from flctool.ros2.bags import read_messages

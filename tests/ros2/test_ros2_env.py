@@ -41,6 +41,7 @@ def _ros() -> None:
     require_ros2()
 
 
+@pytest.mark.slow
 def test_episodes_over_ros2_are_bit_for_bit_the_simulators() -> None:
     handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
     seeds = np.arange(5, dtype=np.int64)
