@@ -1,6 +1,10 @@
-"""``flctool run CONTROLLER --ros2``: deploy a controller as a ROS 2 node (docs/ros2.md).
+"""``flctool run CONTROLLER --ros2``: deploy a controller as a ROS 2 node (docs/ros2.md);
+``flctool run CONTROLLER --link HOST:PORT``: drive a robot (or ``flctool serve``) over the
+robot link (docs/robot-link.md), one episode at a time. A composed behaviour deploys over the
+link as a whole: the arbiter and its parts run here, the robot only walks
+(:mod:`flctool.deployable`).
 
-The node logs on stderr: when it starts driving, every watchdog stop and recovery, each
+The ROS 2 node logs on stderr: when it starts driving, every watchdog stop and recovery, each
 episode's end (with a status topic), and the stop it publishes before it leaves.
 """
 
@@ -28,7 +32,8 @@ def _log(text: str) -> None:
     "flctool run runs/sim/best.yaml --ros2 --robot behaviours/ballchase-ros2.yaml",
     "flctool run behaviours/ballchase-handmade.yaml --ros2 --robot "
     "behaviours/ballchase-ros2.yaml --episodes 20",
-    "flctool run bundle/ --ros2"))
+    "flctool run bundle/ --ros2",
+    "flctool run behaviours/striker-handmade.yaml --link 127.0.0.1:5757 --episodes 20"))
 def run(
     file: Annotated[Path, typer.Argument(
         metavar="CONTROLLER", help="A behaviour file (YAML), a run directory (its best.yaml) "
@@ -40,32 +45,74 @@ def run(
                                                "section (adapter: ros2) says the topics, when "
                                                "the controller's own is a simulator's.")]
     = None,
+    link: Annotated[str | None, typer.Option(metavar="HOST:PORT", help="Drive the robot "
+                                             "behind the robot link at this address (e.g. "
+                                             "flctool serve).")] = None,
     episodes: Annotated[int | None, typer.Option(min=1, help="Stop after this many episodes "
-                                                 "have ended (needs an episode status "
-                                                 "topic).")] = None,
+                                                 "have ended (--ros2: needs an episode status "
+                                                 "topic; --link: default 1).")] = None,
+    seed: Annotated[int, typer.Option(min=0, help="--link: the episodes' seeds are the ones "
+                                      "'flctool evaluate --seed SEED' draws.")] = 0,
     duration: Annotated[float | None, typer.Option(min=0.001, help="Stop after this many "
                                                    "seconds.")] = None,
     rate: Annotated[float | None, typer.Option(min=0.001, max=1000, help="Control rate in Hz "
                                                "(default: the environment's rate).")] = None,
 ) -> None:
-    """Deploy a controller on a robot: publish its command at the control rate from the
-    latest inputs, with a watchdog that publishes stop at once on a stale, NaN or
-    out-of-range input or a lost publisher, and again on Ctrl-C."""
+    """Deploy a controller on a robot. --ros2: publish its command at the control rate from
+    the latest inputs, with a watchdog that publishes stop at once on a stale, NaN or
+    out-of-range input or a lost publisher, and again on Ctrl-C. --link: run episodes on a
+    robot-link robot, a composed behaviour's arbiter and parts included."""
     with user_errors():
         # an export bundle (flctool export --format bundle) deploys its controller.yaml
         bundled = file / "controller.yaml"
         if file.is_dir() and bundled.is_file() and (file / "wiring.json").is_file():
             file = bundled
         behaviour, source = load_controller(file)
-        if getattr(behaviour.environment, "compose", None):
-            raise FlcError(f"{behaviour.name} is a composed behaviour: flctool run deploys "
-                           "one controller", hint="deploy the composition with its bundle's "
-                           "flc_composed_step (flctool export --format bundle, "
-                           "docs/formats/bundle.md)")
-        if not ros2:
-            raise FlcError("flctool run deploys over ROS 2 only: add --ros2",
-                           hint="for the robot link or a simulator, use flctool evaluate")
+        if ros2 == (link is not None):
+            raise FlcError("flctool run needs one of --ros2 and --link HOST:PORT",
+                           hint="--ros2 deploys as a ROS 2 node; --link drives a robot-link "
+                           "robot, e.g. one served by 'flctool serve FILE --port 5757'")
+        if link is not None:
+            _run_link(behaviour, link, episodes or 1, seed)
+            return
+        from flctool.deployable import require_single
+
+        require_single(behaviour, "flctool run --ros2")
         _run_ros2(behaviour, source, robot, episodes, duration, rate)
+
+
+def _address(link: str) -> tuple[str, int]:
+    host, _, port = link.rpartition(":")
+    if not host or not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise FlcError(f"--link {link!r} is not HOST:PORT", hint="e.g. --link 127.0.0.1:5757 "
+                       "(flctool serve prints its address)")
+    return host, int(port)
+
+
+def _run_link(behaviour: Behaviour, link: str, episodes: int, seed: int) -> None:
+    from flctool.behaviour.environment import RobotLinkConfig
+    from flctool.deployable import deployable, run_episodes
+    from flctool.envs.robot_link import RobotLinkEnv
+    from flctool.rollout import evaluation_seeds
+
+    host, port = _address(link)
+    deployment = deployable(behaviour)
+    config = RobotLinkConfig(adapter="robot-link", host=host, port=port)
+    with RobotLinkEnv(config, behaviour.name, deployment.observations,
+                      deployment.commands) as env:
+        what = "composition" if deployment.composed else "controller"
+        _log(f"{behaviour.name} ({what}) on {env.robot} at {host}:{port}: "
+             f"{', '.join(deployment.observations)} -> {', '.join(deployment.commands)}")
+        try:
+            ended = run_episodes(deployment, env, evaluation_seeds(seed, episodes).tolist())
+        except KeyboardInterrupt:
+            report_interrupted(f"{behaviour.name} stopped (the robot was sent stop)")
+            raise
+    successes = sum(e.success for e in ended)
+    steps = sum(e.steps for e in ended)
+    typer.echo(f"{len(ended)} episodes ended: success {successes}, failure "
+               f"{len(ended) - successes}")
+    typer.echo(f"success rate {successes / len(ended):.3f}, {steps} steps")
 
 
 def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: int | None,

@@ -112,7 +112,9 @@ class RobotServer:
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour, **options: Any) -> RobotServer:
-        """Serve the simulator adapter named by the behaviour's ``environment:`` section."""
+        """Serve the simulator adapter named by the behaviour's ``environment:`` section; for a
+        composed behaviour, its world as the robot a deployment of it drives
+        (:func:`flctool.deployable.composition_world`)."""
         from flctool.envs import make_env
 
         env = behaviour.environment
@@ -121,6 +123,13 @@ class RobotServer:
                            "environment; the server needs a simulator to serve",
                            hint="serve a behaviour with e.g. 'environment: {adapter: "
                            "ballchase-sim}'")
+        if getattr(env, "compose", None):
+            # a composition's robot only walks: the controller side runs arbiter and parts
+            from flctool.deployable import composition_world
+
+            world = composition_world(behaviour)
+            return cls(world, dict(zip(world.drive.order, world.drive.values.tolist(),
+                                       strict=True)), **options)
         return cls(make_env(behaviour, 1), dict(behaviour.output.commands), **options)
 
     # -- lifecycle ---------------------------------------------------------------------------
