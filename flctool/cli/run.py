@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -33,6 +33,7 @@ def _log(text: str) -> None:
     "flctool run behaviours/ballchase-handmade.yaml --ros2 --robot "
     "behaviours/ballchase-ros2.yaml --episodes 20",
     "flctool run bundle/ --ros2",
+    "flctool run runs/robot --ros2 --record session",
     "flctool run behaviours/striker-handmade.yaml --link 127.0.0.1:5757 --episodes 20"))
 def run(
     file: Annotated[Path, typer.Argument(
@@ -57,6 +58,10 @@ def run(
                                                    "seconds.")] = None,
     rate: Annotated[float | None, typer.Option(min=0.001, max=1000, help="Control rate in Hz "
                                                "(default: the environment's rate).")] = None,
+    record: Annotated[Path | None, typer.Option(help="Also record the run (every mapped "
+                                                "topic: inputs, commands, status, reward) as "
+                                                "an MCAP bag, as flctool record does (a new "
+                                                "folder).")] = None,
 ) -> None:
     """Deploy a controller on a robot. --ros2: publish its command at the control rate from
     the latest inputs, with a watchdog that publishes stop at once on a stale, NaN or
@@ -73,12 +78,15 @@ def run(
                            hint="--ros2 deploys as a ROS 2 node; --link drives a robot-link "
                            "robot, e.g. one served by 'flctool serve FILE --port 5757'")
         if link is not None:
+            if record is not None:
+                raise FlcError("--record records a ROS 2 deployment",
+                               hint="use --ros2, or leave --record out with --link")
             _run_link(behaviour, link, episodes or 1, seed)
             return
         from flctool.deployable import require_single
 
         require_single(behaviour, "flctool run --ros2")
-        _run_ros2(behaviour, source, robot, episodes, duration, rate)
+        _run_ros2(behaviour, source, robot, episodes, duration, rate, record)
 
 
 def _address(link: str) -> tuple[str, int]:
@@ -116,7 +124,7 @@ def _run_link(behaviour: Behaviour, link: str, episodes: int, seed: int) -> None
 
 
 def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: int | None,
-              duration: float | None, rate: float | None) -> None:
+              duration: float | None, rate: float | None, record: Path | None) -> None:
     from flctool.compile import compile_behaviour
     from flctool.ros2.section import ros2_section
 
@@ -137,16 +145,38 @@ def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: 
     def act(values: list[float]) -> float:
         return flc.output_one(np.array(values, dtype=np.float64))
 
-    node = ControllerNode(config, behaviour.input_names, dict(behaviour.output.commands), act,
-                          _log)
+    recorder = None
+    if record is not None:
+        from flctool.ros2.bags import BagRecorder, session_topics
+
+        # a deployment never resets: its reset topic would have no publisher to wait for
+        reset = config.episode.reset
+        topics = [(topic, type_name) for topic, type_name in session_topics(config)
+                  if reset is None or topic != reset.topic]
+        # in the graph before the node publishes, so that its first commands are recorded
+        recorder = BagRecorder(record, topics)
+    try:
+        node = ControllerNode(config, behaviour.input_names, dict(behaviour.output.commands),
+                              act, _log)
+    except BaseException:
+        if recorder is not None:
+            recorder.close()
+        raise
     try:
         _log(f"{behaviour.name} at {config.rate:g} Hz: {', '.join(s.topic for s in node.sources)}"
              f" -> {config.command.topic}")
+        if recorder is not None:
+            _start_recording(recorder, record, config.startup_timeout)
+        published = node.commands_sent + len(node.stop_times)
         try:
             node.run(episodes, duration)
         except KeyboardInterrupt:
             report_interrupted(f"{behaviour.name} stopped (the stop command was published)")
             raise
+        finally:
+            if recorder is not None:
+                _finish_recording(recorder, record, config.command.topic,
+                                  node.commands_sent + len(node.stop_times) - published)
         if node.status is not None:
             outcomes = ", ".join(f"{k} {v}" for k, v in node.outcomes.items())
             typer.echo(f"{node.episodes} episodes ended: {outcomes}")
@@ -156,3 +186,19 @@ def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: 
                    f"{node.deployment.stops}")
     finally:
         node.close()
+
+
+def _start_recording(recorder: Any, bag: Path | None, timeout: float) -> None:
+    """Wait (at most ``timeout`` s) until every recorded topic has a publisher."""
+    if not recorder.graph.wait(recorder.publishers_found, timeout):
+        missing = [s.topic_name for s in recorder.subscriptions if s.get_publisher_count() == 0]
+        _log(f"no publisher yet on {', '.join(missing)}; recording anyway")
+    _log(f"recording {len(recorder.subscriptions)} topics to {bag}")
+
+
+def _finish_recording(recorder: Any, bag: Path | None, command_topic: str, sent: int) -> None:
+    """Finish the bag once the commands published while recording (the last stop included)
+    have reached it, or after 1 s (a command sent before the recorder matched never will)."""
+    recorder.graph.wait(lambda: recorder.counts[command_topic] >= sent, 1.0)
+    recorder.close()
+    typer.echo(f"recorded {recorder.messages} messages to {bag}")
