@@ -8,8 +8,9 @@ chooses a part (the command nearest its output, or the vote), the part's control
 own channels and its output is the value sent, in the parts' common command table (a part
 whose ``environment.action`` is ``nearest`` sends its nearest command's singleton, which the
 robot's blend executes exactly). The robot side of a composition is its world with those
-walking commands and every channel the tree reads (:func:`composition_world`): what ``flctool
-serve`` serves for a composed file. The choices are made by the same compiled controllers and
+walking commands and every channel the tree reads
+(:func:`flctool.envs.robot_server.composition_world`): what ``flctool serve`` serves for a
+composed file. The choices are made by the same compiled controllers and
 the same rules as the pitch world's composition (:mod:`flctool.envs.pitch_compose`), so a
 deployment commands step for step what evaluation commands.
 """
@@ -22,14 +23,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from flctool.errors import FlcError, Problem, SpecError
+from flctool.errors import FlcError
 
 if TYPE_CHECKING:
-    from flctool.behaviour.environment import PitchConfig
     from flctool.behaviour.models import Behaviour
     from flctool.envs.base import BatchEnv
-    from flctool.envs.pitch import PitchSim
-    from flctool.envs.pitch_compose import ComposedDrive
 
 
 @dataclass(frozen=True)
@@ -76,44 +74,11 @@ def _controller_act(flc: object, votes: bool) -> Callable[[Sequence[float]], flo
     return act
 
 
-def _parts(behaviour: Behaviour) -> tuple[PitchConfig, tuple[str, ...], ComposedDrive,
-                                          tuple[str, ...]]:
-    """The composition's config, the arbiter's channels, its drive and every channel read."""
-    from flctool.behaviour.environment import PitchConfig
-    from flctool.envs.pitch_compose import ComposedDrive, composed_drive
-
-    config = behaviour.environment
-    assert isinstance(config, PitchConfig)
-    channels = tuple(config.channel_of(name) for name in behaviour.input_names)
-    drive, extra = composed_drive(behaviour, config, channels)
-    assert isinstance(drive, ComposedDrive)
-    return config, channels, drive, (*channels, *extra)
-
-
-def walking_commands(behaviour: Behaviour) -> dict[str, float]:
-    """The parts' common command table: what the robot of a composition executes."""
-    _, _, drive, _ = _parts(behaviour)
-    return _common_commands(behaviour, drive)
-
-
-def _common_commands(behaviour: Behaviour, drive: ComposedDrive) -> dict[str, float]:
-    tables = {part.name: dict(zip(part.drive.order, part.drive.values_list, strict=True))
-              for part in drive.parts}
-    first_name, first = next(iter(tables.items()))
-    problems = [Problem(("environment", "compose", name),
-                        f"the part's commands {table} differ from part '{first_name}''s "
-                        f"{first}", "deploying a composition needs parts with one command "
-                        "table (the robot executes it): give every part the same commands "
-                        "and singletons")
-                for name, table in tables.items() if table != first]
-    if problems:
-        raise SpecError(problems)
-    return first
-
-
 def _composition(behaviour: Behaviour) -> Deployable:
-    config, channels, drive, read = _parts(behaviour)
-    commands = _common_commands(behaviour, drive)
+    from flctool.envs.pitch_compose import common_commands, composition_parts
+
+    config, channels, drive, read = composition_parts(behaviour)
+    commands = common_commands(drive)
     names = tuple(dict.fromkeys(read))  # a channel read twice is observed once
     arbiter_columns = [names.index(c) for c in channels]
     part_columns = [[names.index(read[i]) for i in part.indices] for part in drive.parts]
@@ -136,23 +101,6 @@ def _composition(behaviour: Behaviour) -> Deployable:
         return value
 
     return Deployable(behaviour.name, names, commands, act, composed=True)
-
-
-def composition_world(behaviour: Behaviour) -> PitchSim:
-    """A composition's world as its robot: the composing file's pitch world, observed through
-    every channel the arbiter and its parts read (named by channel), driven by the parts'
-    common walking commands, blended. The same episodes as the composition's for every seed
-    (the same channels read, so the same noise table)."""
-    from flctool.envs.pitch import PitchSim
-    from flctool.envs.pitch_drive import CommandDrive
-    from flctool.envs.pitch_world import world_from_config
-
-    config, _, drive, read = _parts(behaviour)
-    commands = _common_commands(behaviour, drive)
-    names = tuple(dict.fromkeys(read))
-    walk = CommandDrive(commands, config.motion, config.noise, False)
-    return PitchSim(world_from_config(config), commands, config.motion, config.noise, names,
-                    names, False, drive=walk)
 
 
 def require_single(behaviour: Behaviour, how: str) -> None:
