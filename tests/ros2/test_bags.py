@@ -115,18 +115,26 @@ def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_step
     commands = dict(load_behaviour(BEHAVIOURS / "ballchase.yaml").output.commands)
     fits = fit_motion(bag, config, commands, "/measured/odom")
     assert sum(fit.steps for fit in fits.values()) == 1000
+    within_5_percent = []
     for name, fit in fits.items():
         n = fit.steps
         assert n >= 150, (name, n)  # each command ran about 200 times
         for k, key in enumerate(("forward", "sideways", "rotation")):
             mean, std = MOTION[name][key], NOISE[name][key]
-            # Within 5 %, or within 4 standard errors where 5 % of the value is less than
-            # 1000 steps can tell (a mean near 0; a deviation from ~200 samples, whose
-            # standard error is about 1 / sqrt(2 n) = 5 %).
-            assert abs(fit.mean[k] - mean) <= max(0.05 * abs(mean), 4 * std / math.sqrt(n)), (
-                name, key, fit.mean[k], mean)
-            assert abs(fit.std[k] - std) <= std * max(0.05, 4 / math.sqrt(2 * n)), (
-                name, key, fit.std[k], std)
+            mean_error, std_error = abs(fit.mean[k] - mean), abs(fit.std[k] - std)
+            print(f"{name} {key}: mean {fit.mean[k]:.3f} ({100 * mean_error / abs(mean):.1f} %),"
+                  f" std {fit.std[k]:.3f} ({100 * std_error / std:.1f} %), {n} steps")
+            # What n steps can tell (benchmarks/fit_sim_accuracy.py, docs/ros2.md): a mean to
+            # its standard error std / sqrt(n), a deviation to about std / sqrt(2 n) -- 5 % of
+            # it from ~200 steps. Each within 4 standard errors, ...
+            assert mean_error <= 4 * std / math.sqrt(n), (name, key, fit.mean[k], mean)
+            assert std_error <= 4 * std / math.sqrt(2 * n), (name, key, fit.std[k], std)
+            # ... and within 5 % every mean that 1,000 steps know to 5 % (4 standard errors
+            # are at most 5 % of it): the forward speeds and the large turns
+            if 4 * std / math.sqrt(n) <= 0.05 * abs(mean):
+                within_5_percent.append(f"{name} {key}")
+                assert mean_error <= 0.05 * abs(mean), (name, key, fit.mean[k], mean)
+    assert len(within_5_percent) >= 5, within_5_percent
 
     robot = tmp_path / "robot.yaml"
     robot.write_text(behaviour_to_yaml(robot_behaviour("/measured")), encoding="utf-8")
