@@ -1,5 +1,6 @@
-"""Shared helpers of the benchmark scripts: timing, states, JSON, and the same controller
-built in the libraries users would pick instead (scikit-fuzzy, pyfuzzylite, simpful).
+"""Shared helpers of the benchmark scripts: timing, states, JSON, training a run and
+evaluating what it learned, and the same controller built in the libraries users would pick
+instead (scikit-fuzzy, pyfuzzylite, simpful).
 
 Each builder makes the other library compute eq. 1-3 exactly as flctool does (Mamdani min,
 centre of area over singletons, sum over rules), so outputs can be checked equal before
@@ -14,15 +15,70 @@ import platform
 import sys
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from flctool import Behaviour, Controller
+from flctool.learners.metrics import Usage
+from flctool.rollout import EvaluationResult
+from flctool.runs import Run, RunSummary
 
 ROOT = Path(__file__).resolve().parents[1]
 BALLCHASE = ROOT / "behaviours" / "ballchase-handmade.yaml"
+
+
+# -- training, then evaluating what was learned ----------------------------------------------
+@dataclass(frozen=True)
+class Trained:
+    """A run trained to its end and its ``best.yaml`` evaluated on held-out episodes."""
+
+    run: Run
+    summary: RunSummary
+    best: Behaviour
+    result: EvaluationResult
+    #: CPU seconds of ``run.train()`` (this process, every thread): training, selection and
+    #: confirmation, without the held-out evaluation.
+    train_cpu_seconds: float
+
+    @property
+    def usage(self) -> Usage:
+        """Every episode and step the run spent (training, selection, confirmation,
+        baselines); the held-out evaluation is not among them."""
+        return self.summary.usage or Usage()
+
+    def counts(self) -> dict[str, int]:
+        """The run's episodes and steps as the benchmarks' JSON records them."""
+        usage = self.usage
+        return {"training_episodes": usage.training_episodes,
+                "selection_episodes": usage.selection_episodes,
+                "confirmation_episodes": usage.confirmation_episodes,
+                "episodes": usage.episodes, "steps": usage.steps}
+
+
+def train_and_evaluate(behaviour: Behaviour, out: Path, episodes: int,
+                       seeds: Sequence[int] | np.ndarray | None = None) -> Trained:
+    """Train ``behaviour`` in a new run directory ``out``, then evaluate its ``best.yaml`` on
+    ``episodes`` held-out episodes: the seeds ``flctool evaluate`` runs (which training and
+    selection never use), or ``seeds``."""
+    from flctool import compile_behaviour, load_behaviour
+    from flctool.envs import make_env
+    from flctool.rollout import TRAIN_SEED_LOW, evaluate, evaluation_seeds
+    from flctool.runs import BEST_FILE, create_run
+
+    run = create_run(behaviour, out)
+    started = time.process_time()
+    summary = run.train()
+    cpu = time.process_time() - started
+    best = load_behaviour(run.path / BEST_FILE)
+    held_out = evaluation_seeds(0, episodes) if seeds is None else np.asarray(seeds,
+                                                                                dtype=np.int64)
+    assert held_out.max() < TRAIN_SEED_LOW  # held out: training and selection never use these
+    with make_env(best, len(held_out)) as env:
+        result = evaluate(compile_behaviour(best), env, held_out)
+    return Trained(run, summary, best, result, cpu)
 
 
 # -- timing ---------------------------------------------------------------------------------
@@ -160,7 +216,7 @@ def skfuzzy_simulation(behaviour: Behaviour, controller: Controller) -> Any:
 
 
 def _trapezoid_samples(universe: np.ndarray, quad: Sequence[float]) -> np.ndarray:
-    from flctool.compile.membership import trapezoid
+    from flctool.membership import trapezoid
 
     return trapezoid(universe, np.array([quad], dtype=np.float64))[:, 0]
 

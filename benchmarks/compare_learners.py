@@ -22,17 +22,14 @@ import argparse
 import json
 import statistics
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
 import yaml
+from common import train_and_evaluate
 
-from flctool import compile_behaviour, load_behaviour
-from flctool.envs import make_env
-from flctool.learners import TRAIN_SEED_LOW
-from flctool.rollout import evaluate, evaluation_seeds
-from flctool.runs import BEST_FILE, create_run, resolve_behaviour
+from flctool import load_behaviour
+from flctool.runs import resolve_behaviour
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,30 +38,18 @@ def run_one(behaviour_path: Path, learner: str, seed: int, overrides: dict[str, 
             episodes: int, workdir: Path) -> dict[str, Any]:
     behaviour = resolve_behaviour(load_behaviour(behaviour_path),
                                   {**overrides, "learner": learner, "seed": seed})
-    run = create_run(behaviour, workdir / f"{learner}-{seed}")
-    started = time.process_time()
-    summary = run.train()
-    train_seconds = time.process_time() - started
-    metrics = run.metrics()
-    best = load_behaviour(run.path / BEST_FILE)
-    seeds = evaluation_seeds(0, episodes)  # what `flctool evaluate` runs
-    assert seeds.max() < TRAIN_SEED_LOW  # held out: training and selection never use these
-    result = evaluate(compile_behaviour(best), make_env(best, episodes), seeds)
-    usage = summary.to_dict()["usage"]
+    trained = train_and_evaluate(behaviour, workdir / f"{learner}-{seed}", episodes)
+    summary, result = trained.summary, trained.result
+    metrics = trained.run.metrics()
     return {"learner": learner, "seed": seed,
             "success": float(result.success_rate.value),
             "mean_return": float(result.mean_return.value),
             "auc": float(sum(m.mean for m in metrics)),
             "final_mean": metrics[-1].mean, "best_fitness": summary.to_dict()["best"]["fitness"],
             "validated": (summary.to_dict()["best"].get("validation") or {}).get("value"),
-            "train_cpu_seconds": train_seconds,
-            "training_episodes": int(sum(m.episodes for m in metrics)),
-            "selection_episodes": int(sum(m.selection_episodes for m in metrics)),
+            "train_cpu_seconds": trained.train_cpu_seconds,
             # every episode the run used: training, selection, confirmation, baselines
-            "episodes": int(usage.get("episodes", usage.get("training_episodes", 0)
-                                      + usage.get("selection_episodes", 0))),
-            "steps": int(usage.get("steps", usage.get("training_steps", 0)
-                                   + usage.get("selection_steps", 0))),
+            **trained.counts(),
             "status": summary.status,
             "confirmed_fitness": ((summary.to_dict()["best"].get("confirmation") or {})
                                   .get("mean_fitness") or {}),

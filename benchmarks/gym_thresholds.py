@@ -19,16 +19,14 @@ import argparse
 import json
 import statistics
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
 import yaml
+from common import train_and_evaluate
 
-from flctool import compile_behaviour, load_behaviour
-from flctool.envs import make_env
-from flctool.rollout import evaluate, evaluation_seeds
-from flctool.runs import BEST_FILE, create_run, resolve_behaviour
+from flctool import load_behaviour
+from flctool.runs import resolve_behaviour
 
 ROOT = Path(__file__).resolve().parents[1]
 THRESHOLDS = {"cartpole": 475.0, "mountaincar": -110.0, "pendulum": -200.0}
@@ -38,26 +36,13 @@ def run_one(name: str, seed: int, overrides: dict[str, Any], episodes: int,
             workdir: Path) -> dict[str, Any]:
     behaviour = resolve_behaviour(load_behaviour(ROOT / "behaviours" / f"{name}.yaml"),
                                   {**overrides, "seed": seed})
-    run = create_run(behaviour, workdir / f"{name}-{seed}")
-    started = time.process_time()
-    summary = run.train()
-    cpu = time.process_time() - started
-    best = load_behaviour(run.path / BEST_FILE)
-    env = make_env(best, episodes)
-    try:
-        result = evaluate(compile_behaviour(best), env, evaluation_seeds(0, episodes))
-    finally:
-        env.close()
-    usage = summary.to_dict()["usage"]
-    return {"file": name, "seed": seed, "mean_return": float(result.mean_return.value),
+    trained = train_and_evaluate(behaviour, workdir / f"{name}-{seed}", episodes)
+    summary = trained.summary
+    return {"file": name, "seed": seed, "mean_return": float(trained.result.mean_return.value),
             "validated": (summary.to_dict()["best"].get("validation") or {}).get("value"),
-            "generations": summary.generations,
-            "training_episodes": usage["training_episodes"],
-            "selection_episodes": usage["selection_episodes"],
-            "episodes": usage["training_episodes"] + usage["selection_episodes"],
-            "steps": usage["training_steps"] + usage["selection_steps"],
+            "generations": summary.generations, **trained.counts(),
             "stop_reason": (summary.selection or {}).get("stop_reason"),
-            "train_cpu_seconds": cpu}
+            "train_cpu_seconds": trained.train_cpu_seconds}
 
 
 def main() -> None:

@@ -24,18 +24,16 @@ import argparse
 import json
 import statistics
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
+from common import train_and_evaluate
 from scipy.stats import mannwhitneyu
 
-from flctool import compile_behaviour, load_behaviour
+from flctool import load_behaviour
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.set_learning import strong_partition_problems
-from flctool.envs import make_env
-from flctool.rollout import evaluate, evaluation_seeds
-from flctool.runs import BEST_FILE, create_run, resolve_behaviour
+from flctool.runs import resolve_behaviour
 
 ROOT = Path(__file__).resolve().parents[1]
 #: task -> (behaviour file under the repository, score: "return" (mean return) or "success"
@@ -69,25 +67,15 @@ def run_one(task: str, seed: int, with_sets: bool, episodes: int, workdir: Path,
     if with_sets:
         overrides["sets"] = sets_section(behaviour, bound)
     behaviour = resolve_behaviour(behaviour, overrides)
-    run = create_run(behaviour, workdir / f"{task}-{seed}-{'sets' if with_sets else 'cons'}")
-    started = time.process_time()
-    summary = run.train()
-    cpu = time.process_time() - started
-    best = load_behaviour(run.path / BEST_FILE)
-    env = make_env(best, episodes)
-    try:
-        result = evaluate(compile_behaviour(best), env, evaluation_seeds(0, episodes))
-    finally:
-        env.close()
-    usage = summary.to_dict()["usage"]
+    trained = train_and_evaluate(
+        behaviour, workdir / f"{task}-{seed}-{'sets' if with_sets else 'cons'}", episodes)
+    result = trained.result
     value = (float(result.mean_return.value) if score == "return"
              else float(result.success_rate.value))
     return {"task": task, "seed": seed, "sets": with_sets, "score": value,
             "mean_return": float(result.mean_return.value),
-            "success_rate": float(result.success_rate.value),
-            "episodes": usage["training_episodes"] + usage["selection_episodes"],
-            "training_episodes": usage["training_episodes"],
-            "selection_episodes": usage["selection_episodes"], "train_cpu_seconds": cpu}
+            "success_rate": float(result.success_rate.value), **trained.counts(),
+            "train_cpu_seconds": trained.train_cpu_seconds}
 
 
 def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:

@@ -305,39 +305,29 @@ def sb3_run(task: Task, algo: str, seed: int, max_steps: int, max_cpu: float) ->
 
 
 def flctool_run(task: Task, seed: int) -> dict[str, Any]:
-    from flctool import compile_behaviour, load_behaviour
-    from flctool.envs import make_env
-    from flctool.rollout import evaluate
-    from flctool.runs import BEST_FILE, create_run, resolve_behaviour
+    from common import train_and_evaluate
+
+    from flctool.runs import resolve_behaviour
 
     overrides: dict[str, Any] = {"seed": seed}
     if task.flctool_target:
         overrides["stop.target"] = task.threshold
     behaviour = resolve_behaviour(load(task), overrides)
     with tempfile.TemporaryDirectory() as tmp:
-        run = create_run(behaviour, Path(tmp) / "run")
-        started = time.process_time()
-        summary = run.train()
-        cpu = time.process_time() - started
-        best = load_behaviour(run.path / BEST_FILE)
-    env = make_env(best, HELD_OUT)
-    try:
-        result = evaluate(compile_behaviour(best), env,
-                          np.array(held_out_seeds(0), dtype=np.int64))
-    finally:
-        env.close()
+        trained = train_and_evaluate(behaviour, Path(tmp) / "run", HELD_OUT,
+                                     seeds=held_out_seeds(0))
+    summary, result = trained.summary, trained.result
     value = (float(result.mean_return.value) if task.metric == "return"
              else float(result.success_rate.value))
-    usage = summary.usage
-    if not isinstance(usage, dict):  # a Usage object since the learners' budgets
-        usage = usage.to_dict()
+    usage = trained.usage
     return {"task": task.name, "method": f"flctool {behaviour.learning.learner}",
             "seed": seed, "solved": value >= task.threshold, "held_out": value,
-            "train_steps": usage["training_steps"], "train_episodes": usage["training_episodes"],
-            "stop_steps": usage["selection_steps"], "stop_episodes": usage["selection_episodes"],
-            "cpu": cpu, "stopped_by": (summary.selection or {}).get("stop_reason")
-            or "generations", "policy_size": math.prod(len(v.sets) for v in
-                                                       behaviour.inputs.values()),
+            "train_steps": usage.training_steps, "train_episodes": usage.training_episodes,
+            "stop_steps": usage.selection_steps + usage.confirmation_steps,
+            "stop_episodes": usage.selection_episodes + usage.confirmation_episodes,
+            "cpu": trained.train_cpu_seconds, "stopped_by": (summary.selection or {}).get(
+                "stop_reason") or "generations",
+            "policy_size": math.prod(len(v.sets) for v in behaviour.inputs.values()),
             "policy_unit": "rules"}
 
 

@@ -27,11 +27,11 @@ from numpy.typing import NDArray
 
 from flctool.atomic import write_bytes_atomic
 from flctool.behaviour import Behaviour
-from flctool.behaviour.models import FuzzySet
+from flctool.behaviour.fuzzy import FuzzySet
 from flctool.behaviour.shapes import set_row
-from flctool.compile.membership import memberships
 from flctool.errors import FlcError, MissingDependencyError, Problem, RunDirError, SpecError
 from flctool.inputs import no_such_file
+from flctool.membership import memberships
 from flctool.runs import Run
 
 FloatArray = NDArray[np.float64]

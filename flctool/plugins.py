@@ -193,21 +193,8 @@ def _problem(kind: str, plugin: object, taken: set[str],
     if kind == "exporter":
         bad = [s for s in plugin.suffixes if not (s.startswith(".") and len(s) > 1)]
         return f"suffixes {bad} must each be '.' and a name" if bad else None
-    from flctool.behaviour.environment import AdapterConfig
-    from flctool.behaviour.learning import LearningConfig
-
-    try:
-        config = plugin.config_model()
-    except Exception as error:  # a third party's config that does not import or is no model
-        return f"its config cannot be used ({type(error).__name__}: {error})"
-    if kind == "environment" and not issubclass(config, AdapterConfig):
-        return "an adapter's config must extend flctool.behaviour.environment.AdapterConfig"
-    if kind == "learner" and not issubclass(config, LearningConfig):
-        return "a learner's config must extend flctool.behaviour.learning.LearningConfig"
-    tag = "learner" if kind == "learner" else "adapter"
-    field = config.model_fields.get(tag)
-    if field is None or getattr(field.annotation, "__args__", None) != (plugin.name,):
-        return f"its config must declare {tag}: Literal['{plugin.name}']"
+    if plugin.config is None:
+        return "it names no config: a learner or an adapter names the model of its section"
     return None
 
 

@@ -25,6 +25,7 @@ QUICK_SUCCESS = 0.85
 QUICK_SUCCESS_OF = {"shoot-handmade.yaml": 0.25, "approach-handmade.yaml": 0.6}
 
 
+@pytest.mark.slow
 def test_there_are_shipped_behaviours() -> None:
     names = {p.name for p in SHIPPED}
     assert {"ballchase.yaml", "ballchase-handmade.yaml"} <= names
@@ -47,6 +48,7 @@ def test_shipped_behaviour(path: Path) -> None:
 
 
 @pytest.mark.parametrize("path", HANDMADE, ids=[p.name for p in HANDMADE])
+@pytest.mark.slow
 def test_handmade_controller_succeeds(path: Path) -> None:
     behaviour = load_behaviour(path)
     assert behaviour.is_deployable

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from flctool.errors import (
     EnvError,
     FlcError,
@@ -52,6 +54,7 @@ def test_every_exception_and_warning_is_exported_from_flctool() -> None:
         assert getattr(flctool, name) is getattr(errors, name)
 
 
+@pytest.mark.slow
 def test_no_other_module_defines_a_public_exception() -> None:
     import ast
     from pathlib import Path

@@ -44,6 +44,7 @@ def _run(tmp_path: Path, learner: str, name: str) -> Run:
     return run
 
 
+@pytest.mark.slow
 def test_fitness_and_strengths_of_a_run(tmp_path: Path) -> None:
     run = _run(tmp_path, "hybrid", "hybrid")
     written = plot_fitness([run], tmp_path / "fitness.png")
@@ -105,6 +106,7 @@ def test_missing_matplotlib_gives_the_install_hint(tmp_path: Path,
     assert not (tmp_path / "t.png").exists()
 
 
+@pytest.mark.slow
 def test_plot_command(tmp_path: Path) -> None:
     hybrid = _run(tmp_path, "hybrid", "hybrid")
     pitt = _run(tmp_path, "pitt", "pitt")
@@ -123,6 +125,7 @@ def test_plot_command(tmp_path: Path) -> None:
     assert "--rule picks the rule of one run" in result.output
 
 
+@pytest.mark.slow
 def test_plot_sources_decides_the_figures_from_python(tmp_path: Path) -> None:
     hybrid = _run(tmp_path, "hybrid", "hybrid")
     pitt = _run(tmp_path, "pitt", "pitt")
@@ -146,6 +149,7 @@ def test_plot_sources_decides_the_figures_from_python(tmp_path: Path) -> None:
         plot_sources([hybrid.path, hybrid.path / "best.yaml"], both)
 
 
+@pytest.mark.slow
 def test_the_fitness_band_stays_inside_the_possible_range(tmp_path: Path) -> None:
     import matplotlib
 
@@ -173,6 +177,7 @@ def test_the_fitness_band_stays_inside_the_possible_range(tmp_path: Path) -> Non
     assert low.tolist() == [m.min for m in metrics]
 
 
+@pytest.mark.slow
 def test_controller_figures(tmp_path: Path) -> None:
     handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
     written = plot_controller(handmade, tmp_path, 7, "handmade")
@@ -185,6 +190,7 @@ def test_controller_figures(tmp_path: Path) -> None:
     assert "pan (deg)" in (tmp_path / "surface.svg").read_text()
 
 
+@pytest.mark.slow
 def test_controllers_without_a_pitch_or_two_inputs(tmp_path: Path) -> None:
     cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")
     plot_memberships(cartpole, tmp_path / "m.png")
@@ -194,6 +200,7 @@ def test_controllers_without_a_pitch_or_two_inputs(tmp_path: Path) -> None:
         plot_surface(cartpole, tmp_path / "s.png")
 
 
+@pytest.mark.slow
 def test_plot_an_experiment(tmp_path: Path) -> None:
     from flctool.experiment import ExperimentPlan, make_executor, prepare_experiment, write_report
 
@@ -214,6 +221,7 @@ def test_plot_an_experiment(tmp_path: Path) -> None:
     assert both.exit_code == 1 and "one experiment directory at a time" in both.output
 
 
+@pytest.mark.slow
 def test_a_run_that_learned_the_sets_draws_them_over_the_files(tmp_path: Path) -> None:
     behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"), {
         "generations": 2, "population": 4, "sets": {"mode": "partition"}})

@@ -66,6 +66,7 @@ def records(path: Path) -> tuple[str, str]:
 
 
 @pytest.mark.parametrize("plugin", plugins("learner"), ids=lambda p: p.name)
+@pytest.mark.slow
 def test_every_learner_is_reproducible_and_resumes_exactly(plugin: Plugin,
                                                            tmp_path: Path) -> None:
     behaviour = small_run(plugin.name)
@@ -110,6 +111,7 @@ def test_every_builtin_adapter_has_a_contract_behaviour() -> None:
 
 
 @pytest.mark.parametrize("plugin", BUILTIN["environment"], ids=lambda p: p.name)
+@pytest.mark.slow
 def test_every_builtin_adapter_passes_the_checker(plugin: Plugin) -> None:
     if plugin.name == "gymnasium":
         pytest.importorskip("gymnasium")

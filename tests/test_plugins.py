@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from flctool.behaviour.learning import LearningConfig
+from flctool.behaviour.sections import ENVIRONMENT, LEARNING
 from flctool.envs import ENVIRONMENTS
 from flctool.export import EXPORTERS, Exporter
 from flctool.learners import LEARNERS, Learner
@@ -50,6 +51,7 @@ def test_every_learner_entry_loads_a_learner_reading_learning_config(plugin: Plu
     assert issubclass(LEARNERS.get(plugin.name), Learner)
     assert issubclass(plugin.config_model(), LearningConfig)
     assert _problem("learner", plugin, set()) is None
+    assert LEARNING.checked(plugin) is plugin.config_model()
 
 
 @pytest.mark.parametrize("plugin", plugins("environment"), ids=lambda p: p.name)
@@ -58,6 +60,7 @@ def test_every_environment_entry_loads_a_factory_tagged_by_its_name(plugin: Plug
     annotation = plugin.config_model().model_fields["adapter"].annotation
     assert typing.get_args(annotation) == (plugin.name,)
     assert _problem("environment", plugin, set()) is None
+    assert ENVIRONMENT.checked(plugin) is plugin.config_model()
 
 
 @pytest.mark.parametrize("plugin", plugins("exporter"), ids=lambda p: p.name)
@@ -76,6 +79,14 @@ def test_registries_hold_exactly_the_plugins() -> None:
     (object(), "not a flctool.plugins.Plugin"),
     (Plugin("pitt", "x:Y", LearningConfig), "the name 'pitt' is taken"),
     (Plugin("mine", "no_colon", LearningConfig), "is not 'module:attribute'"),
+    (Plugin("mine", "x:Y"), "it names no config"),
+])
+def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem: str) -> None:
+    found = _problem("learner", plugin, {"pitt"})
+    assert found is not None and problem in found
+
+
+@pytest.mark.parametrize(("plugin", "problem"), [
     (Plugin("mine", "x:Y", "no.such.module:Config"), "its config cannot be used"),
     (Plugin("mine", "x:Y", "flctool.behaviour.environment:PitchConfig"), "must extend"),
     (Plugin("mine", "x:Y", "flctool.behaviour.base:Section"), "must extend"),
@@ -85,9 +96,10 @@ def test_registries_hold_exactly_the_plugins() -> None:
     (Plugin("mine", "x:Y", "flctool.behaviour.learning:PittConfig"),
      "must declare learner: Literal['mine']"),
 ])
-def test_a_bad_learner_plugin_is_refused_with_the_reason(plugin: object, problem: str) -> None:
-    found = _problem("learner", plugin, {"pitt"})
-    assert found is not None and problem in found
+def test_a_learner_plugin_whose_model_cannot_read_learning_is_refused(plugin: Plugin,
+                                                                      problem: str) -> None:
+    found = LEARNING.checked(plugin)
+    assert isinstance(found, str) and problem in found
 
 
 def _with_package(site: Path = PACKAGE) -> dict[str, str]:
@@ -110,6 +122,7 @@ def installed_copy(tmp_path: Path) -> dict[str, str]:
     return _with_package(site)
 
 
+@pytest.mark.slow
 def test_with_a_plugin_installed_the_schema_check_passes(installed_copy: dict[str, str]) -> None:
     # The committed schema describes the built-ins, wherever it is checked.
     checked = subprocess.run([sys.executable, "-m", "flctool", "schema", "--check"], cwd=ROOT,
@@ -120,6 +133,7 @@ def test_with_a_plugin_installed_the_schema_check_passes(installed_copy: dict[st
     assert "random_search" in listed.stdout  # and it is installed
 
 
+@pytest.mark.slow
 def test_a_file_naming_only_built_ins_does_not_import_an_installed_plugin(
         installed_copy: dict[str, str]) -> None:
     code = ("import sys; from flctool import load_behaviour; from flctool.envs import make_env; "
@@ -142,6 +156,7 @@ def test_with_a_plugin_installed_the_readme_runs(installed_copy: dict[str, str])
     assert "1 passed" in result.stdout
 
 
+@pytest.mark.slow
 def test_an_installed_learner_and_environment_run_from_a_behaviour_file(tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)
     validated = _flctool(tmp_path, "validate", "demo.yaml")
@@ -165,6 +180,7 @@ def test_a_plugins_own_keys_are_checked_and_located(tmp_path: Path) -> None:
             in result.stderr)
 
 
+@pytest.mark.slow
 def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
         tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO.replace("  keep: 2", "  crossover: 0.3"))
@@ -180,6 +196,7 @@ def test_another_learners_key_under_a_plugin_learner_names_who_reads_it(
     assert "keep: 1" in (tmp_path / "run" / "behaviour.yaml").read_text()
 
 
+@pytest.mark.slow
 def test_without_the_package_its_names_are_unknown(tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)
     result = subprocess.run([sys.executable, "-m", "flctool", "validate", "demo.yaml"],
@@ -196,8 +213,9 @@ def test_an_entry_point_must_be_named_like_its_plugin() -> None:
 
 
 def test_an_adapter_plugin_must_extend_adapter_config() -> None:
-    found = _problem("environment", Plugin("mine", "x:Y", "flctool.behaviour.base:Section"), set())
-    assert found is not None and "must extend flctool.behaviour.environment.AdapterConfig" in found
+    found = ENVIRONMENT.checked(Plugin("mine", "x:Y", "flctool.behaviour.base:Section"))
+    assert isinstance(found, str)
+    assert "must extend flctool.behaviour.environment.AdapterConfig" in found
 
 
 BROKEN = '''\
@@ -244,6 +262,7 @@ def test_an_error_inside_a_plugins_check_is_named_as_the_plugins(tmp_path: Path)
     assert "internal error" not in message and "Traceback" not in result.stderr
 
 
+@pytest.mark.slow
 def test_a_plugin_learners_own_state_is_checkpointed_and_resumed_bit_for_bit(
         tmp_path: Path) -> None:
     (tmp_path / "demo.yaml").write_text(DEMO)

@@ -129,6 +129,7 @@ def test_behaviour_for_picks_any_generation_and_individual(tmp_path: Path) -> No
 
 
 @pytest.mark.parametrize("learner", ["pitt", "fuzzy_q", "hybrid"])
+@pytest.mark.slow
 def test_resume_ends_where_an_uninterrupted_run_ends(tmp_path: Path, learner: str) -> None:
     behaviour = ballchase(learner=learner, seed=3, generations=6)
     whole = create_run(behaviour, tmp_path / "a" / "run")
@@ -170,6 +171,7 @@ def as_an_earlier_version_wrote_it(path: Path) -> None:
 
 
 @pytest.mark.parametrize("learner", ["pitt", "fuzzy_q", "hybrid"])
+@pytest.mark.slow
 def test_a_run_an_earlier_version_recorded_still_resumes(tmp_path: Path, learner: str) -> None:
     behaviour = ballchase(learner=learner, seed=3, generations=4)
     whole = create_run(behaviour, tmp_path / "a" / "run")
@@ -188,6 +190,7 @@ def test_a_run_an_earlier_version_recorded_still_resumes(tmp_path: Path, learner
     assert (part.path / BEST_FILE).read_text() == (whole.path / BEST_FILE).read_text()
 
 
+@pytest.mark.slow
 def test_resume_can_extend_a_finished_run(tmp_path: Path) -> None:
     run = create_run(ballchase(generations=3), tmp_path / "run")
     run.train()
@@ -305,6 +308,7 @@ def write_checkpoint(run_path: Path, generation: int, data: object) -> Path:
     (lambda state: {**state, "traces": []}, r"'traces' table has shape \(0,\)"),
     (lambda state: {**state, "rng": {}}, "no state of the random generator"),
 ])
+@pytest.mark.slow
 def test_a_damaged_checkpoint_names_its_file_and_how_to_get_past_it(
         tmp_path: Path, damage: Callable[[dict[str, Any]], object], message: str) -> None:
     run = create_run(ballchase(generations=3), tmp_path / "run")
@@ -573,6 +577,7 @@ def _tamper(path: Path, change: Callable[[dict[str, Any]], Any]) -> None:
     (lambda s: s.update(population=s["population"] * 20_000, fitness=s["fitness"] * 20_000),
      "holds 120,000 individuals, more than the run's population of 6"),
 ])
+@pytest.mark.slow
 def test_a_tampered_checkpoint_is_refused_clearly(tmp_path: Path, change: Any,
                                                   message: str) -> None:
     path = _stopped_run(tmp_path)

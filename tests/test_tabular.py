@@ -140,6 +140,7 @@ _SPELLINGS = st.one_of(
 
 @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(_SPELLINGS, _SPELLINGS), min_size=1, max_size=6))
+@pytest.mark.slow
 def test_the_python_reading_accepts_and_refuses_as_numpys(cells: list[tuple[str, str]]
                                                           ) -> None:
     # no cell holds the delimiter or a line ending here: those make rows, tested above
@@ -157,6 +158,7 @@ def test_the_python_reading_matches_on_spellings_the_parsers_disagree_on(cell: s
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_SPELLINGS)
+@pytest.mark.slow
 def test_both_readings_accept_exactly_the_documented_grammar(cell: str) -> None:
     """A cell is a number when it matches NUMBER (ASCII digits, no _), whichever reading
     reads its chunk: numpy's parser, the cell-by-cell fallback, or plain Python."""

@@ -30,6 +30,7 @@ def test_command_line_assignments_read_values_as_yaml_and_say_where_they_were_gi
         command_line_overrides(["nonsense"])
 
 
+@pytest.mark.slow
 def test_a_run_started_and_resumed_equals_one_run_straight(tmp_path: Path) -> None:
     training = start_run(BALLCHASE, {**TINY, "generations": 2}, tmp_path / "parts")
     assert not training.resumed and training.done == 0

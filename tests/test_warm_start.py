@@ -53,6 +53,7 @@ def test_a_seeded_population_is_the_controller_then_mutants_of_it() -> None:
     assert 0 < (population[1:, :5] != genes[:5]).mean() < 0.2  # about 10 % redrawn
 
 
+@pytest.mark.slow
 def test_a_run_starts_around_a_learned_controller_with_its_q_values(tmp_path: Path) -> None:
     source = tmp_path / "sim"
     assert runner.invoke(app, ["learn", str(BEHAVIOURS / "ballchase.yaml"), *SMALL, "-o",

@@ -13,16 +13,13 @@ from collections.abc import Callable, Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from flctool.behaviour.environment import AdapterConfig
-from flctool.behaviour.magnitudes import magnitude_problems
-from flctool.behaviour.set_learning import set_learning_problems
 from flctool.behaviour.shapes import evaluated_range, is_trapezoid, set_row, trapezoids
 from flctool.errors import PathPart, Problem
-from flctool.plugins import blamed
+from flctool.membership import firing_sets
 from flctool.registry import did_you_mean
 
 if TYPE_CHECKING:
-    from flctool.behaviour.models import Behaviour, InputVariable, Rule
+    from flctool.behaviour.fuzzy import InputVariable, Rule
 
 # Resource limits (docs/behaviour-files.md): past them a run would need more memory or time
 # than any robot behaviour does, so the file is refused up front instead of hanging.
@@ -72,30 +69,6 @@ def _worded(parts: tuple[str | int, ...], name: RuleNamer) -> str:
     return "".join(part if isinstance(part, str) else name(part) for part in parts)
 
 
-def find_problems(behaviour: Behaviour) -> list[Problem]:
-    problems = limit_problems([len(v.sets) for v in behaviour.inputs.values()],
-                              behaviour.learning.population, behaviour.learning.trials,
-                              behaviour.learning.generations,
-                              getattr(behaviour.environment, "max_steps", None))
-    sets_problems = [p for name, variable in behaviour.inputs.items()
-                     for p in check_input(name, variable)]
-    problems += sets_problems
-    if behaviour.output.name in behaviour.inputs:
-        problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
-                                ", like an input", "give the output a name of its own"))
-    problems += check_rules({name: tuple(v.sets) for name, v in behaviour.inputs.items()},
-                            behaviour.output.commands, enumerate(behaviour.rules))
-    environment = behaviour.environment
-    if isinstance(environment, AdapterConfig):
-        with blamed("environment", environment.adapter):
-            problems += magnitude_problems(environment)
-            problems += environment.fit_problems(behaviour.input_names,
-                                                 tuple(behaviour.output.commands))
-    if not sets_problems:  # learning the sets starts from valid ones
-        problems += set_learning_problems(behaviour)
-    return problems
-
-
 def limit_problems(set_counts: list[int], population: int | None, trials: int | None,
                    generations: int | None, max_steps: int | None) -> list[Problem]:
     """Sizes past the resource limits; a None is a size the file does not (validly) give."""
@@ -129,11 +102,6 @@ def limit_problems(set_counts: list[int], population: int | None, trials: int | 
             f"limit of {MAX_GENERATION_STEPS:,}",
             "use fewer steps per episode, trials or individuals"))
     return problems
-
-
-def find_warnings(behaviour: Behaviour) -> list[Problem]:
-    """What is allowed but probably a mistake; `flctool validate` shows these as warnings."""
-    return command_warnings(behaviour.output.commands)
 
 
 def command_warnings(commands: Mapping[str, float]) -> list[Problem]:
@@ -201,8 +169,6 @@ def _shaped_gap(variable: InputVariable) -> tuple[float, float] | None:
     set at least that high at both. Each shape rises and then falls (is quasi-concave), so
     that set is at least that high between them too, and the check holds for the whole range.
     """
-    from flctool.compile.membership import firing_sets
-
     lo, hi = variable.range
     rows = [set_row(v) for v in variable.sets.values()]
     kinds = [code for code, _ in rows]

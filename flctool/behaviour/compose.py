@@ -21,8 +21,6 @@ if TYPE_CHECKING:
     from flctool.behaviour.models import Behaviour
     from flctool.behaviour.yaml_source import SourceMap
 
-#: At most this many parts in one composition.
-MAX_PARTS = 8
 #: The files being loaded, outermost first: a part that is already loading is a cycle.
 _LOADING: ContextVar[tuple[Path, ...]] = ContextVar("flctool_composing", default=())
 

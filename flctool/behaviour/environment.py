@@ -13,7 +13,6 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
 
 from flctool.behaviour.base import Name, Section
-from flctool.behaviour.compose import MAX_PARTS
 from flctool.behaviour.pitch_vocabulary import (
     BallVelocity,
     DerivedChannel,
@@ -28,6 +27,9 @@ from flctool.registry import did_you_mean
 
 #: What the ballchase simulator observes; a behaviour's inputs are named after these.
 BALLCHASE_OBSERVATIONS = ("ball_size", "pan")
+
+#: At most this many parts in one composition (``environment.compose`` of the pitch world).
+MAX_PARTS = 8
 
 
 class Pitch(Section):
@@ -761,9 +763,9 @@ def default_gymnasium_ranges(data: Any) -> Any:
     try:
         config = GymnasiumConfig.model_validate(environment)
         features = config.features(tuple(str(name) for name in inputs))
-        from flctool.envs.gym_adapter import observation_space_bounds
+        from flctool.behaviour.gym_registry import observation_space_bounds
 
-        low, high = observation_space_bounds(config)
+        low, high = observation_space_bounds(config.id, config.options)
     except (ValueError, FlcError):  # reported where it belongs when the file is validated
         return data
     filled = dict(inputs)

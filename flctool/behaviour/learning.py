@@ -7,7 +7,6 @@ names that model, so ``learning:`` is the union of the models of every learner t
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
@@ -218,65 +217,3 @@ class HybridConfig(GeneticConfig):
 def learner_keys(model: type[BaseModel]) -> tuple[str, ...]:
     """The keys a ``learning:`` model reads, as a file writes them."""
     return tuple(info.alias or name for name, info in model.model_fields.items())
-
-
-def readers_of(key: str) -> tuple[str, ...]:
-    """The learners (built-in and installed) whose ``learning:`` reads ``key``."""
-    from flctool.plugins import plugins
-
-    return tuple(plugin.name for plugin in plugins("learner")
-                 if key in learner_keys(plugin.config_model()))
-
-
-def foreign_key_message(key: str, learner: str) -> str | None:
-    """Why ``key`` may not appear in the ``learning:`` of ``learner``, when another learner
-    reads it; None for a key no learner reads (a typo, reported as unknown)."""
-    readers = readers_of(key)
-    if not readers or learner in readers:
-        return None
-    if len(readers) == 1:
-        return (f"'{key}' is read by {learners_text(readers)}; remove it or set "
-                f"learner: {readers[0]}")
-    return (f"'{key}' is read by {learners_text(readers)}, not by {learner}; remove it or "
-            "set learner to one of them")
-
-
-def learners_text(names: Sequence[str]) -> str:
-    """``the pitt learner only``, or ``the pitt and hybrid learners``: who reads a key."""
-    if len(names) == 1:
-        return f"the {names[0]} learner only"
-    return f"the {', '.join(names[:-1])} and {names[-1]} learners"
-
-
-#: The keys of the one flat ``learning:`` model of earlier versions, which wrote every one of
-#: them into each behaviour they recorded (a run's behaviour.yaml and best.yaml).
-EARLIER_RECORD_KEYS = frozenset((
-    "learner", "seed", "population", "generations", "crossover", "mutation", "pitt_crossover",
-    "elites", "trials", "common_starts", "q", "exploration"))
-
-
-def section_for_learner(learning: Mapping[str, Any]) -> dict[str, Any]:
-    """A ``learning:`` section (as data) ready to validate: named its learner, the default
-    if it names none, and, if an earlier version recorded it, without the keys its learner
-    never read. A section someone wrote keeps every key, so that a stray key is reported."""
-    section = {"learner": DEFAULT_LEARNER, **learning}
-    learner = section["learner"]
-    if section.keys() >= EARLIER_RECORD_KEYS and isinstance(learner, str):
-        return keep_keys_read_by(section, learner)
-    return section
-
-
-def keep_keys_read_by(learning: Mapping[str, Any], learner: str) -> dict[str, Any]:
-    """``learning`` (a section as data) for ``learner``: the keys it does not read left out.
-
-    For a section written for another learner, e.g. when an override switches the learner
-    or a run directory of an older flctool recorded every key for every learner. A learner
-    nobody knows keeps every key, so that validation reports the name.
-    """
-    from flctool.plugins import plugin
-
-    found = plugin("learner", learner)
-    if found is None:
-        return dict(learning)
-    keys = learner_keys(found.config_model())
-    return {key: value for key, value in learning.items() if key in keys}

@@ -25,12 +25,12 @@ from flctool.behaviour.checks import (
 from flctool.behaviour.compose import inline_parts
 from flctool.behaviour.dump import behaviour_to_data
 from flctool.behaviour.environment import AdapterConfig
-from flctool.behaviour.learning import foreign_key_message
+from flctool.behaviour.fuzzy import InputVariable, Rule
 from flctool.behaviour.located import attach_source
 from flctool.behaviour.magnitudes import magnitude_problems
-from flctool.behaviour.models import FORMAT_VERSION, Behaviour, InputVariable, Rule
+from flctool.behaviour.models import FORMAT_VERSION, Behaviour
 from flctool.behaviour.rules import expand_dont_care
-from flctool.behaviour.sections import CHOSEN, section_model
+from flctool.behaviour.sections import CHOSEN, foreign_key_message, section_model
 from flctool.behaviour.yaml_source import MAX_FILE_CHARS, SourceMap, read_yaml
 from flctool.errors import PathPart, Problem, SpecError
 from flctool.inputs import read_input

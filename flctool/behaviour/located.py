@@ -17,7 +17,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
-from flctool.behaviour.yaml_source import SourceMap
+from flctool.behaviour.yaml_source import SourceMap, SourceRef
 from flctool.errors import PathPart, Problem, SpecError
 
 if TYPE_CHECKING:
@@ -25,31 +25,6 @@ if TYPE_CHECKING:
 
 #: The source of a behaviour built in Python rather than read from a file.
 UNKNOWN_SOURCE = SourceMap("<behaviour>")
-
-
-class SourceRef:
-    """Holds a behaviour's :class:`SourceMap` outside its value: any two compare equal, so
-    two behaviours with the same fields are equal wherever they were read from."""
-
-    __slots__ = ("source",)
-
-    def __init__(self, source: SourceMap | None = None) -> None:
-        self.source = source
-
-    def __eq__(self, other: object) -> bool:
-        return True
-
-    def __hash__(self) -> int:
-        return 0
-
-    def __getstate__(self) -> SourceMap | None:
-        return self.source
-
-    def __setstate__(self, state: SourceMap | None) -> None:
-        self.source = state
-
-    def __repr__(self) -> str:
-        return f"SourceRef({self.source.file if self.source else None!r})"
 
 
 def attach_source(behaviour: Behaviour, source: SourceMap) -> None:

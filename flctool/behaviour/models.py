@@ -2,113 +2,40 @@
 
 A behaviour declares N inputs, each partitioned into L_i fuzzy sets given as trapezoid
 quadruples ``(pa, pb, pc, pd)``; one output with K singleton commands; and optionally the rule
-consequents. Structure and types are checked here; the checks that relate fields to each other
-(coverage, rule references) live in :mod:`flctool.behaviour.checks`.
+consequents. The inputs, the output and the rules are the models of :mod:`flctool.behaviour.fuzzy`;
+the checks that relate fields to each other (coverage, rule references) live in
+:mod:`flctool.behaviour.checks`, and :func:`find_problems` runs them when a behaviour is
+validated.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Union
+from typing import Any
 
 from pydantic import (
-    AfterValidator,
-    ConfigDict,
-    Discriminator,
     Field,
     PrivateAttr,
     SerializeAsAny,
-    Tag,
     ValidationInfo,
     field_validator,
     model_validator,
 )
 
 from flctool.behaviour.base import BehaviourName, Name, Section
-from flctool.behaviour.checks import find_problems
+from flctool.behaviour.checks import check_input, check_rules, limit_problems
 from flctool.behaviour.environment import AdapterConfig, default_gymnasium_ranges
-from flctool.behaviour.learning import (
-    DEFAULT_LEARNER,
-    HybridConfig,
-    LearningConfig,
-    section_for_learner,
-)
-from flctool.behaviour.located import SourceRef
+from flctool.behaviour.fuzzy import InputVariable, Output, Rule
+from flctool.behaviour.learning import DEFAULT_LEARNER, HybridConfig, LearningConfig
+from flctool.behaviour.magnitudes import magnitude_problems
 from flctool.behaviour.rule_order import rule_grid
-from flctool.behaviour.sections import CHOSEN
-from flctool.behaviour.shapes import ShapedSet
-from flctool.errors import NotDeployableError
+from flctool.behaviour.sections import CHOSEN, section_for_learner
+from flctool.behaviour.set_learning import set_learning_problems
+from flctool.behaviour.yaml_source import SourceRef
+from flctool.errors import NotDeployableError, Problem
+from flctool.plugins import blamed
 
 FORMAT_VERSION = 1
-
-
-def _ordered(quad: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
-    pa, pb, pc, pd = quad
-    if not pa <= pb <= pc <= pd:
-        raise ValueError(
-            f"the quadruple [{pa:g}, {pb:g}, {pc:g}, {pd:g}] must satisfy pa <= pb <= pc <= pd; "
-            "write the left foot, left shoulder, right shoulder, right foot in that order")
-    return quad
-
-
-Quadruple = Annotated[tuple[float, float, float, float], AfterValidator(_ordered)]
-
-
-def _set_form(value: Any) -> str:
-    return "shape" if isinstance(value, (dict, ShapedSet)) else "trapezoid"
-
-
-#: A set: a trapezoid quadruple (the default, and the paper's), or a shape written as a
-#: one-key mapping (flctool.behaviour.shapes). The form of the value chooses, so an error
-#: concerns the form written.
-FuzzySet = Annotated[Union[Annotated[Quadruple, Tag("trapezoid")],  # noqa: UP007
-                           Annotated[ShapedSet, Tag("shape")]], Discriminator(_set_form)]
-
-
-def _increasing(bounds: tuple[float, float]) -> tuple[float, float]:
-    lo, hi = bounds
-    if not lo < hi:
-        raise ValueError(f"range [{lo:g}, {hi:g}] must be [low, high] with low < high")
-    return bounds
-
-
-def _range_may_default(schema: dict[str, Any]) -> None:
-    # The loader fills in a gymnasium input's range before validation
-    # (default_gymnasium_ranges), so a file may leave it out: editors must not flag that.
-    schema["required"] = [key for key in schema.get("required", []) if key != "range"]
-
-
-class InputVariable(Section):
-    """One sensor input s_i with its L_i fuzzy sets."""
-
-    model_config = ConfigDict(json_schema_extra=_range_may_default)
-
-    range: Annotated[tuple[float, float], AfterValidator(_increasing)] = Field(
-        description="[low, high]; inputs outside it are clipped to it. Required, except "
-        "for a gymnasium input whose observation bounds are finite: it defaults to them "
-        "(docs/environments.md)")
-    unit: str | None = None
-    sets: dict[Name, FuzzySet] = Field(min_length=1, description=(
-        "set name -> [pa, pb, pc, pd] (a trapezoid; pb == pc is a triangle, pa == pb or "
-        "pc == pd a vertical edge), or a shape {gauss: [mean, sigma]}, {gauss2: [...]}, "
-        "{bell: [width, slope, centre]}, {sigmoid: [centre, slope]}, {sigmoid_difference: "
-        "[...]}, {sigmoid_product: [...]}, {s_shape: [foot, shoulder]}, {z_shape: "
-        "[shoulder, foot]} or {pi_shape: [...]} (docs/behaviour-files.md)"))
-
-
-class Output(Section):
-    """The single output a, with its K singleton commands c^k."""
-
-    name: Name
-    unit: str | None = None
-    commands: dict[Name, float] = Field(min_length=1, description="command name -> singleton")
-
-
-class Rule(Section):
-    """Rule R_m of eq. 1: IF s_1 is F^{j_1} AND ... THEN a is c^k."""
-
-    if_: dict[Name, Name] = Field(alias="if", min_length=1)
-    then: Name
 
 
 class Behaviour(Section):
@@ -130,8 +57,8 @@ class Behaviour(Section):
         "the learner and its hyperparameters; without 'learner:' the section is the "
         f"{DEFAULT_LEARNER} learner's"))
     environment: SerializeAsAny[AdapterConfig] | None = None
-    #: Where each field was written (:mod:`flctool.behaviour.located`); not part of the value,
-    #: set once by the loader (:func:`flctool.behaviour.located.attach_source`).
+    #: Where each field was written (read by :mod:`flctool.behaviour.located`); not part of
+    #: the value, set once by the loader (:func:`flctool.behaviour.located.attach_source`).
     _source: SourceRef = PrivateAttr(default_factory=SourceRef)
 
     def __setattr__(self, name: str, value: Any) -> None:
@@ -208,6 +135,34 @@ class Behaviour(Section):
     @property
     def is_deployable(self) -> bool:
         return len(self.rules) == self.rule_count and not self.missing_rules()
+
+
+def find_problems(behaviour: Behaviour) -> list[Problem]:
+    """What relates the fields of ``behaviour`` badly (the checks of
+    :mod:`flctool.behaviour.checks`, the adapter's and the set learning's), run once, when it
+    is validated."""
+    problems = limit_problems([len(v.sets) for v in behaviour.inputs.values()],
+                              behaviour.learning.population, behaviour.learning.trials,
+                              behaviour.learning.generations,
+                              getattr(behaviour.environment, "max_steps", None))
+    sets_problems = [p for name, variable in behaviour.inputs.items()
+                     for p in check_input(name, variable)]
+    problems += sets_problems
+    if behaviour.output.name in behaviour.inputs:
+        problems.append(Problem(("output", "name"), f"the output is named '{behaviour.output.name}'"
+                                ", like an input", "give the output a name of its own"))
+    problems += check_rules({name: tuple(v.sets) for name, v in behaviour.inputs.items()},
+                            behaviour.output.commands, enumerate(behaviour.rules))
+    environment = behaviour.environment
+    if isinstance(environment, AdapterConfig):
+        with blamed("environment", environment.adapter):
+            problems += magnitude_problems(environment)
+            problems += environment.fit_problems(behaviour.input_names,
+                                                 tuple(behaviour.output.commands))
+    if not sets_problems:  # learning the sets starts from valid ones
+        problems += set_learning_problems(getattr(behaviour.learning, "sets", None),
+                                          behaviour.inputs)
+    return problems
 
 
 #: How many missing rules a :class:`NotDeployableError` lists.

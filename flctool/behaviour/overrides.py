@@ -16,10 +16,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from flctool.behaviour.dump import behaviour_to_data
-from flctool.behaviour.learning import keep_keys_read_by
 from flctool.behaviour.load import behaviour_from_data
 from flctool.behaviour.located import source_of
 from flctool.behaviour.models import Behaviour
+from flctool.behaviour.sections import keep_keys_read_by
 from flctool.errors import PathPart, Problem, SpecError
 
 

@@ -21,7 +21,8 @@ from collections.abc import Iterable
 from typing import Any, SupportsInt
 
 from flctool.behaviour.checks import MAX_RULES
-from flctool.behaviour.models import Behaviour, Rule
+from flctool.behaviour.fuzzy import Rule
+from flctool.behaviour.models import Behaviour
 from flctool.behaviour.yaml_source import Mark, SourceMap
 from flctool.errors import FlcError, PathPart, Problem
 

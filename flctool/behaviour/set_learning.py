@@ -34,7 +34,7 @@ from flctool.errors import PathPart, Problem
 from flctool.registry import did_you_mean
 
 if TYPE_CHECKING:
-    from flctool.behaviour.models import Behaviour, InputVariable
+    from flctool.behaviour.fuzzy import InputVariable
 
 Mode = Literal["partition", "lateral"]
 BoundIn = Literal["spacing", "units"]
@@ -110,25 +110,26 @@ class InputSetting:
     fixed: tuple[str, ...]
 
 
-def set_learning_problems(behaviour: Behaviour) -> list[Problem]:
-    """What in ``learning.sets`` does not fit the inputs: unknown names, and sets that the
-    chosen mode cannot start from."""
-    config: SetLearningConfig | None = getattr(behaviour.learning, "sets", None)
+def set_learning_problems(config: SetLearningConfig | None,
+                          inputs: Mapping[str, InputVariable]) -> list[Problem]:
+    """What in ``learning.sets`` (``config``, None if the learner learns no sets) does not fit
+    the behaviour's ``inputs``: unknown names, and sets that the chosen mode cannot start
+    from."""
     if config is None:
         return []
     problems: list[Problem] = []
     here: tuple[PathPart, ...] = ("learning", "sets", "inputs")
-    known = behaviour.input_names
+    known = tuple(inputs)
     chosen = config.inputs
     named = [] if chosen == "all" else list(chosen)
     for index, name in enumerate(named):
-        if name not in behaviour.inputs:
+        if name not in inputs:
             path = (*here, index) if isinstance(chosen, list) else (*here, name)
             problems.append(Problem(path, f"there is no input '{name}'."
                                     f"{did_you_mean(name, known)}",
                                     f"use one of the inputs: {', '.join(known)}"))
     for name, setting in config.settings(known).items():
-        variable = behaviour.inputs[name]
+        variable = inputs[name]
         shaped = [(s, v.kind) for s, v in variable.sets.items() if not is_trapezoid(v)]
         if shaped:  # the set genes code trapezoids only (flctool.behaviour.shapes)
             set_name, kind = shaped[0]
@@ -206,7 +207,7 @@ Quad = tuple[float, float, float, float]
 
 def membership(s: float, quad: Sequence[float]) -> float:
     """The trapezoid membership of paper Sec. II (the formula of
-    :mod:`flctool.compile.membership`)."""
+    :mod:`flctool.membership`)."""
     pa, pb, pc, pd = quad
     if s > pc:
         return max(0.0, (pd - s) / (pd - pc)) if pd > pc else 0.0

@@ -18,7 +18,7 @@ shape                     parameters                              scikit-fuzzy
 ``pi_shape``              foot1, shoulder1, shoulder2, foot2      ``pimf``
 ========================  ======================================  =======================
 
-The formulas are coded once in Python, in :mod:`flctool.compile.membership`. Only trapezoids
+The formulas are coded once in Python, in :mod:`flctool.membership`. Only trapezoids
 can be learned as sets; these shapes are fixed where the file puts them.
 """
 

@@ -161,6 +161,31 @@ class SourceMap:
                        column=column)
 
 
+class SourceRef:
+    """Holds a behaviour's :class:`SourceMap` outside its value: any two compare equal, so
+    two behaviours with the same fields are equal wherever they were read from."""
+
+    __slots__ = ("source",)
+
+    def __init__(self, source: SourceMap | None = None) -> None:
+        self.source = source
+
+    def __eq__(self, other: object) -> bool:
+        return True
+
+    def __hash__(self) -> int:
+        return 0
+
+    def __getstate__(self) -> SourceMap | None:
+        return self.source
+
+    def __setstate__(self, state: SourceMap | None) -> None:
+        self.source = state
+
+    def __repr__(self) -> str:
+        return f"SourceRef({self.source.file if self.source else None!r})"
+
+
 # Large files are parsed by libyaml (PyYAML's C parser) when it is installed: the pure-Python
 # parser needs tens of seconds for a file of a few megabytes.
 _LIBYAML_FROM = 64 * 1024

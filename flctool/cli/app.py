@@ -190,7 +190,7 @@ def main(
 ) -> None:
     _state["debug"] = debug
     if import_module:
-        from flctool.envs.gym_adapter import import_user_modules
+        from flctool.behaviour.gym_registry import import_user_modules
 
         with user_errors():
             import_user_modules(import_module)
@@ -550,9 +550,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("flctool.cli.bags", "Run a controller over a bag's recorded inputs: at each "
                "recorded command, its output from the latest inputs, beside the recorded one "
                "and their difference (CSV)."),
-    "run": ("flctool.cli.run", "Deploy a controller on a robot: publish its command at the "
-            "control rate from the latest inputs, with a watchdog that publishes stop at once "
-            "on a stale, NaN or out-of-range input or a lost publisher, and again on Ctrl-C."),
+    "run": ("flctool.cli.run", "Deploy a controller on a robot. --ros2: publish its command "
+            "at the control rate from the latest inputs, with a watchdog that publishes stop "
+            "at once on a stale, NaN or out-of-range input or a lost publisher, and again on "
+            "Ctrl-C. --link: run episodes on a robot-link robot, a composed behaviour's "
+            "arbiter and parts included."),
     "serve": ("flctool.cli.serve", "Serve a behaviour's simulator over the robot-link "
               "protocol (docs/robot-link.md), for trying the link without a robot and as an "
               "example for bridge writers."),

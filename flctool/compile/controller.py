@@ -24,9 +24,9 @@ from numpy.typing import NDArray
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.shapes import evaluated_range, set_row
 from flctool.compile import vectorised
-from flctool.compile.membership import memberships
 from flctool.compile.rules import rule_consequents, rule_grid
 from flctool.errors import InferenceError, NotDeployableError
+from flctool.membership import memberships
 
 if TYPE_CHECKING:
     from flctool.compile.kernels import Layout

@@ -685,7 +685,7 @@ def fired_rules_bound(ranges: FloatArray, quadruples: tuple[FloatArray, ...],
     (for the other shapes, whose parameters are not where they start, it is a good
     estimate: a cost model reads it, never the arithmetic).
     """
-    from flctool.compile.membership import memberships
+    from flctool.membership import memberships
 
     bound = 1
     for i, quads in enumerate(quadruples):

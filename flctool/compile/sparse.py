@@ -18,8 +18,8 @@ from typing import TYPE_CHECKING, Protocol
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.shapes import evaluated_range, set_row
 from flctool.compile.defuzzify import centre_of_area
-from flctool.compile.membership import firing_sets
 from flctool.errors import InferenceError
+from flctool.membership import firing_sets
 
 if TYPE_CHECKING:
     import numpy as np

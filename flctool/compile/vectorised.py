@@ -7,7 +7,7 @@ seconds), while a call here costs a few microseconds of numpy per operation. The
 much as loading the kernels would cost, then loads them (see ``Controller.output``).
 
 The arithmetic is the kernels' (and the reference loop's), so the results are the same bits:
-each input's memberships by :func:`~flctool.compile.membership.memberships` (trapezoids
+each input's memberships by :func:`~flctool.membership.memberships` (trapezoids
 vectorised, other shapes value by value), then, vectorised
 over the states, the rules that combine each state's fired sets, enumerated in increasing
 rule order (each input's fired sets in set order, the last input fastest): for each, eq. 2's
@@ -28,7 +28,7 @@ from collections.abc import Iterator, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from flctool.compile.membership import memberships
+from flctool.membership import memberships
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

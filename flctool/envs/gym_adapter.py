@@ -19,131 +19,24 @@ and one-at-a-time runs agree. gymnasium is an optional extra: ``pip install 'flc
 
 from __future__ import annotations
 
-import importlib
-import inspect
 import re
-from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from flctool.behaviour.environment import GymnasiumConfig, ObservationFeature
+from flctool.behaviour.gym_registry import id_module_problem, import_gymnasium, option_problems
 from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
-from flctool.errors import EnvError, MissingDependencyError, Problem, SpecError
+from flctool.errors import EnvError, Problem, SpecError
 from flctool.registry import did_you_mean
 
-
-def import_gymnasium() -> Any:
-    """The gymnasium module, or :class:`MissingDependencyError` with the install hint."""
-    try:
-        import gymnasium
-    except ImportError:
-        raise MissingDependencyError("gymnasium", "gym", "the gymnasium adapter") from None
-    return gymnasium
-
-
 _GYM_SUGGESTION = re.compile(r"\s*Did you mean: `[^`]*`\?")
-
-#: Modules the user imported on the command line (``--import-module``). Gymnasium imports the
-#: module of an id ``module:Env-v0`` itself; a behaviour file alone must not run code, so such
-#: an id is refused unless its module is one of these.
-_USER_MODULES: set[str] = set()
-
-
-def import_user_modules(names: Iterable[str]) -> None:
-    """Import the modules the user named (they register their Gymnasium environments) and
-    allow ids ``module:Env-v0`` to name them. Raises :class:`EnvError` if one fails."""
-    for name in names:
-        try:
-            importlib.import_module(name)
-        except Exception as error:  # any failure of the user's module is theirs to fix
-            raise EnvError(f"cannot import the module '{name}' (--import-module): "
-                           f"{type(error).__name__}: {error}",
-                           hint="check the module name and that it is importable") from None
-        _USER_MODULES.add(name)
-
-
-def id_module_problem(env_id: str) -> Problem | None:
-    """A Gymnasium id that would import a module the user did not name, or None."""
-    module, colon, _ = env_id.rpartition(":")
-    if not colon or module in _USER_MODULES:
-        return None
-    return Problem(("environment", "id"), f"the id '{env_id}' names the Python module "
-                   f"'{module}' to import, and reading a behaviour file never runs code",
-                   f"if you trust the module, pass --import-module {module} on the command "
-                   "line, or use the id without the module")
 
 
 def _spec_error(path: tuple[str | int, ...], message: str, hint: str = "") -> SpecError:
     return SpecError([Problem(path, message, hint)])
-
-
-#: Keyword arguments gymnasium.make takes itself, whatever the environment.
-_MAKE_OPTIONS = frozenset({"max_episode_steps", "disable_env_checker"})
-
-
-def option_problems(gym: Any, config: GymnasiumConfig) -> list[Problem]:
-    """``environment.options`` checked against what the registered environment accepts,
-    before it is made: ``render_mode`` against its ``metadata['render_modes']``, every other
-    key against its constructor's parameters (unless it takes ``**kwargs``). Only the module
-    the id is registered from is imported (as making it would); an id that names another
-    module, or no registered id, is left to :func:`id_module_problem` and ``gym.make``."""
-    if not config.options or id_module_problem(config.id) is not None:
-        return []
-    try:
-        spec = gym.spec(config.id)
-        creator = (gym.envs.registration.load_env_creator(spec.entry_point)
-                   if isinstance(spec.entry_point, str) else spec.entry_point)
-        parameters = inspect.signature(creator).parameters
-    except Exception:  # an unknown id or an entry point that cannot be inspected: make says
-        return []
-    problems: list[Problem] = []
-    modes = (getattr(creator, "metadata", None) or {}).get("render_modes")
-    mode = config.options.get("render_mode")
-    if mode is not None and isinstance(modes, (list, tuple)) and mode not in modes:
-        problems.append(Problem(("environment", "options", "render_mode"),
-                                f"'{mode}' is not a render mode of '{config.id}'."
-                                f"{did_you_mean(str(mode), [str(m) for m in modes])}",
-                                f"use one of: {', '.join(map(str, modes)) or '(none)'}, or "
-                                "leave render_mode out"))
-    if not any(p.kind is inspect.Parameter.VAR_KEYWORD for p in parameters.values()):
-        accepted = [name for name, p in parameters.items()
-                    if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD,
-                                  inspect.Parameter.KEYWORD_ONLY)]
-        for key in config.options:
-            if key not in accepted and key not in _MAKE_OPTIONS:
-                problems.append(Problem(("environment", "options", key),
-                                        f"'{config.id}' takes no option '{key}'."
-                                        f"{did_you_mean(key, accepted)}",
-                                        f"its options: {', '.join(accepted) or '(none)'}"))
-    return problems
-
-
-def observation_space_bounds(config: GymnasiumConfig) -> tuple[list[float], list[float]]:
-    """The low and high bounds ``(D,)`` of the environment's one-dimensional Box observation
-    space, each the shortest decimal of its dtype (entries may be infinite). Makes the
-    environment once, then closes it."""
-    gym = import_gymnasium()
-    problems = option_problems(gym, config)
-    if problems:
-        raise SpecError(problems)
-    try:
-        env = gym.make(config.id, disable_env_checker=True, **config.options)
-    except (gym.error.Error, TypeError) as error:  # make_env reports it in full
-        raise _spec_error(("environment", "id"), f"Gymnasium cannot make '{config.id}': "
-                          f"{error}") from None
-    try:
-        space = env.observation_space
-        if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
-            raise _spec_error(("environment", "id"), f"'{config.id}' observes {space}; the "
-                              "gymnasium adapter needs a one-dimensional Box observation space")
-        # Bounds as the space's dtype prints them: float32 4.8 is 4.800000190734863 as a
-        # double, and sets written up to 4.8 would leave a sliver uncovered.
-        return ([float(str(v)) for v in space.low], [float(str(v)) for v in space.high])
-    finally:
-        env.close()
 
 
 class GymnasiumEnv(BatchEnv):
@@ -191,7 +84,7 @@ class GymnasiumEnv(BatchEnv):
         problem = id_module_problem(config.id)
         if problem is not None:
             raise SpecError([problem])
-        problems = option_problems(gym, config)
+        problems = option_problems(gym, config.id, config.options)
         if problems:
             raise SpecError(problems)
         try:

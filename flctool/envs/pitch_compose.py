@@ -115,3 +115,31 @@ def composed_drive(behaviour: Behaviour, config: PitchConfig, channels: tuple[st
         raise SpecError(problems)
     drive = ComposedDrive(dict(behaviour.output.commands), parts)
     return drive, tuple(read[len(channels):])
+
+
+def composition_parts(behaviour: Behaviour) -> tuple[PitchConfig, tuple[str, ...],
+                                                     ComposedDrive, tuple[str, ...]]:
+    """The composition's config, the arbiter's channels, its drive and every channel read."""
+    config = behaviour.environment
+    assert isinstance(config, PitchConfig)
+    channels = tuple(config.channel_of(name) for name in behaviour.input_names)
+    drive, extra = composed_drive(behaviour, config, channels)
+    assert isinstance(drive, ComposedDrive)
+    return config, channels, drive, (*channels, *extra)
+
+
+def common_commands(drive: ComposedDrive) -> dict[str, float]:
+    """The parts' common command table: what the robot of a composition executes (a
+    :class:`SpecError` if the parts' tables differ)."""
+    tables = {part.name: dict(zip(part.drive.order, part.drive.values_list, strict=True))
+              for part in drive.parts}
+    first_name, first = next(iter(tables.items()))
+    problems = [Problem(("environment", "compose", name),
+                        f"the part's commands {table} differ from part '{first_name}''s "
+                        f"{first}", "deploying a composition needs parts with one command "
+                        "table (the robot executes it): give every part the same commands "
+                        "and singletons")
+                for name, table in tables.items() if table != first]
+    if problems:
+        raise SpecError(problems)
+    return first

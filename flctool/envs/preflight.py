@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from flctool.behaviour import Behaviour, load_behaviour
-from flctool.behaviour.checks import find_warnings
+from flctool.behaviour.checks import command_warnings
 from flctool.behaviour.located import locate
 from flctool.errors import MissingDependencyError, Problem
 
@@ -45,7 +45,8 @@ def validate_file(path: str | Path) -> FileReport:
     problem located in the file."""
     path = Path(path)
     behaviour = load_behaviour(path)
-    warnings = [locate(behaviour, w.path, w.message, w.hint) for w in find_warnings(behaviour)]
+    warnings = [locate(behaviour, w.path, w.message, w.hint)
+                for w in command_warnings(behaviour.output.commands)]
     note = ""
     environment = behaviour.environment
     if environment is not None:

@@ -32,7 +32,7 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -53,11 +53,32 @@ from flctool.envs.robot_protocol import (
 )
 from flctool.errors import EnvError, FlcError
 
+if TYPE_CHECKING:
+    from flctool.envs.pitch import PitchSim
+
 _POLL = 0.1  # s; how often blocking waits look whether the server is shutting down
 #: Connections whose handshake is still awaited; a new one beyond this drops the oldest.
 MAX_PENDING = 64
 #: s a client that said hello waits for the one controlling the robot to finish.
 BUSY_WAIT = 2.0
+
+
+def composition_world(behaviour: Behaviour) -> PitchSim:
+    """A composition's world as its robot: the composing file's pitch world, observed through
+    every channel the arbiter and its parts read (named by channel), driven by the parts'
+    common walking commands, blended. The same episodes as the composition's for every seed
+    (the same channels read, so the same noise table)."""
+    from flctool.envs.pitch import PitchSim
+    from flctool.envs.pitch_compose import common_commands, composition_parts
+    from flctool.envs.pitch_drive import CommandDrive
+    from flctool.envs.pitch_world import world_from_config
+
+    config, _, drive, read = composition_parts(behaviour)
+    commands = common_commands(drive)
+    names = tuple(dict.fromkeys(read))
+    walk = CommandDrive(commands, config.motion, config.noise, False)
+    return PitchSim(world_from_config(config), commands, config.motion, config.noise, names,
+                    names, False, drive=walk)
 
 
 class _Fault(Exception):
@@ -112,7 +133,9 @@ class RobotServer:
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour, **options: Any) -> RobotServer:
-        """Serve the simulator adapter named by the behaviour's ``environment:`` section."""
+        """Serve the simulator adapter named by the behaviour's ``environment:`` section; for a
+        composed behaviour, its world as the robot a deployment of it drives
+        (:func:`composition_world`)."""
         from flctool.envs import make_env
 
         env = behaviour.environment
@@ -121,6 +144,11 @@ class RobotServer:
                            "environment; the server needs a simulator to serve",
                            hint="serve a behaviour with e.g. 'environment: {adapter: "
                            "ballchase-sim}'")
+        if getattr(env, "compose", None):
+            # a composition's robot only walks: the controller side runs arbiter and parts
+            world = composition_world(behaviour)
+            return cls(world, dict(zip(world.drive.order, world.drive.values.tolist(),
+                                       strict=True)), **options)
         return cls(make_env(behaviour, 1), dict(behaviour.output.commands), **options)
 
     # -- lifecycle ---------------------------------------------------------------------------

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.ros2 import Ros2Config
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
-from flctool.envs.pitch import timed_fitness
+from flctool.envs.pitch import PitchSim, timed_fitness
 from flctool.errors import EnvError, FlcError, LinkError, SpecError
 from flctool.ros2.fields import CommandWriter, input_reader, message_class, outcome, value_problem
 from flctool.ros2.graph import Inbox, RosGraph
@@ -57,6 +57,9 @@ class Ros2Env(BatchEnv):
         values = sorted(self.commands.values())
         self.action_bounds = (float(values[0]), float(values[-1]))
         self.max_steps = config.episode.max_steps
+        if config.episode.fitness == "timed":
+            # the pitch world's bounds: the same intervals as learning in the simulator
+            self.fitness_range = PitchSim.fitness_range
         self.where = f"ROS 2 robot (node {config.namespace}/{config.node})"
         self.graph = RosGraph(config.node, config.namespace)
         try:

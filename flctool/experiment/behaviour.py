@@ -19,16 +19,16 @@ from typing import Any
 
 from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data
 from flctool.behaviour.dump import data_to_yaml
-from flctool.behaviour.learning import (
-    DEFAULT_LEARNER,
+from flctool.behaviour.learning import DEFAULT_LEARNER
+from flctool.behaviour.load import read_behaviour_text
+from flctool.behaviour.located import source_of
+from flctool.behaviour.overrides import Override, Overrides, apply_overrides, as_overrides
+from flctool.behaviour.sections import (
     EARLIER_RECORD_KEYS,
     keep_keys_read_by,
     learners_text,
     readers_of,
 )
-from flctool.behaviour.load import read_behaviour_text
-from flctool.behaviour.located import source_of
-from flctool.behaviour.overrides import Override, Overrides, apply_overrides, as_overrides
 from flctool.behaviour.yaml_source import SourceMap, read_yaml
 from flctool.errors import Problem, SpecError
 

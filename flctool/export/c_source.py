@@ -5,7 +5,7 @@ the header by its file name. Without a file the export is one self-contained tra
 unit (header, then source) on stdout. The tables are ``static const`` data; the one public
 function is ``<prefix>output(const double state[N])`` (``float`` with ``single``). No heap, no
 libm: clipping is two comparisons, and the arithmetic is exactly flctool's (membership as in
-flctool/compile/membership.py, minimum activation, sums over the rules in rule order).
+flctool/membership.py, minimum activation, sums over the rules in rule order).
 """
 
 from __future__ import annotations
@@ -243,7 +243,7 @@ def _shaped_sets(behaviour: Behaviour) -> tuple[str, str, bool] | None:
 
 
 def _shape_functions(prefix: str, real: str) -> list[str]:
-    """The shapes of flctool.behaviour.shapes, coded as flctool/compile/membership.py codes them
+    """The shapes of flctool.behaviour.shapes, coded as flctool/membership.py codes them
     (``exp`` and ``pow`` are libm's, as Python's and numba's are)."""
     return f"""\
 static {real} {prefix}sigmoid({real} x, {real} c, {real} a)

@@ -21,7 +21,6 @@ import json
 from pathlib import Path
 from typing import Any
 
-from flctool import __version__
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.base import identifier
 from flctool.behaviour.environment import PitchConfig
@@ -29,6 +28,7 @@ from flctool.errors import ExportError
 from flctool.export.base import ExportOptions
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
+from flctool.version import __version__
 
 #: The composed wiring file's format version.
 COMPOSED_WIRING_VERSION = 1

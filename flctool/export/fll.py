@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.base import identifier
-from flctool.behaviour.models import FuzzySet
+from flctool.behaviour.fuzzy import FuzzySet
 from flctool.behaviour.shapes import ShapedSet, set_row
 from flctool.errors import ExportError
 from flctool.export import shapes

@@ -17,8 +17,8 @@ from flctool.behaviour import Behaviour
 from flctool.behaviour.shapes import trapezoids
 from flctool.compile import compile_behaviour
 from flctool.compile.defuzzify import centre_of_area
-from flctool.compile.membership import trapezoid
 from flctool.errors import ExportError
+from flctool.membership import trapezoid
 
 #: The float export's documented bound, relative to max(1, largest |command|).
 FLOAT_BOUND = 1e-5

@@ -20,7 +20,7 @@ import numpy as np
 from flctool.behaviour import Behaviour
 from flctool.behaviour.shapes import set_row
 from flctool.compile import compile_behaviour
-from flctool.compile.membership import memberships
+from flctool.membership import memberships
 
 Quad = tuple[float, float, float, float]
 #: How many random states the deviation is measured on (besides every range's ends, every

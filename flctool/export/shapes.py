@@ -4,7 +4,7 @@
 flctool writes a shape's parameters in scikit-fuzzy's order; fuzzylite and MATLAB each have
 their own. Each entry here is ``flctool shape -> (their name, order)``, where ``order[k]`` is
 the index in flctool's parameters of their k-th parameter. The same formulas are computed
-(:mod:`flctool.compile.membership`), so an export reads back to the same set, and the
+(:mod:`flctool.membership`), so an export reads back to the same set, and the
 engines compute what flctool does.
 """
 

@@ -36,7 +36,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import SupportsFloat
 
-from flctool.behaviour.models import Behaviour, InputVariable
+from flctool.behaviour.fuzzy import InputVariable
+from flctool.behaviour.models import Behaviour
 from flctool.behaviour.set_learning import InputSetting, Quad, SetLearningConfig, coverage
 from flctool.behaviour.shapes import trapezoids
 from flctool.errors import LearnError

@@ -20,7 +20,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from flctool.behaviour.models import Behaviour, FuzzySet
+from flctool.behaviour.fuzzy import FuzzySet
+from flctool.behaviour.models import Behaviour
 from flctool.behaviour.set_learning import Quad, coverage, membership
 from flctool.behaviour.shapes import is_trapezoid, trapezoids
 

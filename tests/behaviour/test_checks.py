@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from flctool.behaviour.checks import uncovered_gap
-from flctool.behaviour.models import InputVariable
+from flctool.behaviour.fuzzy import InputVariable
 
 
 def _gap(sets: dict[str, list[float]], lo: float = 0.0, hi: float = 1.0) -> object:
@@ -46,7 +46,7 @@ def test_two_commands_with_the_same_value_are_a_warning() -> None:
 
 def test_a_broken_rule_table_is_reported_up_to_a_limit() -> None:
     from flctool.behaviour.checks import MAX_RULE_PROBLEMS, check_rules
-    from flctool.behaviour.models import Rule
+    from flctool.behaviour.fuzzy import Rule
 
     rule = Rule.model_validate({"if": {"x": "nowhere"}, "then": "up"})
     problems = check_rules({"x": ("low", "high")}, ("up",), enumerate([rule] * 10_000))
@@ -57,7 +57,7 @@ def test_a_broken_rule_table_is_reported_up_to_a_limit() -> None:
 
 def test_a_duplicate_rule_is_named_the_way_the_file_names_rules() -> None:
     from flctool.behaviour.checks import RuleProblem, check_rules
-    from flctool.behaviour.models import Rule
+    from flctool.behaviour.fuzzy import Rule
 
     rule = Rule.model_validate({"if": {"x": "low"}, "then": "up"})
     [problem] = check_rules({"x": ("low", "high")}, ("up",), [(3, rule), (7, rule)])

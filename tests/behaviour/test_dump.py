@@ -19,6 +19,7 @@ from ..compile.reference import random_behaviour_data
 from ..conftest import ROOT
 
 
+@pytest.mark.slow
 def test_yaml_and_json_round_trip_exactly() -> None:
     rng = np.random.default_rng(5)
     for _ in range(30):

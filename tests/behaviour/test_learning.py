@@ -17,11 +17,9 @@ from flctool.behaviour.learning import (
     HybridConfig,
     LearningConfig,
     PittConfig,
-    foreign_key_message,
-    keep_keys_read_by,
     learner_keys,
-    readers_of,
 )
+from flctool.behaviour.sections import foreign_key_message, keep_keys_read_by, readers_of
 from flctool.errors import SpecError
 from flctool.plugins import names, plugins
 from flctool.runs import resolve_behaviour

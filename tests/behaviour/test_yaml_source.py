@@ -94,6 +94,7 @@ def test_a_control_character_is_refused_with_its_line(character: str) -> None:
     assert line == 2 and f"U+{ord(character):04X}" in message
 
 
+@pytest.mark.slow
 def test_a_large_file_reads_like_a_small_one() -> None:
     from flctool.behaviour import yaml_source
 

@@ -120,6 +120,7 @@ def test_a_run_directory_stands_for_its_best_controller(command: str, tmp_path: 
     ("evaluate", [HANDMADE, "--episodes", "2", "--trace", "{target}.csv"]),
     ("schema", ["-o", "{target}.json"]),
 ])
+@pytest.mark.slow
 def test_outputs_create_folders_and_are_replaced_only_with_force(
         command: str, arguments: list[str], tmp_path: Path) -> None:
     target = tmp_path / "new" / "folder" / "out"
@@ -201,6 +202,7 @@ def test_start_up_loads_no_command_and_no_heavy_module(options: list[str]) -> No
     assert result.stdout.splitlines()[-1] == "loaded: []"
 
 
+@pytest.mark.slow
 def test_a_command_loads_its_own_module_only() -> None:
     result = _run_python(
         "import sys\n"
@@ -215,6 +217,7 @@ def test_a_command_loads_its_own_module_only() -> None:
     assert result.stdout.splitlines()[-1] == "loaded: ['flctool.cli.app', 'flctool.cli.new']"
 
 
+@pytest.mark.slow
 def test_a_mistyped_command_is_suggested_before_any_is_loaded() -> None:
     result = _run_python(
         "import sys\n"
@@ -246,6 +249,7 @@ def test_ctrl_c_during_start_up_imports_is_one_line_and_130() -> None:
     assert result.stderr == "interrupted\n"
 
 
+@pytest.mark.slow
 def test_ctrl_c_turned_into_another_error_is_still_an_interruption() -> None:
     # numba, interrupted while it compiles, raises its own error chained to the
     # KeyboardInterrupt: still one line and 130, not a traceback and exit 1
@@ -266,6 +270,7 @@ def test_ctrl_c_turned_into_another_error_is_still_an_interruption() -> None:
 
 
 @pytest.mark.parametrize("command", ["export", "infer", "show"])
+@pytest.mark.slow
 def test_stdout_to_a_full_device_is_a_clear_error(command: str, tmp_path: Path) -> None:
     if not Path("/dev/full").exists():
         pytest.skip("no /dev/full on this system")

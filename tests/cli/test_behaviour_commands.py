@@ -40,6 +40,7 @@ def test_help_on_every_command() -> None:
         assert "Usage" in result.output
 
 
+@pytest.mark.slow
 def test_validate_shipped_files() -> None:
     files = sorted(str(p) for p in BEHAVIOURS.glob("*.yaml"))
     result = runner.invoke(app, ["validate", *files])
@@ -218,6 +219,7 @@ def test_schema_to_an_unwritable_place(tmp_path: Path) -> None:
     assert "is a folder" in result.output
 
 
+@pytest.mark.slow
 def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
     stale = tmp_path / "schema.json"
     stale.write_text("{}\n")

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from flctool import load_behaviour, with_rules
@@ -94,6 +95,7 @@ def test_an_environment_error_points_at_the_line_of_the_file(tmp_path: Path) -> 
         result.stderr.split())
 
 
+@pytest.mark.slow
 def test_evaluate_on_chosen_seeds_lists_them_in_json() -> None:
     result = runner.invoke(app, ["evaluate", HANDMADE, "--seeds", "1,2,5-9", "--json"])
     assert result.exit_code == 0, result.output

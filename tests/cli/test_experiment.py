@@ -6,6 +6,7 @@ import json
 import re
 from pathlib import Path
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
@@ -18,6 +19,7 @@ runner = CliRunner()
 TINY = ["--set", "generations=3", "--set", "population=4", "--heldout", "20"]
 
 
+@pytest.mark.slow
 def test_experiment_writes_a_report_and_continues(tmp_path: Path) -> None:
     out = tmp_path / "exp"
     args = ["experiment", str(BEHAVIOURS / "ballchase.yaml"), "--seeds", "2", "--learners",
@@ -60,6 +62,7 @@ def test_bad_options_are_clear_errors(tmp_path: Path) -> None:
     assert not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow
 def test_another_plan_in_the_same_directory_is_refused(tmp_path: Path) -> None:
     file = str(BEHAVIOURS / "ballchase.yaml")
     out = ["--out", str(tmp_path / "exp")]
@@ -72,6 +75,7 @@ def test_another_plan_in_the_same_directory_is_refused(tmp_path: Path) -> None:
     assert "different plan" in second.output and "seeds" in second.output
 
 
+@pytest.mark.slow
 def test_one_file_carries_the_settings_of_every_compared_learner(tmp_path: Path) -> None:
     """exploration for the fuzzy_q runs, pitt_crossover for the pitt runs, and a --set of
     q for the runs that read q: each run's behaviour.yaml holds its learner's keys only."""

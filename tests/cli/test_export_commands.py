@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from flctool import compile_behaviour, load_behaviour, parse_behaviour
@@ -29,6 +30,7 @@ def test_export_yaml_to_stdout_is_the_same_controller() -> None:
     assert parse_behaviour(result.output) == load_behaviour(HANDMADE)
 
 
+@pytest.mark.slow
 def test_every_format_through_a_file_and_back(tmp_path: Path) -> None:
     want = compile_behaviour(load_behaviour(HANDMADE))
     states = np.random.default_rng(0).uniform([-0.1, -100], [1.1, 100], (1000, 2))

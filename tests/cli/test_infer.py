@@ -58,6 +58,7 @@ def test_both_paths_refuse_nan() -> None:
         compile_behaviour(behaviour).output(np.array([state]))
 
 
+@pytest.mark.slow
 def test_a_small_table_is_inferred_without_numpy() -> None:
     # In a fresh process, as the command runs: neither numpy nor numba is imported.
     probe = (
@@ -115,6 +116,7 @@ def test_output_file_is_written_whole_or_not_at_all(tmp_path: Path) -> None:
     assert bad.exit_code == 1 and not out.exists() and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_loading_the_kernels_for_a_large_table_spares_scipy_blas() -> None:
     # In a fresh process, as the command runs: numba's probe for scipy's BLAS is spared while
     # the kernels load, and scipy's BLAS imports normally afterwards.

@@ -47,6 +47,7 @@ def test_learn_writes_a_run_and_a_json_summary(tmp_path: Path) -> None:
     assert load_behaviour(out / "best.yaml").is_deployable
 
 
+@pytest.mark.slow
 def test_learn_reports_progress_and_the_best_controller(tmp_path: Path) -> None:
     out = tmp_path / "run"
     result = runner.invoke(app, ["learn", BALLCHASE, "-g", "2", "-o", str(out)])
@@ -109,6 +110,7 @@ def test_switching_learner_drops_the_files_keys_for_the_other_learner(tmp_path: 
     assert "pitt_crossover" not in (out / "behaviour.yaml").read_text()
 
 
+@pytest.mark.slow
 def test_resume_refuses_changed_hyperparameters(tmp_path: Path) -> None:
     out = tmp_path / "run"
     assert runner.invoke(app, ["learn", BALLCHASE, "-g", "2", "-o", str(out)]).exit_code == 0
@@ -171,6 +173,7 @@ def test_a_behaviour_without_environment_leaves_no_run_directory(tmp_path: Path)
 
 
 @pytest.mark.parametrize("key", ["generations", "learning.generations"])
+@pytest.mark.slow
 def test_resume_takes_the_new_budget_from_set_as_from_generations(tmp_path: Path,
                                                                   key: str) -> None:
     out = tmp_path / "run"
@@ -233,6 +236,7 @@ def test_an_environment_error_points_at_the_line_of_the_file(tmp_path: Path) -> 
         " ".join(result.stderr.split()))
 
 
+@pytest.mark.slow
 def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
     run = tmp_path / "run"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -266,6 +270,7 @@ def test_ctrl_c_leaves_the_run_stopped_and_resumable(tmp_path: Path) -> None:
     assert json.loads(result.stdout)["status"] == "finished"
 
 
+@pytest.mark.slow
 def test_learn_loads_neither_scipy_nor_numba(tmp_path: Path) -> None:
     """A learning run needs neither: selection's intervals take the t quantile from a table
     and validation runs the training loop's inference (each would add tenths of a second)."""

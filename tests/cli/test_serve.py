@@ -97,6 +97,7 @@ def test_evaluate_over_the_link_equals_the_simulator(tmp_path: Path) -> None:
     assert "client 127.0.0.1:" in log and "safe stop: the client sent stop (close)" in log
 
 
+@pytest.mark.slow
 def test_trace_over_the_link_has_the_simulator_s_state(
         tmp_path: Path, served: tuple[subprocess.Popen[str], int]) -> None:
     process, port = served
@@ -114,6 +115,7 @@ def _metrics(run: Path) -> list[dict[str, str]]:
                 for row in csv.DictReader(handle)]
 
 
+@pytest.mark.slow
 def test_learning_over_the_link_equals_learning_on_the_simulator(
         tmp_path: Path, served: tuple[subprocess.Popen[str], int]) -> None:
     _, port = served
@@ -136,6 +138,7 @@ def test_serving_a_robot_link_is_an_error(tmp_path: Path) -> None:
     assert "needs a simulator to serve" in result.stderr
 
 
+@pytest.mark.slow
 def test_evaluate_without_a_server_says_how_to_start_one(tmp_path: Path) -> None:
     with server_process(HANDMADE, "--once") as (process, port):
         process.kill()  # the port is free again, and nobody listens

@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 
 from flctool.compile import Controller
-from flctool.compile.membership import trapezoid_scalar
+from flctool.membership import trapezoid_scalar
 
 
 def reference_output(controller: Controller, state: np.ndarray, consequents: np.ndarray) -> float:

@@ -48,6 +48,7 @@ def test_output_equals_loop_over_rules_on_random_controllers() -> None:
         np.testing.assert_allclose(controller.output(states), expected, rtol=0, atol=1e-12)
 
 
+@pytest.mark.slow
 def test_one_state_gives_the_bits_of_a_batch() -> None:
     # output of one state takes the one-state kernel: the same bits as in a batch, strided too
     rng = np.random.default_rng(11)
@@ -136,6 +137,7 @@ _finite = st.floats(allow_nan=False, allow_infinity=False, width=64)
 
 @settings(max_examples=300, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), x=st.lists(_finite, min_size=3, max_size=3))
+@pytest.mark.slow
 def test_output_stays_within_the_singletons(seed: int, x: list[float]) -> None:
     rng = np.random.default_rng(seed)
     controller = compile_behaviour(behaviour_from_data(random_behaviour_data(rng, 3)))

@@ -20,8 +20,8 @@ from flctool import compile_behaviour, load_behaviour
 from flctool.behaviour import behaviour_from_data
 from flctool.behaviour.checks import MAX_RULES
 from flctool.compile import Controller, kernels
-from flctool.compile.membership import trapezoid_scalar
 from flctool.errors import InferenceError
+from flctool.membership import trapezoid_scalar
 
 from .reference import random_behaviour_data, reference_output
 
@@ -78,6 +78,7 @@ def many_overlapping_sets() -> Controller:
     return controller.with_consequents(rng.integers(0, 3, size=controller.n_rules))
 
 
+@pytest.mark.slow
 def test_fast_paths_equal_the_reference_exactly_on_random_controllers() -> None:
     rng = np.random.default_rng(2024)
     for _ in range(40):
@@ -126,6 +127,7 @@ def test_populations_on_both_walks() -> None:
         np.testing.assert_array_equal(sparse_output(controller, states, population), expected)
 
 
+@pytest.mark.slow
 def test_large_rule_base_never_makes_a_dense_batch_by_rules_array() -> None:
     # 6 inputs x 5 sets: M = 15,625; a (B, M) float array for B = 400 would be 50 MB.
     sets = {f"s{j}": [max(0.0, j - 1.0), j - 0.25, j + 0.25, min(4.0, j + 1.0)]
@@ -252,6 +254,7 @@ def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -
                                kernels.OWN_SMALL_BATCH_FEW_INPUTS,
                                kernels.OWN_SMALL_BATCH_FEW_INPUTS + 1, 63, 64, 65, 130]),
        population=st.integers(1, 3))
+@pytest.mark.slow
 def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
                                          population: int) -> None:
     """Small batches (state by state), blocks on both walks, strided states, populations
@@ -303,6 +306,7 @@ def test_own_consequents_entry_on_both_sides_of_its_switch(n_inputs: int) -> Non
                                           expected)
 
 
+@pytest.mark.slow
 def test_own_consequents_entry_on_the_fired_rules_walk() -> None:
     # 4 inputs x 5 sets (M = 625): past the switch, infer_own's blocks walk the fired rules.
     sets = {f"s{j}": [max(0.0, j - 1.0), j - 0.25, j + 0.25, min(4.0, j + 1.0)]
@@ -410,6 +414,7 @@ def test_fired_rules_bound_counts_the_sets_that_overlap() -> None:
     assert many.n_rules == 45
 
 
+@pytest.mark.slow
 def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time() -> None:
     # 6 x 2 and 8 x 2 sets (every rule fires) take the interleaved walk of every rule for up
     # to OWN_SMALL_BATCH_FEW_INPUTS states; 3 x 6 (8 of 216 rules fire) the fired rules'.

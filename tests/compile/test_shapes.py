@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 from flctool import compile_behaviour
 from flctool.behaviour import behaviour_from_data, parse_behaviour
 from flctool.behaviour.shapes import CODES
-from flctool.compile.membership import memberships, shape_membership
 from flctool.compile.sparse import SparseRules
 from flctool.errors import SpecError
+from flctool.membership import memberships, shape_membership
 
 #: (shape, parameters in flctool's order, scikit-fuzzy's value on x)
 REFERENCE = [
@@ -194,6 +194,7 @@ def test_bad_shapes_are_reported_at_their_line(written: str, message: str) -> No
 
 @settings(max_examples=40, deadline=None)
 @given(st.floats(-5, 5), st.floats(0.05, 3), st.floats(-5, 5), st.floats(0.05, 3))
+@pytest.mark.slow
 def test_coverage_holds_wherever_the_check_accepts(m1: float, s1: float, m2: float,
                                                    s2: float) -> None:
     """Accepted inputs have a set at least 1e-6 high at 20,001 points of the range."""

@@ -39,6 +39,7 @@ def test_an_unknown_mode_is_refused() -> None:
         controller_module.set_inference("jit")
 
 
+@pytest.mark.slow
 def test_a_small_evaluation_never_loads_numba(handmade_path: Path) -> None:
     # In a fresh process, as a user runs it: numpy is enough, numba is never imported (so it
     # neither loads nor, on a machine's first run, compiles the kernels).

@@ -76,6 +76,7 @@ def test_batched_equals_one_at_a_time(action: str) -> None:
             assert value[0] == batch_env.trace_state()[key][seed], key
 
 
+@pytest.mark.slow
 def test_one_at_a_time_gives_the_batched_bits_over_many_random_states() -> None:
     # One dynamics (envs/pitch.py's _advance and _sense) runs on floats for reset_one and
     # step_one and on arrays for reset and step: over many random starts and actions, noise

@@ -43,6 +43,7 @@ def _cartpole_env(extra: str) -> str:
     return text[: text.index("environment:")] + extra
 
 
+@pytest.mark.slow
 def test_cartpole_maps_inputs_and_actions() -> None:
     behaviour = load_behaviour(BEHAVIOURS / "cartpole.yaml")
     env = make_env(behaviour, 2)

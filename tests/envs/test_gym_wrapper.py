@@ -5,6 +5,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 from gymnasium.utils.env_checker import check_env
 
 from flctool import load_behaviour
@@ -32,6 +33,7 @@ def test_seed_is_the_simulators_episode_seed() -> None:
     assert env.observation_space.contains(obs) and info == {}
 
 
+@pytest.mark.slow
 def test_every_shipped_pitch_behaviour_is_registered_and_passes_check_env() -> None:
     import gymnasium as gym
 

@@ -27,6 +27,7 @@ def test_every_adapter_has_a_config_and_an_example() -> None:
 
 
 @pytest.mark.parametrize("adapter", sorted(EXAMPLES))
+@pytest.mark.slow
 def test_every_registered_adapter_passes_the_checker(adapter: str) -> None:
     behaviour = load_behaviour(BEHAVIOURS / EXAMPLES[adapter])
     assert behaviour.environment is not None

@@ -52,6 +52,7 @@ def _set(data: dict[str, Any], path: tuple[Any, ...], value: float) -> None:
     "ballchase-handmade",
     pytest.param("avoid-obstacle-handmade", marks=pytest.mark.slow),  # the pitch: 20 s
 ])
+@pytest.mark.slow
 def test_every_environment_number_at_the_bound_simulates_without_nan(name: str) -> None:
     behaviour = load_behaviour(BEHAVIOURS / f"{name}.yaml")
     base = behaviour_to_data(behaviour)

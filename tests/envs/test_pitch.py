@@ -67,6 +67,7 @@ def test_passes_the_adapter_checker() -> None:
     check_env(make_env(behaviour), batch_size=3)
 
 
+@pytest.mark.slow
 def test_batched_equals_one_at_a_time_on_every_channel() -> None:
     # The two paths run the same functions on floats and on arrays; this checks it holds
     # for every channel, a rolling ball and moving obstacles, bit for bit.
@@ -151,6 +152,7 @@ def test_channels_read_the_geometry() -> None:
     assert (read["ball_x"], read["ball_y"]) == (0.0, 1000.0)
 
 
+@pytest.mark.slow
 def test_sensors_map_inputs_to_channels_with_their_noise() -> None:
     env_yaml = """  adapter: pitch
   sensors: {where: goal_bearing}

@@ -68,6 +68,7 @@ def test_parts_are_inlined_and_a_written_composition_reads_back(tmp_path: Path) 
     assert behaviour_to_data(again) == behaviour_to_data(behaviour)
 
 
+@pytest.mark.slow
 def test_both_paths_agree_bit_for_bit(tmp_path: Path) -> None:
     behaviour = load_behaviour(_write(tmp_path))
     check_env(lambda: make_env(behaviour, 4), batch_size=4)
@@ -100,6 +101,7 @@ def test_the_arbiter_chooses_the_part(tmp_path: Path) -> None:
     assert np.degrees(float(env.heading[0]) - heading) > 8 and abs(float(env.x[0]) - x) < 40
 
 
+@pytest.mark.slow
 def test_learning_the_arbiter_keeps_the_parts_fixed(tmp_path: Path) -> None:
     from flctool.training import start_run
 
@@ -170,5 +172,99 @@ def test_flctool_run_refuses_a_composition_clearly(tmp_path: Path) -> None:
 
     result = CliRunner().invoke(app, ["run", str(_write(tmp_path)), "--ros2"])
     assert result.exit_code != 0
-    assert "is a composed behaviour: flctool run deploys one controller" in result.output
-    assert "--format bundle" in result.output
+    assert "is a composed behaviour: flctool run --ros2 deploys one controller" in result.output
+    assert "--link" in result.output and "--format bundle" in result.output
+
+
+def _nearest_chase(folder: Path) -> Path:
+    """The test composition with its chase part walking its nearest command (the robot
+    blends, so the deployment must send that command's singleton)."""
+    path = _write(folder)
+    chase = (folder / "chase.yaml").read_text().replace(
+        "  adapter: pitch\n", "  adapter: pitch\n  action: nearest\n")
+    (folder / "chase.yaml").write_text(chase)
+    return path
+
+
+def test_a_deployed_composition_walks_step_for_step_as_evaluation(tmp_path: Path) -> None:
+    """Over the robot link (flctool serve's server), the arbiter and its parts run on the
+    controller's side and send walking commands: the same walks, step for step, and the same
+    episodes as evaluating the composition in process."""
+    from flctool.behaviour.environment import RobotLinkConfig
+    from flctool.deployable import deployable, run_episodes
+    from flctool.envs.pitch_drive import CommandDrive
+    from flctool.envs.robot_link import RobotLinkEnv
+    from flctool.envs.robot_server import RobotServer
+
+    behaviour = load_behaviour(_nearest_chase(tmp_path))
+    controller = compile_behaviour(behaviour)
+    seeds = np.arange(4, 10)  # seed 8 scores
+    # in process: the composition's own drive, recorded
+    env = make_env(behaviour)
+    walks: list[tuple[list[float], list[float]]] = []
+    drive = env.drive  # type: ignore[attr-defined]
+    one = drive.one
+    drive.one = lambda action, readings=(): walks.append(one(action, readings)) or walks[-1]
+    expected = [evaluate(controller, env, [seed]) for seed in seeds.tolist()]
+    # deployed: the values sent, walked by the composing world's table
+    deployment = deployable(behaviour)
+    config = behaviour.environment
+    walk = CommandDrive(deployment.commands, config.motion, config.noise,  # type: ignore[union-attr]
+                        False)
+    sent: list[tuple[list[float], list[float]]] = []
+    server = RobotServer.from_behaviour(behaviour, idle_timeout=10.0)
+    thread = server.serve_in_background()
+    try:
+        link = RobotLinkConfig(adapter="robot-link", port=server.port)
+        with RobotLinkEnv(link, behaviour.name, deployment.observations,
+                          deployment.commands) as robot:
+            episodes = run_episodes(deployment, robot, seeds.tolist(),
+                                    lambda value: sent.append(walk.one(value)))
+    finally:
+        server.close()
+        thread.join(timeout=5)
+    assert sent == walks and len(sent) == sum(int(e.lengths[0]) for e in expected)
+    assert [e.steps for e in episodes] == [int(e.lengths[0]) for e in expected]
+    assert [e.total_reward for e in episodes] == [float(e.returns[0]) for e in expected]
+    success = [e.success for e in episodes]
+    assert success == [bool(e.success[0]) for e in expected] and any(success)
+
+
+def test_flctool_run_drives_a_served_composition_as_evaluate_scores_it(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from flctool.cli.app import app
+    from flctool.envs.robot_server import RobotServer
+    from flctool.evaluation import evaluate_behaviour
+
+    path = _nearest_chase(tmp_path)
+    behaviour = load_behaviour(path)
+    server = RobotServer.from_behaviour(behaviour, idle_timeout=10.0)
+    thread = server.serve_in_background()
+    try:
+        result = CliRunner().invoke(app, ["run", str(path), "--link",
+                                          f"127.0.0.1:{server.port}", "--episodes", "8"])
+    finally:
+        server.close()
+        thread.join(timeout=5)
+    assert result.exit_code == 0, result.output
+    rate = evaluate_behaviour(behaviour, seed=0, episodes=8).result.success_rate.value
+    assert f"success rate {rate:.3f}" in result.output
+    assert "8 episodes ended" in result.output
+    for args, message in [([], "needs one of --ros2 and --link"),
+                          (["--link", "nowhere"], "is not HOST:PORT")]:
+        refused = CliRunner().invoke(app, ["run", str(path), *args])
+        assert refused.exit_code == 1 and message in refused.output, refused.output
+
+
+def test_a_composition_deploys_only_with_one_command_table(tmp_path: Path) -> None:
+    from flctool.deployable import deployable
+
+    path = _write(tmp_path)
+    chase = (tmp_path / "chase.yaml").read_text().replace("forward: 0.0", "forward: 0.1")
+    assert chase != (tmp_path / "chase.yaml").read_text()
+    (tmp_path / "chase.yaml").write_text(chase)
+    with pytest.raises(SpecError) as caught:
+        deployable(load_behaviour(path))
+    assert "environment.compose." in str(caught.value)
+    assert "one command table" in str(caught.value)

@@ -251,6 +251,7 @@ ALL_INPUTS = ("guard", "between", "keeper", "speed", "opponent_bearing", "oppone
               "own_goal_bearing", "ball_vx", "ball_vy", "pan")
 
 
+@pytest.mark.slow
 def test_batched_equals_one_at_a_time_with_the_new_vocabulary() -> None:
     behaviour = _behaviour(EVERYTHING_NEW, ALL_INPUTS)
     check_env(lambda: make_env(behaviour, 4), batch_size=4)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from flctool.envs import gym_adapter
+from flctool.behaviour import gym_registry
 from flctool.envs.preflight import check_adapter, validate_file
 from flctool.errors import EnvError, SpecError
 
@@ -82,8 +82,8 @@ def test_an_id_naming_a_module_imports_nothing(tmp_path: Path,
     assert not hasattr(sys, "planted_module_ran")
     assert "planted_module" not in sys.modules
     # Only the user, on the command line, can allow it.
-    monkeypatch.setattr(gym_adapter, "_USER_MODULES", set())
-    gym_adapter.import_user_modules(["planted_module"])
+    monkeypatch.setattr(gym_registry, "_USER_MODULES", set())
+    gym_registry.import_user_modules(["planted_module"])
     assert getattr(sys, "planted_module_ran", False)
     assert validate_file(_write(tmp_path, text)).behaviour.name == "cartpole"
     monkeypatch.delattr(sys, "planted_module_ran")
@@ -92,7 +92,7 @@ def test_an_id_naming_a_module_imports_nothing(tmp_path: Path,
 
 def test_a_module_that_cannot_be_imported_is_a_clear_error() -> None:
     with pytest.raises(EnvError, match="cannot import the module 'no_such_module_x'"):
-        gym_adapter.import_user_modules(["no_such_module_x"])
+        gym_registry.import_user_modules(["no_such_module_x"])
 
 
 def test_a_singleton_outside_a_box_action_space_is_reported(tmp_path: Path) -> None:
@@ -107,6 +107,7 @@ def test_a_singleton_outside_a_box_action_space_is_reported(tmp_path: Path) -> N
     assert problem.line == _line_of(text, "push_right: 3.0")
 
 
+@pytest.mark.slow
 def test_the_simulators_are_checked_by_loading_without_numpy() -> None:
     # Their construction checks nothing beyond fit_problems (run by loading), so validate does
     # not build them and stays clear of numpy; building them must then never fail on a file

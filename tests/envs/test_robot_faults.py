@@ -211,7 +211,13 @@ def _metrics(run: Path) -> list[dict[str, str]]:
                 for row in csv.DictReader(handle)]
 
 
-@pytest.mark.parametrize("name", list(FAULTS))
+#: The faults of the default test loop: one at a step (with its resume) and the welcome's,
+#: which end before any run starts; each other step fault is a run and its resume (slow).
+QUICK = {"error with escapes", "welcome max_steps true", "welcome deep json", "welcome huge"}
+
+
+@pytest.mark.parametrize("name", [
+    name if name in QUICK else pytest.param(name, marks=pytest.mark.slow) for name in FAULTS])
 def test_a_robot_side_fault_ends_the_run_clearly_and_resume_loses_nothing(
         tmp_path: Path, upstream: int, clean_run: Path, name: str) -> None:
     kind, nth, fault, expected, link_alive = FAULTS[name]

@@ -350,6 +350,7 @@ def test_a_client_that_only_sends_stop_loses_control_after_the_idle_timeout() ->
       "success": [True] * 100_001}, "batch", "fitness of 100,001 episodes asked"),
     ({"type": "stop", "reason": "\x1b[2Jcleared"}, None, ""),
 ])
+@pytest.mark.slow
 def test_requests_are_bounded(server: RobotServer, client: Client, message: dict[str, Any],
                               code: str | None, text: str) -> None:
     client.ask(HELLO)

@@ -25,6 +25,7 @@ def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return experiment.path
 
 
+@pytest.mark.slow
 def test_summary_matches_the_runs(finished: Path) -> None:
     from flctool.experiment import open_experiment
 
@@ -83,6 +84,7 @@ def test_each_claim_is_answered_with_numbers(finished: Path) -> None:
     assert "held-out episodes" in report
 
 
+@pytest.mark.slow
 def test_claims_need_both_learners(tmp_path: Path) -> None:
     experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("hybrid", "fuzzy_q"))
     experiment.run(LocalExecutor(1))

@@ -3,13 +3,21 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from flctool import load_behaviour
 from flctool.errors import RunDirError
-from flctool.experiment import ExperimentPlan, open_experiment, parse_learners, write_report
+from flctool.experiment import (
+    Experiment,
+    ExperimentPlan,
+    open_experiment,
+    parse_learners,
+    write_report,
+)
 from flctool.experiment.executors import LocalExecutor
 from flctool.experiment.runner import HELDOUT_FILE, JobOutcome, prepare_experiment, run_job
 from flctool.rollout import evaluation_seeds
@@ -17,10 +25,21 @@ from flctool.runs import ENDED, open_run
 
 from .helpers import tiny_experiment
 
+Finished = tuple[Experiment, list[JobOutcome], dict[str, Any]]
 
-def test_every_learner_on_every_seed(tmp_path: Path) -> None:
-    experiment = tiny_experiment(tmp_path / "exp")
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory: pytest.TempPathFactory) -> Finished:
+    """The tiny experiment run to its end once for this module: the experiment, its jobs'
+    outcomes and its report."""
+    experiment = tiny_experiment(tmp_path_factory.mktemp("finished") / "exp")
     outcomes = experiment.run(LocalExecutor(1))
+    return experiment, outcomes, write_report(experiment)
+
+
+@pytest.mark.slow
+def test_every_learner_on_every_seed(finished: Finished) -> None:
+    experiment, outcomes, _ = finished
     assert [(o.learner, o.seed) for o in outcomes] == [
         (learner, seed) for learner in ("pitt", "hybrid", "fuzzy_q") for seed in (0, 1)]
     assert not any(o.skipped for o in outcomes)
@@ -34,6 +53,7 @@ def test_every_learner_on_every_seed(tmp_path: Path) -> None:
         assert heldout["successes"] == round(heldout["success_rate"] * 20)
 
 
+@pytest.mark.slow
 def test_heldout_episodes_are_the_ones_flctool_evaluate_runs(tmp_path: Path) -> None:
     from flctool.compile import compile_behaviour
     from flctool.envs import make_env
@@ -51,13 +71,12 @@ def test_heldout_episodes_are_the_ones_flctool_evaluate_runs(tmp_path: Path) -> 
     assert evaluation_seeds(0, 20).max() < 2**32
 
 
-def test_a_killed_experiment_continues_without_redoing_finished_runs(tmp_path: Path) -> None:
-    whole = tiny_experiment(tmp_path / "whole")
-    whole.run(LocalExecutor(1))
-    expected = write_report(whole)
-
-    killed = tiny_experiment(tmp_path / "killed")
-    killed.run(LocalExecutor(1))
+@pytest.mark.slow
+def test_a_killed_experiment_continues_without_redoing_finished_runs(
+        tmp_path: Path, finished: Finished) -> None:
+    whole, _, expected = finished
+    shutil.copytree(whole.path, tmp_path / "killed")
+    killed = open_experiment(tmp_path / "killed")
     # As a kill leaves it: one run stopped after its first generation, one run trained but
     # not yet tested, the rest finished.
     stopped = killed.runs_dir / "hybrid-seed1"
@@ -134,6 +153,7 @@ def test_prepare_refuses_an_unwritable_place(tmp_path: Path) -> None:
         prepare_experiment(experiment.behaviour, experiment.plan, blocker)
 
 
+@pytest.mark.slow
 def test_a_run_killed_while_being_created_starts_over(tmp_path: Path) -> None:
     experiment = tiny_experiment(tmp_path / "exp", seeds=1, learners=("pitt",))
     job = experiment.jobs()[0]

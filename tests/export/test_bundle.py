@@ -51,6 +51,7 @@ def run_harnesses(folder: Path, lines: list[str]) -> tuple[list[list[str]], list
 
 
 @needs_cc
+@pytest.mark.slow
 def test_the_gymnasium_bundle_wires_observations_and_actions(tmp_path: Path) -> None:
     mapping = {"cart_position": 3, "cart_velocity": 0, "pole_angle": 2, "pole_velocity": 1}
     behaviour = cartpole(mapping)
@@ -82,6 +83,7 @@ def test_the_gymnasium_bundle_wires_observations_and_actions(tmp_path: Path) -> 
 
 
 @needs_cc
+@pytest.mark.slow
 def test_the_ballchase_bundle_reads_named_sensors(tmp_path: Path) -> None:
     behaviour = load_behaviour(SHIPPED[0])
     folder = tmp_path / "bundle"

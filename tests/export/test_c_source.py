@@ -164,6 +164,7 @@ def test_float_export_refuses_sets_that_rounding_leaves_apart() -> None:
 
 
 @needs_cc
+@pytest.mark.slow
 def test_c_returns_nan_where_no_set_fires(tmp_path: Path) -> None:
     """A state where float arithmetic leaves every membership 0 (high's ramp (s - 0) / 10
     underflows at the smallest float) gives NaN, and the sanitizers see no unset memory read."""

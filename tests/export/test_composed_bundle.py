@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from flctool import compile_behaviour, load_behaviour
 from flctool.envs import make_env
@@ -19,6 +20,7 @@ from .test_bundle import needs_cc, run_harnesses
 
 
 @needs_cc
+@pytest.mark.slow
 def test_the_composed_bundle_runs_the_composition_as_flctool(tmp_path: Path) -> None:
     behaviour = load_behaviour(BEHAVIOURS / "striker-handmade.yaml")
     folder = tmp_path / "bundle"

@@ -134,6 +134,7 @@ def _mutated(draw: st.DrawFn) -> tuple[str, str]:
 
 @settings(max_examples=300, deadline=None, derandomize=True)
 @given(_mutated())
+@pytest.mark.slow
 def test_mutated_exports_import_or_fail_with_a_location(case: tuple[str, str]) -> None:
     """Mutations of our own exports either import or raise one of flctool's errors that
     names the file and a line; nothing else escapes."""

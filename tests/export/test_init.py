@@ -62,6 +62,7 @@ def test_shipped_behaviours_round_trip(path: Path, format: str) -> None:
 
 
 @pytest.mark.parametrize("format", TEXT_FORMATS)
+@pytest.mark.slow
 def test_random_controllers_round_trip(format: str) -> None:
     for seed in range(40):
         behaviour = random_behaviour(seed)
@@ -79,6 +80,7 @@ def test_every_exporter_refuses_missing_rules(format: str) -> None:
     assert "... and 5 more" in str(error.value)
 
 
+@pytest.mark.slow
 def test_importing_export_loads_no_learner() -> None:
     import subprocess
     import sys

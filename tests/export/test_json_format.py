@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import jsonschema
+import pytest
 
 from flctool import load_behaviour
 from flctool.behaviour import behaviour_from_data
@@ -15,6 +16,7 @@ from .controllers import random_behaviour
 from .roundtrip import SHIPPED
 
 
+@pytest.mark.slow
 def test_json_is_the_behaviour_and_matches_the_schema() -> None:
     schema = json.loads((ROOT / "schemas" / "behaviour.schema.json").read_text())
     for behaviour in [load_behaviour(SHIPPED[0]), random_behaviour(4)]:

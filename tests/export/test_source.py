@@ -30,6 +30,7 @@ def test_a_missing_source_is_named(tmp_path: Path) -> None:
         load_source(tmp_path / "nope.yaml")
 
 
+@pytest.mark.slow
 def test_a_run_directory_gives_its_best_or_a_chosen_controller(tmp_path: Path) -> None:
     from typer.testing import CliRunner
 

@@ -65,6 +65,7 @@ def infer(behaviour: Behaviour, states: np.ndarray, folder: Path) -> np.ndarray:
 
 
 @pytest.mark.parametrize(("file", "mode", "seed"), TUNED, ids=IDS)
+@pytest.mark.slow
 def test_fuzzylite6_computes_what_infer_does(file: str, mode: str, seed: int,
                                              tmp_path: Path) -> None:
     behaviour = tuned(file, mode, seed)
@@ -89,6 +90,7 @@ def test_fuzzylite6_computes_what_infer_does(file: str, mode: str, seed: int,
 
 
 @needs_cc
+@pytest.mark.slow
 def test_the_c_build_computes_what_infer_does(tmp_path: Path) -> None:
     controllers = [tuned(f, m, s) for f, m, s in TUNED]
     program = build(tmp_path, [(b, ExportOptions(prefix=f"t{i}_"))

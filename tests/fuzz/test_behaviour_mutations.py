@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -86,6 +87,7 @@ FUZZ = settings(max_examples=80, deadline=None, derandomize=True,
 
 @FUZZ
 @given(st.sampled_from(sorted(SOURCES)), st.data())
+@pytest.mark.slow
 def test_a_replaced_scalar_is_read_as_written_or_refused_at_its_line(name: str,
                                                                      data: st.DataObject) -> None:
     path, node = data.draw(st.sampled_from(SCALARS[name]), label="scalar")
@@ -102,6 +104,7 @@ def test_a_replaced_scalar_is_read_as_written_or_refused_at_its_line(name: str,
 
 @FUZZ
 @given(st.sampled_from(sorted(SOURCES)), st.data())
+@pytest.mark.slow
 def test_random_text_in_place_of_a_scalar_never_crashes(name: str, data: st.DataObject) -> None:
     _, node = data.draw(st.sampled_from(SCALARS[name]), label="scalar")
     token = data.draw(st.text(max_size=12), label="text")
@@ -111,6 +114,7 @@ def test_random_text_in_place_of_a_scalar_never_crashes(name: str, data: st.Data
 
 @FUZZ
 @given(st.sampled_from(sorted(SOURCES)), st.data())
+@pytest.mark.slow
 def test_line_edits_never_crash(name: str, data: st.DataObject) -> None:
     lines = SOURCES[name].splitlines()
     i = data.draw(st.integers(0, len(lines) - 1), label="line")
@@ -136,6 +140,7 @@ def test_line_edits_never_crash(name: str, data: st.DataObject) -> None:
     _load("\n".join(lines) + "\n")
 
 
+@pytest.mark.slow
 def test_sizes_and_bombs_are_refused_at_their_line() -> None:
     text = SOURCES["ballchase.yaml"]
     bomb = "a0: &a0 [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n" + "".join(

@@ -71,6 +71,7 @@ def test_a_callback_can_stop_training_early(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", names("learner"))
+@pytest.mark.slow
 def test_the_same_seed_gives_the_same_run(name: str) -> None:
     runs = []
     for _ in range(2):
@@ -86,6 +87,7 @@ def test_the_same_seed_gives_the_same_run(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", names("learner"))
+@pytest.mark.slow
 def test_resuming_from_a_json_checkpoint_ends_where_an_uninterrupted_run_ends(
         name: str) -> None:
     behaviour = line_behaviour(learner=name, generations=7)

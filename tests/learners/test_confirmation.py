@@ -79,6 +79,7 @@ def test_a_plain_target_is_a_mean_fitness() -> None:
     assert target is not None and (target.unit, target.value) == ("fitness", 1.5)
 
 
+@pytest.mark.slow
 def test_a_learned_controller_beats_the_baselines(tmp_path: Path) -> None:
     run = create_run(ballchase(seed=0, generations=10), tmp_path / "run")
     summary = run.train()
@@ -114,6 +115,7 @@ def test_a_run_that_cannot_learn_ends_not_learned_with_its_exit_code(tmp_path: P
     assert open_run(out).summary().status == "not_learned"
 
 
+@pytest.mark.slow
 def test_a_hand_made_baseline_is_compared_and_recorded(tmp_path: Path) -> None:
     handmade = BEHAVIOURS / "ballchase-handmade.yaml"
     out = tmp_path / "run"
@@ -127,6 +129,7 @@ def test_a_hand_made_baseline_is_compared_and_recorded(tmp_path: Path) -> None:
     assert line.exit_code == 1 and "rule grid" in line.stderr
 
 
+@pytest.mark.slow
 def test_resume_is_bit_identical_with_confirmation_and_baselines(tmp_path: Path) -> None:
     behaviour = ballchase(seed=4, generations=6, **{"stop.target": {"success": 0.99}})
     whole = create_run(behaviour, tmp_path / "a")
@@ -169,6 +172,7 @@ def test_confirmation_and_baselines_stay_within_an_episode_budget(limit: int) ->
     assert usage.confirmation_episodes > 0 and usage.baseline_episodes > 0
 
 
+@pytest.mark.slow
 def test_learn_says_the_budget_and_why(tmp_path: Path) -> None:
     result = runner.invoke(app, ["learn", str(BEHAVIOURS / "ballchase.yaml"), "-g", "1",
                                  "--out", str(tmp_path / "run")])

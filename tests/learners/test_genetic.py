@@ -94,6 +94,7 @@ def test_a_warm_start_that_does_not_fit_is_refused() -> None:
     assert (fuzzy.population == fuzzy.controller.n_commands - 1).all()
 
 
+@pytest.mark.slow
 def test_a_stalled_run_restarts_all_but_its_elites_and_resumes_bit_for_bit() -> None:
     behaviour = line_behaviour(learner="hybrid", generations=12, restart_after=2)
     learner = make_learner(behaviour, LineEnv())

@@ -189,6 +189,7 @@ def metrics_rows(path: Path) -> list[dict[str, str]]:
 @pytest.mark.parametrize("learner", names("learner"))
 @pytest.mark.parametrize("stop", [{"stop.episodes": 300}, {"stop.steps": 5000},
                                   {"stop.target": 1.9}])
+@pytest.mark.slow
 def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
         tmp_path: Path, learner: str, stop: dict[str, object]) -> None:
     behaviour = ballchase(learner=learner, seed=5, generations=12, **stop,
@@ -216,6 +217,7 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
 
 
 @pytest.mark.parametrize("learner", names("learner"))
+@pytest.mark.slow
 def test_reusing_known_validation_episodes_changes_nothing(
         learner: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """A candidate that commands alike every rule that fired where an earlier one acted in a

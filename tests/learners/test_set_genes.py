@@ -37,6 +37,7 @@ SETS = [{"mode": "partition"},
 
 @pytest.mark.parametrize("learner", names("learner"))
 @pytest.mark.parametrize("sets", SETS, ids=["partition", "lateral"])
+@pytest.mark.slow
 def test_every_learner_learns_the_sets_and_resumes_bit_for_bit(
         tmp_path: Path, learner: str, sets: dict[str, object]) -> None:
     behaviour = ballchase(learner, sets)

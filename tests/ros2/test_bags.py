@@ -101,6 +101,7 @@ def _record(tmp_path: Path, sim: Path, namespace: str, steps: int, drive: Any) -
     return bag
 
 
+@pytest.mark.slow
 def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_steps(
         tmp_path: Path) -> None:
     from flctool.ros2.bags import fit_motion
@@ -114,18 +115,26 @@ def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_step
     commands = dict(load_behaviour(BEHAVIOURS / "ballchase.yaml").output.commands)
     fits = fit_motion(bag, config, commands, "/measured/odom")
     assert sum(fit.steps for fit in fits.values()) == 1000
+    within_5_percent = []
     for name, fit in fits.items():
         n = fit.steps
         assert n >= 150, (name, n)  # each command ran about 200 times
         for k, key in enumerate(("forward", "sideways", "rotation")):
             mean, std = MOTION[name][key], NOISE[name][key]
-            # Within 5 %, or within 4 standard errors where 5 % of the value is less than
-            # 1000 steps can tell (a mean near 0; a deviation from ~200 samples, whose
-            # standard error is about 1 / sqrt(2 n) = 5 %).
-            assert abs(fit.mean[k] - mean) <= max(0.05 * abs(mean), 4 * std / math.sqrt(n)), (
-                name, key, fit.mean[k], mean)
-            assert abs(fit.std[k] - std) <= std * max(0.05, 4 / math.sqrt(2 * n)), (
-                name, key, fit.std[k], std)
+            mean_error, std_error = abs(fit.mean[k] - mean), abs(fit.std[k] - std)
+            print(f"{name} {key}: mean {fit.mean[k]:.3f} ({100 * mean_error / abs(mean):.1f} %),"
+                  f" std {fit.std[k]:.3f} ({100 * std_error / std:.1f} %), {n} steps")
+            # What n steps can tell (benchmarks/fit_sim_accuracy.py, docs/ros2.md): a mean to
+            # its standard error std / sqrt(n), a deviation to about std / sqrt(2 n) -- 5 % of
+            # it from ~200 steps. Each within 4 standard errors, ...
+            assert mean_error <= 4 * std / math.sqrt(n), (name, key, fit.mean[k], mean)
+            assert std_error <= 4 * std / math.sqrt(2 * n), (name, key, fit.std[k], std)
+            # ... and within 5 % every mean that 1,000 steps know to 5 % (4 standard errors
+            # are at most 5 % of it): the forward speeds and the large turns
+            if 4 * std / math.sqrt(n) <= 0.05 * abs(mean):
+                within_5_percent.append(f"{name} {key}")
+                assert mean_error <= 0.05 * abs(mean), (name, key, fit.mean[k], mean)
+    assert len(within_5_percent) >= 5, within_5_percent
 
     robot = tmp_path / "robot.yaml"
     robot.write_text(behaviour_to_yaml(robot_behaviour("/measured")), encoding="utf-8")
@@ -140,6 +149,7 @@ def test_fit_sim_recovers_the_tables_of_a_measured_robot_from_1000_recorded_step
     assert behaviour_from_data(data).environment is not None  # a valid simulator section
 
 
+@pytest.mark.slow
 def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path) -> None:
     handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
     flc = compile_behaviour(handmade)
@@ -178,6 +188,7 @@ def test_replay_reproduces_a_recorded_controllers_outputs_exactly(tmp_path: Path
     assert differs.exit_code == 0 and "; 0 differ" not in differs.output, differs.output
 
 
+@pytest.mark.slow
 def test_record_writes_a_session_bag_and_refuses_an_existing_one(tmp_path: Path) -> None:
     from flctool.envs.ros2_robot import SimRobot
     from flctool.ros2.bags import read_messages
@@ -262,3 +273,50 @@ def test_a_deployment_recorded_by_flctool_record_replays_exactly(tmp_path: Path)
     # (discovery takes longer on a loaded machine): what it recorded must replay exactly
     assert published // 2 <= int(replayed[1]) <= published and replayed[2] == "0", (
         published, result.output)
+
+
+@pytest.mark.slow
+def test_an_export_bundle_deployed_with_run_record_drives_the_robot_and_replays_exactly(
+        tmp_path: Path) -> None:
+    """`flctool run BUNDLE --ros2 --record BAG`: the bundle's controller drives the reference
+    robot on the topics of the controller it was exported from, and the bag it recorded while
+    driving replays to every command it published, the last one the stop."""
+    import os
+    import subprocess
+    import sys
+
+    from flctool.ros2.bags import read_messages
+
+    from ..ros2_support import ros_environment, served_robot
+
+    controller = tmp_path / "controller.yaml"
+    controller.write_text(behaviour_to_yaml(handmade_rules(robot_behaviour("/bundled",
+                                                                           rate=20.0))),
+                          encoding="utf-8")
+    bundle = tmp_path / "bundle"
+    exported = runner.invoke(app, ["export", str(controller), "--format", "bundle", "-o",
+                                   str(bundle)])
+    assert exported.exit_code == 0, exported.output
+    bag = tmp_path / "session"
+    with served_robot("--namespace", "/bundled", "--auto-reset", "--seed", "300"):
+        run = subprocess.run(
+            [sys.executable, "-m", "flctool", "run", str(bundle), "--ros2", "--episodes", "3",
+             "--record", str(bag)], capture_output=True, text=True, timeout=240,
+            env={**os.environ, **ros_environment()}, check=False)
+    assert run.returncode == 0, run.stderr
+    assert "3 episodes ended" in run.stdout, run.stdout
+    assert f"recording 5 topics to {bag}" in run.stderr, run.stderr
+    published = int(re.search(r"(\d+) commands published", run.stdout)[1])  # type: ignore[index]
+    commands = [message for _, _, message in read_messages(bag, ["/bundled/cmd_vel"])]
+    assert commands[-1].linear.x == 0.0 and commands[-1].angular.z == 0.0  # the stop
+    result = runner.invoke(app, ["replay", str(controller), str(bag), "-o",
+                                 str(tmp_path / "replayed.csv")])
+    assert result.exit_code == 0, result.output
+    replayed = re.search(r"(\d+) commands replayed; (\d+) differ", result.output)
+    assert replayed is not None, result.output
+    # recording starts once the recorder has found every publisher; on a loaded machine the
+    # node's first commands may come before that
+    assert published // 2 <= int(replayed[1]) <= published and replayed[2] == "0", (
+        published, result.output)
+    statuses = [m.data for _, _, m in read_messages(bag, ["/bundled/status"])]
+    assert sum(s in ("success", "failure", "timeout") for s in statuses) >= 3

@@ -243,4 +243,4 @@ def test_run_deploys_an_export_bundles_controller(tmp_path: Any) -> None:
     assert runner.invoke(app, ["export", str(controller), "--format", "bundle", "-o",
                                str(bundle)]).exit_code == 0
     result = runner.invoke(app, ["run", str(bundle)])  # the bundle's controller.yaml, loaded
-    assert result.exit_code == 1 and "deploys over ROS 2 only: add --ros2" in result.output
+    assert result.exit_code == 1 and "needs one of --ros2 and --link" in result.output

@@ -7,9 +7,12 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from ..ros2_support import require_ros2, ros_environment
 
 
+@pytest.mark.slow
 def test_a_graph_left_open_is_closed_at_exit_without_aborting() -> None:
     require_ros2()
     script = ("from flctool.ros2.graph import RosGraph\n"

@@ -3,6 +3,7 @@ episodes, learning and resume as in process, and every fault a safe stop within 
 
 from __future__ import annotations
 
+import json
 import math
 import signal
 import threading
@@ -15,7 +16,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flctool import compile_behaviour
-from flctool.behaviour import behaviour_to_yaml, load_behaviour
+from flctool.behaviour import behaviour_to_data, behaviour_to_yaml, load_behaviour
 from flctool.cli import app
 from flctool.envs import make_env
 from flctool.errors import LinkError
@@ -41,6 +42,7 @@ def _ros() -> None:
     require_ros2()
 
 
+@pytest.mark.slow
 def test_episodes_over_ros2_are_bit_for_bit_the_simulators() -> None:
     handmade = load_behaviour(BEHAVIOURS / "ballchase-handmade.yaml")
     seeds = np.arange(5, dtype=np.int64)
@@ -189,3 +191,39 @@ def test_learning_survives_the_robot_killed_mid_run_and_resumes_to_the_same_run(
     direct = tmp_path / "direct"
     assert _learn(str(BEHAVIOURS / "ballchase.yaml"), *SMALL, "-o", str(direct)).exit_code == 0
     assert _records(run) == _records(direct)
+
+
+#: 20 generations, as the paper learned on the robot, on a small population (a CPU budget for
+#: CI): 197 episodes, 3,362 steps with selection, confirmation and the baselines; about 22 s of
+#: CPU in all (12 s learning over ROS 2, 9 s the served robot, 2 s learning in process).
+TWENTY = ["-g", "20", "-p", "4", "--set", "selection.candidates=2", "--set",
+          "selection.episodes=3", "--set", "selection.confirmation=10"]
+
+
+def _summary(result: Any) -> dict[str, Any]:
+    """The run's JSON summary without what differs between two routes: its folder, its best
+    file and the last generation's wall time."""
+    data = json.loads(result.stdout)
+    del data["run"], data["best_file"], data["last"]["wall_time"]
+    return dict(data)
+
+
+@pytest.mark.slow
+def test_twenty_generations_over_ros2_learn_the_simulators_controller(tmp_path: Path) -> None:
+    """Learning 20 generations against ``flctool serve --ros2`` ends with the in-process
+    simulator's best controller and metrics for the same seed."""
+    robot_file = tmp_path / "robot.yaml"
+    robot_file.write_text(behaviour_to_yaml(robot_behaviour("/twenty")), encoding="utf-8")
+    over, direct = tmp_path / "over", tmp_path / "direct"
+    with served_robot("--namespace", "/twenty"):
+        learned = _learn(str(robot_file), *TWENTY, "-o", str(over))
+    assert learned.exit_code == 0, learned.output
+    simulated = _learn(str(BEHAVIOURS / "ballchase.yaml"), *TWENTY, "-o", str(direct))
+    assert simulated.exit_code == 0, simulated.output
+    assert len((over / "metrics.csv").read_text(encoding="utf-8").splitlines()) == 21
+    assert _records(over) == _records(direct)
+    best_over, best_direct = (behaviour_to_data(load_behaviour(path / "best.yaml"))
+                              for path in (over, direct))
+    for key in ("inputs", "output", "rules"):
+        assert best_over[key] == best_direct[key], key
+    assert _summary(learned) == _summary(simulated)

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from flctool.behaviour.load import behaviour_from_data
 from flctool.behaviour.models import Behaviour
 from flctool.behaviour.set_learning import coverage
-from flctool.compile.membership import trapezoid_scalar
+from flctool.membership import trapezoid_scalar
 from flctool.sets.codec import SetCodec
 
 
@@ -59,6 +59,7 @@ def _genome(size: int) -> st.SearchStrategy[list[float]]:
 @settings(max_examples=150, deadline=None)
 @given(strong_partitions(), st.sampled_from(["spacing", "units"]), st.floats(0.01, 3.0),
        st.data())
+@pytest.mark.slow
 def test_every_partition_genome_decodes_to_a_strong_partition(
         partition: tuple[dict[str, list[float]], float, float], bound_in: str, bound: float,
         data: st.DataObject) -> None:
@@ -110,6 +111,7 @@ def covering_partitions(draw: st.DrawFn) -> tuple[dict[str, list[float]], float]
 @settings(max_examples=150, deadline=None)
 @given(covering_partitions(), st.sampled_from(["spacing", "units"]), st.floats(0.01, 5.0),
        st.data())
+@pytest.mark.slow
 def test_every_lateral_genome_keeps_order_and_the_coverage_floor(
         partition: tuple[dict[str, list[float]], float], bound_in: str, bound: float,
         data: st.DataObject) -> None:

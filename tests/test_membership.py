@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import skfuzzy
 
-from flctool.compile.membership import trapezoid, trapezoid_scalar
+from flctool.membership import trapezoid, trapezoid_scalar
 
 
 def _random_quads(rng: np.random.Generator, count: int) -> np.ndarray:
@@ -41,10 +41,11 @@ def test_documented_shapes(quad: tuple[float, ...], x: list[float], mu: list[flo
     np.testing.assert_allclose(trapezoid(np.array(x), np.array([quad], float))[:, 0], mu)
 
 
+@pytest.mark.slow
 def test_the_scalar_form_gives_the_vectorised_bits() -> None:
     # The learners' one-value form and the array form are the one formula: same operations,
     # so the same bits, on random sets of every shape and values at and around their corners.
-    from flctool.compile.membership import firing_sets
+    from flctool.membership import firing_sets
 
     rng = np.random.default_rng(7)
     quads = _random_quads(rng, 300)
