@@ -91,8 +91,9 @@ JFUZZYLOGIC: dict[str, tuple[str, tuple[int, ...]]] = {
 
 def from_jfuzzylogic(name: str, values: Sequence[float]) -> tuple[str, list[float]]:
     """jFuzzyLogic's term ``name`` as fuzzylite's term and values (unchanged if ``name`` is
-    not one of jFuzzyLogic's terms, or has another count)."""
-    found = JFUZZYLOGIC.get(name)
+    not one of jFuzzyLogic's terms, or has another count). jFuzzyLogic reads its keywords in
+    any case, and its examples write ``GAUSS 0 1`` as often as ``gauss 0 1``."""
+    found = JFUZZYLOGIC.get(name.lower())
     if found is None or len(values) != len(found[1]):
         return name, list(values)
     their, order = found

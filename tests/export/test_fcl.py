@@ -85,6 +85,17 @@ def test_import_reads_the_subset() -> None:
     assert behaviour.is_deployable
 
 
+def test_jfuzzylogics_terms_are_read_in_any_case() -> None:
+    """jFuzzyLogic reads ``GAUSS 0.2 0.3`` as ``gauss 0.2 0.3`` (its examples write both)."""
+    low = "TERM low := (0, 1) (0.2, 1) (0.8, 0);"
+    lower = FclImporter().from_string(BLOCK.replace(low, "TERM low := gauss 0.2 0.3;"),
+                                      "tiny.fcl")
+    upper = FclImporter().from_string(BLOCK.replace(low, "TERM low := GAUSS 0.2 0.3;"),
+                                      "tiny.fcl")
+    assert lower.inputs["x"].sets == upper.inputs["x"].sets
+    assert upper.inputs["x"].sets["low"].kind == "gauss"
+
+
 @pytest.mark.parametrize(("old", "new", "message"), [
     ("TERM up := 1;", "TERM up := (0, 0) (1, 1) (2, 0);",
      r"tiny.fcl:15: output term 'up' is not a singleton: a Mamdani output set"),
