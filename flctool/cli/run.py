@@ -11,6 +11,7 @@ episode's end (with a status topic), and the stop it publishes before it leaves.
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -196,9 +197,24 @@ def _start_recording(recorder: Any, bag: Path | None, timeout: float) -> None:
     _log(f"recording {len(recorder.subscriptions)} topics to {bag}")
 
 
+#: Finishing a recording: a command still in flight arrives within QUIET s of the one before
+#: it (more than a control period, even on a loaded machine); SETTLE bounds the whole wait.
+QUIET, SETTLE = 2.0, 10.0
+
+
 def _finish_recording(recorder: Any, bag: Path | None, command_topic: str, sent: int) -> None:
     """Finish the bag once the commands published while recording (the last stop included)
-    have reached it, or after 1 s (a command sent before the recorder matched never will)."""
-    recorder.graph.wait(lambda: recorder.counts[command_topic] >= sent, 1.0)
+    have reached it. A command sent before the recorder matched never will, so the bag is
+    also finished once no command has arrived for ``QUIET`` s."""
+    last: list[float] = [recorder.counts[command_topic], time.monotonic()]  # count, when grown
+
+    def settled() -> bool:
+        count: int = recorder.counts[command_topic]
+        now = time.monotonic()
+        if count != last[0]:
+            last[:] = [count, now]
+        return count >= sent or now - last[1] >= QUIET
+
+    recorder.graph.wait(settled, SETTLE)
     recorder.close()
     typer.echo(f"recorded {recorder.messages} messages to {bag}")
