@@ -103,7 +103,7 @@ def outcome(path: Path, convert: bool) -> tuple[str, str]:
     else:
         return measured(path, behaviours, "exact", "")
     suffix = path.suffix.lower()
-    if convert and suffix in (".fis", ".fll"):
+    if convert:
         importer = IMPORTERS.get(suffix[1:])(mamdani_singletons=True)  # type: ignore[call-arg]
         try:
             behaviours = importer.from_file_all(path)

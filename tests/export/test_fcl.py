@@ -108,7 +108,8 @@ def test_jfuzzylogics_terms_are_read_in_any_case() -> None:
     ("TERM low := (0, 1) (0.2, 1) (0.8, 0);", "TERM low := cosine 0.2 0.1;",
      r"tiny.fcl:9: a cosine term: flctool's sets do not include it"),
     ("METHOD : COGS;", "METHOD : COG;", r"tiny.fcl:16: METHOD : COG"),
-    ("    u : REAL;\n", "    u : REAL;\n    v : REAL;\n", r"tiny.fcl:7: a second output 'v'"),
+    ("    u : REAL;\n", "    u : REAL;\n    v : REAL;\n",
+     r"tiny.fcl:7: output 'v' has no DEFUZZIFY block"),
     ("ACCU : NSUM;", "ACCU : MAX;", None),  # no two rules share a term: MAX changes nothing
 ])
 def test_import_names_what_it_cannot_express(old: str, new: str, message: str | None) -> None:

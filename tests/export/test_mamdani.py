@@ -12,6 +12,7 @@ from typer.testing import CliRunner
 from flctool import compile_behaviour
 from flctool.cli import app
 from flctool.errors import ExportError
+from flctool.export.fcl import FclImporter
 from flctool.export.fis import FisImporter
 from flctool.export.fll import FllImporter
 from flctool.export.mamdani import MamdaniOutput, centroid, mamdani_outputs
@@ -201,3 +202,105 @@ def test_an_fll_mamdani_output_converts_and_its_reference_is_fuzzylites(
     # the stated error bounds what fuzzylite 6 measures on other states, within 1 %
     converted = compile_behaviour(behaviour).output(states)
     assert np.max(np.abs(converted - want)) <= 1.01 * deviation
+
+
+#: Two outputs: 'u' Mamdani (a point list, a fuzzylite Triangle, a jFuzzyLogic gauss) and
+#: 'v' singletons, sharing one rule block; fuzzylite 6 reads both.
+MAMDANI_FCL = """\
+FUNCTION_BLOCK mam
+VAR_INPUT
+  x : REAL;
+  y : REAL;
+END_VAR
+VAR_OUTPUT
+  u : REAL;
+  v : REAL;
+END_VAR
+FUZZIFY x
+  RANGE := (0.0 .. 1.0);
+  TERM lo := (0.0, 1.0) (0.2, 1.0) (0.8, 0.0);
+  TERM hi := (0.2, 0.0) (0.8, 1.0);
+END_FUZZIFY
+FUZZIFY y
+  RANGE := (0.0 .. 10.0);
+  TERM lo := Triangle -10.0 0.0 10.0;
+  TERM hi := Triangle 0.0 10.0 20.0;
+END_FUZZIFY
+DEFUZZIFY u
+  RANGE := (-1.0 .. 1.0);
+  TERM left := (-1.0, 0.0) (-0.5, 1.0) (0.0, 0.0);
+  TERM mid := Triangle -0.5 0.0 0.5;
+  TERM right := Gaussian 0.6 0.3;
+  METHOD : COG;
+  ACCU : MAX;
+  DEFAULT := nan;
+END_DEFUZZIFY
+DEFUZZIFY v
+  TERM down := -1.0;
+  TERM up := 1.0;
+  METHOD : COGS;
+  ACCU : NSUM;
+  DEFAULT := nan;
+END_DEFUZZIFY
+RULEBLOCK rules
+  AND : MIN;
+  ACT : MIN;
+  RULE 1 : if x is lo and y is lo then u is left and v is down
+  RULE 2 : if x is lo and y is hi then u is mid and v is up
+  RULE 3 : if x is hi and y is lo then u is mid and v is down
+  RULE 4 : if x is hi and y is hi then u is right and v is up
+END_RULEBLOCK
+END_FUNCTION_BLOCK
+"""
+
+
+def test_an_fcl_mamdani_output_is_refused_unless_converting() -> None:
+    with pytest.raises(ExportError, match=r"mam.fcl:22: output term 'left' is not a "
+                       r"singleton.*\(fix: import with --mamdani-singletons"):
+        FclImporter().from_string_all(MAMDANI_FCL, "mam.fcl")
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("METHOD : COG;", "METHOD : MM;", r"mam.fcl:25: METHOD : MM of the Mamdani output 'u'"),
+    ("ACCU : MAX;", "ACCU : BSUM;", r"mam.fcl:26: ACCU : BSUM of the Mamdani output 'u'"),
+    ("ACT : MIN;", "ACT : LM;", r"mam.fcl:38: ACT : LM"),
+    ("TERM mid := Triangle -0.5 0.0 0.5;", "TERM mid := 0.0;",
+     r"mam.fcl:22: output 'u' mixes singletons and sets"),
+])
+def test_fcl_mamdani_settings_the_measurement_does_not_compute_are_refused(
+        old: str, new: str, message: str) -> None:
+    text = MAMDANI_FCL.replace(old, new)
+    assert text != MAMDANI_FCL
+    with pytest.raises(ExportError, match=message):
+        FclImporter(mamdani_singletons=True).from_string_all(text, "mam.fcl")
+
+
+def test_an_fcl_file_with_two_outputs_converts_one_and_keeps_the_other_exact() -> None:
+    importer = FclImporter(mamdani_singletons=True)
+    u, v = importer.from_string_all(MAMDANI_FCL, "mam.fcl")
+    assert (u.name, v.name) == ("u", "v")
+    assert u.output.commands["left"] == -0.5 and u.output.commands["mid"] == 0.0
+    assert v.output.commands == {"down": -1.0, "up": 1.0}
+    assert [r.then for r in v.rules] == ["down", "up", "down", "up"]
+    assert "2 outputs, imported as one behaviour each" in importer.report
+    assert "output 'u': Mamdani output sets replaced" in importer.report
+    assert "output 'v'" not in importer.report
+
+
+@pytest.mark.slow
+def test_an_fcl_mamdani_output_converts_and_its_reference_is_fuzzylites(tmp_path: Path
+                                                                          ) -> None:
+    importer = FclImporter(mamdani_singletons=True)
+    u, v = importer.from_string_all(MAMDANI_FCL, "mam.fcl")
+    rng = np.random.default_rng(4)
+    states = np.column_stack([rng.uniform(0, 1, 2000), rng.uniform(0, 10, 2000)])
+    want = fuzzylite_outputs(MAMDANI_FCL, "fcl", states, tmp_path, outputs=2)
+    output = MamdaniOutput({"left": (0, (-1.0, -0.5, -0.5, 0.0)),
+                            "mid": (0, (-0.5, 0.0, 0.0, 0.5)), "right": (1, (0.6, 0.3, 0, 0))},
+                           (-1.0, 1.0), 100)
+    assert np.max(np.abs(mamdani_outputs(u, output, states) - want[:, 0])) <= 1e-12
+    # the singleton output is exact; the Mamdani one within the stated error
+    assert np.max(np.abs(compile_behaviour(v).output(states) - want[:, 1])) <= 1e-12
+    line = next(t for t in importer.report.splitlines() if "output 'u'" in t)
+    deviation = float(line.split(" is ")[1].split()[0])
+    assert np.max(np.abs(compile_behaviour(u).output(states) - want[:, 0])) <= 1.01 * deviation
