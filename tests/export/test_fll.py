@@ -119,8 +119,8 @@ def test_import_reads_the_subset() -> None:
 
 
 @pytest.mark.parametrize(("old", "new", "message"), [
-    ("term: high Triangle 0.2 1.0 1.0", "term: high Cosine 0.8 0.1",
-     r"tiny.fll:7: a Cosine term"),
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Discrete 0.2 0.0 1.0 1.0",
+     r"tiny.fll:7: a Discrete term"),
     ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1 0.5",
      r"tiny.fll:7: the term 'high' has height 0.5"),
     ("term: up Constant 1.0", "term: up Triangle 0.0 0.5 1.0",
