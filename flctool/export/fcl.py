@@ -38,6 +38,7 @@ from flctool.export.imported import (
     ImportedRule,
     ImportedSet,
     Method,
+    as_written,
     build_behaviour,
     check_unique,
     fuzzylite_set,
@@ -250,10 +251,13 @@ class FclImporter(Importer):
                          + ", ".join(f"'{b.name}'" for b in behaviours)
                          + "); each keeps the rules that conclude on its output, which "
                          "computes it exactly as the file does")
-        for behaviour, output in zip(behaviours, parser.outputs, strict=True):
+        for behaviour, output, controller in zip(behaviours, parser.outputs, controllers,
+                                                 strict=True):
             if output.sets:
+                mamdani = dataclasses.replace(output.mamdani(),
+                                              **as_written(controller))
                 notes.append(f"{file}: output '{output.name}': "
-                             + mamdani_report(behaviour, output.mamdani()))
+                             + mamdani_report(behaviour, mamdani))
         self.report = "\n".join(notes)
         return behaviours
 
@@ -310,8 +314,10 @@ class _FclParser:
         self.result = ImportedController(file)
         self.input_names: list[tuple[str, int]] = []
         self.outputs: list[_Output] = []
-        #: every rule as read: its antecedent, its conclusions (output, term), line, text
-        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], int, str]] = []
+        #: every rule as read: its antecedent (or an OR rule's conditions), its conclusions
+        #: (output, term, weight), line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]],
+                               list[tuple[str, str, float]], int, str]] = []
         #: ACCU and ACT written in the RULEBLOCK (older IEC drafts and jFuzzyLogic put them
         #: there): they apply to every output without its own
         self.block_accumulation: tuple[str, int] | None = None
@@ -361,14 +367,19 @@ class _FclParser:
         self.parse()
         controllers = []
         for output in self.outputs:
-            self.check_output(output)
+            try:
+                self.check_output(output)
+                pending = []
+            except ExportError as error:  # reported with the rules' refusals
+                pending = [error]
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
-                    ImportedRule(antecedent, term, line, text)
-                    for antecedent, conclusions, line, text in self.rules
-                    for name, term in conclusions if name == output.name],
-                accumulation=None)
+                    ImportedRule(dict(antecedent), term, line, text, list(disjuncts), weight)
+                    for antecedent, disjuncts, conclusions, line, text in self.rules
+                    for name, term, weight in conclusions if name == output.name],
+                accumulation=None, pending=pending,
+                expand_rules=output.mamdani_terms and self.mamdani_singletons)
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line
             word = output.accumulation_word()
@@ -656,11 +667,14 @@ class _FclParser:
                 self.expect(":")
                 method = self.take()
                 self.result.conjunction = (None if method.word == "MIN" else Method(
-                    f"AND : {method.text}", method.line, "use AND : MIN"))
+                    f"AND : {method.text}", method.line, "use AND : MIN",
+                    product=method.word == "PROD"))
                 self.expect(";")
-            elif key.word == "OR":  # OR rules are refused one by one
+            elif key.word == "OR":  # how OR rules fire (converted Mamdani outputs only)
                 self.expect(":")
-                self.take()
+                method = self.take()
+                self.result.disjunction = (None if method.word == "MAX" else Method(
+                    f"OR : {method.text}", method.line, "use OR : MAX"))
                 self.expect(";")
             elif key.word == "ACT":  # a singleton's activation does not change it
                 self.expect(":")
@@ -680,36 +694,41 @@ class _FclParser:
         self.take()  # the rule's number or name
         self.expect(":")
         self.expect("IF")
-        antecedent: dict[str, str] = {}
+        conditions: list[tuple[Token, str]] = []
+        joints: set[str] = set()
         while True:
-            name, term = self.proposition()
-            if name.text in antecedent:
-                raise self.fail(name, f"the rule names input '{name.text}' twice")
-            antecedent[name.text] = term
+            conditions.append(self.proposition())
             joint = self.take()
             if joint.word == "THEN":
                 break
-            if joint.word == "OR":
-                raise self.fail(joint, "an OR rule: flctool's rules are one AND chain (eq. 1)")
-            if joint.word != "AND":
+            if joint.word not in ("AND", "OR"):
                 raise self.fail(joint, f"'{joint.text}' in a rule's condition")
-        conclusions: list[tuple[str, str]] = []
+            joints.add(joint.word)
+            if len(joints) > 1:
+                raise self.fail(joint, "a rule mixing AND and OR", "write one AND chain")
+        antecedent: dict[str, str] = {}
+        disjuncts: list[tuple[str, str]] = []
+        if "OR" in joints:  # refused unless a Mamdani output is converted (imported.py)
+            disjuncts = [(name.text, term) for name, term in conditions]
+        for name, term in [] if disjuncts else conditions:
+            if name.text in antecedent:
+                raise self.fail(name, f"the rule names input '{name.text}' twice")
+            antecedent[name.text] = term
+        conclusions: list[tuple[str, str, float]] = []
         names = [o.name for o in self.outputs]
         while True:
             output, command = self.proposition()
             if output.text not in names:
                 raise self.fail(output, f"the rule concludes on '{output.text}', which is not "
                                 f"an output ({', '.join(names)})")
-            if output.text in [name for name, _ in conclusions]:
+            if output.text in [name for name, _, _ in conclusions]:
                 raise self.fail(output, f"the rule concludes on '{output.text}' twice")
-            conclusions.append((output.text, command))
             end = self.take()
+            weight = 1.0  # another is refused unless a Mamdani output is converted
             if end.word == "WITH":
                 weight = self.number()
-                if weight != 1.0:
-                    raise self.fail(end, f"a rule weight of {weight!r}: flctool's rules all "
-                                    "weigh 1")
                 end = self.take()
+            conclusions.append((output.text, command, weight))
             if end.word not in (",", "AND"):  # IEC separates conclusions by ',', fuzzylite
                 break                         # by 'and'
         if end.word in ("RULE", "END_RULEBLOCK"):  # fuzzylite ends rules at the line's end
@@ -718,7 +737,7 @@ class _FclParser:
             raise self.fail(end, f"'{end.text}' where the rule should end with ';'",
                             "end the rule with ';'")
         written = [t.text for t in self.tokens[first:self.at] if t.text != ";"]
-        self.rules.append((antecedent, conclusions, start.line, " ".join(written)))
+        self.rules.append((antecedent, disjuncts, conclusions, start.line, " ".join(written)))
 
     def proposition(self) -> tuple[Token, str]:
         first = self.take()

@@ -12,6 +12,7 @@ MATLAB does not clip inputs to their range: clip states before evaluating to mat
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import re
 
@@ -26,6 +27,7 @@ from flctool.export.imported import (
     ImportedRule,
     ImportedSet,
     Method,
+    as_written,
     build_behaviour,
     excerpt,
     fuzzylite_quad,
@@ -122,8 +124,10 @@ class FisImporter(Importer):
             if outputs > 1:  # named after its output
                 behaviour = behaviour.model_copy(update={"name": behaviour.output.name})
             if reader.output_sets:
+                mamdani = dataclasses.replace(reader.mamdani_output(),
+                                              **as_written(reader.result))
                 notes.append(f"{file}: output '{behaviour.output.name}': "
-                             f"{mamdani_report(behaviour, reader.mamdani_output())}")
+                             f"{mamdani_report(behaviour, mamdani)}")
             behaviours.append(behaviour)
         if outputs > 1:
             notes.insert(0, f"{file}: {outputs} outputs, imported as one behaviour each, named "
@@ -225,6 +229,11 @@ class _FisReader:
                 self.entry(key, value.strip(), line_number)
         self.check_system()
         self.check_counts()
+        self.result.expand_rules = bool(self.output_sets)  # a Mamdani output, converting
+        disjunction, at = self.system.get("OrMethod", ("max", 1))
+        if disjunction.lower() != "max":
+            self.result.disjunction = Method(f"OrMethod='{disjunction}'", at,
+                                             "use OrMethod='max'")
         for line, line_number in self.rule_lines:
             self.result.rules.append(self.rule(line, line_number))
         self.methods()
@@ -368,6 +377,8 @@ class _FisReader:
     def mamdani_set(self, name: str, kind: str, params: list[float], line: int) -> float:
         """A Mamdani output set, refused unless converting: then its centroid."""
         if not self.mamdani_singletons:
+            if self.mamdani:
+                return 0.0  # the Type='mamdani' refusal names the system (check_system)
             raise self.fail(line, f"output term '{name}' is a {kind}, a Mamdani output set: "
                             "flctool's commands are singletons", MAMDANI_HINT)
         found = shapes.read(shapes.MATLAB, kind, params)
@@ -407,10 +418,20 @@ class _FisReader:
         return [parse_number(p, self.file, line, what)
                 for p in re.split(r"[\s,]+", inner[1:-1].strip()) if p]
 
+    @property
+    def mamdani(self) -> bool:
+        return self.system.get("Type", ("", 1))[0].lower() == "mamdani"
+
     def check_system(self) -> None:
         kind, line = self.system.get("Type", ("", 1))
         if kind.lower() == "mamdani" and self.mamdani_singletons:
             self.check_mamdani(line)
+            return
+        if kind.lower() == "mamdani":  # reported with the rules' refusals
+            self.result.pending.append(self.fail(
+                line, f"Type='{kind}': flctool reads Sugeno systems with constant outputs; "
+                "Mamdani output sets that are not singletons cannot be expressed exactly",
+                MAMDANI_HINT))
             return
         if kind.lower() != "sugeno":
             raise self.fail(line, f"Type='{kind}': flctool reads Sugeno systems with constant "
@@ -467,9 +488,9 @@ class _FisReader:
         method, line = self.system.get("AndMethod", ("min", 1))
         if method != "min":
             self.result.conjunction = Method(f"AndMethod='{method}'", line,
-                                             "use AndMethod='min'")
+                                             "use AndMethod='min'", product=method == "prod")
         method, line = self.system.get("AggMethod", ("sum", 1))
-        if method != "sum" and not self.output_sets:  # Mamdani: part of what is measured
+        if method != "sum" and not self.mamdani:  # Mamdani: part of what is measured
             self.result.accumulation = Method(f"AggMethod='{method}'", line,
                                               "use AggMethod='sum'")
 
@@ -492,13 +513,8 @@ class _FisReader:
 
     def rule(self, text: str, line: int) -> ImportedRule:
         sets, outputs, weight_text, connection = self.split_rule(text, line)
+        # a weight other than 1 is refused unless a Mamdani output is converted (imported.py)
         weight = parse_number(weight_text.strip(), self.file, line, "rule weight")
-        if weight != 1.0:
-            raise self.fail(line, f"a rule weight of {excerpt(weight_text.strip())}: "
-                            "flctool's rules all weigh 1")
-        if connection != "1" and len(sets) > 1:
-            raise self.fail(line, "an OR rule (connection 2): flctool's rules are one AND chain "
-                            "(eq. 1)")
         if len(sets) != len(self.result.inputs) or len(outputs) != 1:
             raise self.fail(line, f"the rule has {len(sets)} input and {len(outputs)} output "
                             f"indices; the system has {len(self.result.inputs)} inputs and 1 "
@@ -517,7 +533,11 @@ class _FisReader:
         if not 1 <= k <= len(self.result.commands):
             raise self.fail(line, f"the output has no MF{k}" if k > 0 else
                             "the rule gives no (or a negated) output MF")
-        return ImportedRule(antecedent, self.result.commands[k - 1].name, line, text)
+        command = self.result.commands[k - 1].name
+        if connection != "1" and len(antecedent) > 1:  # OR: imported.py refuses it unless
+            return ImportedRule({}, command, line, text, list(antecedent.items()),  # converting
+                                weight)
+        return ImportedRule(antecedent, command, line, text, weight=weight)
 
     def index(self, text: str, line: int, what: str) -> int:
         if len(text) > MAX_DIGITS + 3:

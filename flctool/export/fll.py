@@ -30,6 +30,7 @@ from flctool.export.imported import (
     ImportedInput,
     ImportedRule,
     Method,
+    as_written,
     build_behaviour,
     excerpt,
     fuzzylite_set,
@@ -138,10 +139,13 @@ class FllImporter(Importer):
                          + ", ".join(f"'{b.name}'" for b in behaviours)
                          + "); each keeps the rules that conclude on its output, which "
                          "computes it exactly as the file does")
-        for behaviour, output in zip(behaviours, reader.outputs, strict=True):
+        for behaviour, output, controller in zip(behaviours, reader.outputs, controllers,
+                                                 strict=True):
             if output.sets:
+                mamdani = dataclasses.replace(output.mamdani(),
+                                              **as_written(controller))
                 notes.append(f"{file}: output '{output.name}': "
-                             + mamdani_report(behaviour, output.mamdani()))
+                             + mamdani_report(behaviour, mamdani))
         self.report = "\n".join(notes)
         return behaviours
 
@@ -180,10 +184,13 @@ class _FllReader:
         self.blocks = 0
         # fuzzylite's default conjunction is none, which cannot combine two memberships
         self.result.conjunction = Method("conjunction none", 1, "use conjunction: Minimum")
+        self.result.disjunction = Method("disjunction none", 1, "use disjunction: Maximum")
         self.current: ImportedInput | None = None
         self.outputs: list[_Output] = []
-        #: every rule as read: its antecedent, its conclusions (output, term), line, text
-        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], int, str]] = []
+        #: every rule as read: its antecedent (or an OR rule's conditions), its conclusions
+        #: (output, term), weight, line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], list[tuple[str, str]],
+                               float, int, str]] = []
         self.implication = ("none", 0)
 
     def read_all(self, text: str) -> list[ImportedController]:
@@ -191,16 +198,21 @@ class _FllReader:
         self.read(text)
         controllers = []
         for output in self.outputs:
-            self.check_output(output)
+            try:
+                self.check_output(output)
+                pending = []
+            except ExportError as error:  # reported with the rules' refusals
+                pending = [error]
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
-                    ImportedRule(antecedent, term, line, text_)
-                    for antecedent, conclusions, line, text_ in self.rules
+                    ImportedRule(dict(antecedent), term, line, text_, list(disjuncts), weight)
+                    for antecedent, disjuncts, conclusions, weight, line, text_ in self.rules
                     for name, term in conclusions if name == output.name],
-                accumulation=None)
+                accumulation=None, pending=pending)
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line
+            imported.expand_rules = bool(output.sets) and self.mamdani_singletons
             if not output.sets and output.aggregation[0].lower() != "none":
                 imported.accumulation = Method(f"aggregation {output.aggregation[0]}",
                                                output.aggregation[1], "use aggregation: none")
@@ -385,11 +397,16 @@ class _FllReader:
         if key == "implication":
             self.implication = (value, line)
             return
-        if self.common_entry(key, value, line) or key == "disjunction":
-            return  # OR rules are refused one by one
+        if key == "disjunction":  # how an OR rule (converted Mamdani outputs only) fires
+            self.result.disjunction = (None if value == "Maximum" else Method(
+                f"disjunction {value}", line, "use disjunction: Maximum"))
+            return
+        if self.common_entry(key, value, line):
+            return
         if key == "conjunction":
             self.result.conjunction = (None if value == "Minimum" else Method(
-                f"conjunction {value}", line, "use conjunction: Minimum"))
+                f"conjunction {value}", line, "use conjunction: Minimum",
+                product=value == "AlgebraicProduct"))
         elif key == "activation":
             if value != "General":
                 raise self.fail(line, f"activation {value}: flctool fires every rule",
@@ -431,20 +448,22 @@ class _FllReader:
         condition, conclusion = words[1:cut], words[cut + 1:]
         if "(" in text or ")" in text:
             raise self.fail(line, "a rule with parentheses", "write one 'and' chain")
-        if "or" in condition:
-            raise self.fail(line, "an 'or' rule: flctool's rules are one AND chain (eq. 1)")
+        if "or" in condition and "and" in condition:
+            raise self.fail(line, "a rule mixing 'and' and 'or'", "write one 'and' chain")
         antecedent: dict[str, str] = {}
-        for clause in _split(condition, "and"):
+        disjuncts: list[tuple[str, str]] = []
+        if "or" in condition:  # refused unless a Mamdani output is converted (imported.py)
+            disjuncts = [self.proposition(c, line, "condition") for c in _split(condition,
+                                                                               "or")]
+        for clause in [] if disjuncts else _split(condition, "and"):
             name, term = self.proposition(clause, line, "condition")
             if name in antecedent:
                 raise self.fail(line, f"the rule names input '{name}' twice")
             antecedent[name] = term
+        weight = 1.0  # another is refused unless a Mamdani output is converted (imported.py)
         if "with" in conclusion:
             at = conclusion.index("with")
             weight = parse_number(" ".join(conclusion[at + 1:]), self.file, line, "weight")
-            if weight != 1.0:
-                raise self.fail(line, f"a rule weight of {conclusion[at + 1]}: flctool's "
-                                "rules all weigh 1")
             conclusion = conclusion[:at]
         conclusions: list[tuple[str, str]] = []
         names = [o.name for o in self.outputs]
@@ -456,7 +475,7 @@ class _FllReader:
             if output in [name for name, _ in conclusions]:
                 raise self.fail(line, f"the rule concludes on '{output}' twice")
             conclusions.append((output, command))
-        self.rules.append((antecedent, conclusions, line, text.strip()))
+        self.rules.append((antecedent, disjuncts, conclusions, weight, line, text.strip()))
 
     def proposition(self, words: list[str], line: int, part: str) -> tuple[str, str]:
         if len(words) == 3 and words[1] == "is":

@@ -126,7 +126,7 @@ def test_import_reads_the_subset() -> None:
     ("term: up Constant 1.0", "term: up Triangle 0.0 0.5 1.0",
      r"tiny.fll:14: output 'u' has Mamdani sets.*\(fix: import with --mamdani-singletons"),
     ("rule: if x is low then u is up", "rule: if x is low or x is high then u is up",
-     r"tiny.fll:19: an 'or' rule"),
+     r"tiny.fll:19: an OR rule: flctool's rules are one AND chain"),
     ("rule: if x is low then u is up", "rule: if x is very low then u is up",
      r"tiny.fll:19: the hedge 'very'"),
     ("rule: if x is low then u is up", "rule: if x is not low then u is up",

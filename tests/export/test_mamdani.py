@@ -3,6 +3,7 @@ output the measurement uses is fuzzylite 6's."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -13,8 +14,9 @@ from flctool import compile_behaviour
 from flctool.cli import app
 from flctool.errors import ExportError
 from flctool.export.fcl import FclImporter
-from flctool.export.fis import FisImporter
+from flctool.export.fis import FisImporter, _FisReader
 from flctool.export.fll import FllImporter
+from flctool.export.imported import as_written, build_behaviour
 from flctool.export.mamdani import MamdaniOutput, centroid, mamdani_outputs
 
 from .engines import fuzzylite_outputs
@@ -72,8 +74,8 @@ def test_centroids() -> None:
 
 
 def test_a_mamdani_system_is_refused_unless_converting() -> None:
-    with pytest.raises(ExportError, match=r"mam.fis:31: output term 'left' is a trimf, a "
-                       r"Mamdani output set.*\(fix: import with --mamdani-singletons"):
+    with pytest.raises(ExportError, match=r"mam.fis:3: Type='mamdani': .*Mamdani output "
+                       r"sets .*\(fix: import with --mamdani-singletons"):
         FisImporter().from_string(MAMDANI, "mam.fis")
 
 
@@ -304,3 +306,79 @@ def test_an_fcl_mamdani_output_converts_and_its_reference_is_fuzzylites(tmp_path
     line = next(t for t in importer.report.splitlines() if "output 'u'" in t)
     deviation = float(line.split(" is ")[1].split()[0])
     assert np.max(np.abs(compile_behaviour(u).output(states) - want[:, 0])) <= 1.01 * deviation
+
+
+#: MAMDANI with rules flctool's grid does not have: a product conjunction, a rule that leaves
+#: out y (weight 0.5) and an OR rule, which fuzzylite 6 and MATLAB read.
+REWRITTEN = (MAMDANI.replace("AndMethod='min'", "AndMethod='prod'").replace("NumRules=4",
+                                                                             "NumRules=3")
+             .split("[Rules]")[0] + "[Rules]\n1 1, 1 (1) : 1\n2 0, 3 (0.5) : 1\n1 2, 2 (1) : 2\n")
+
+
+def test_rules_outside_the_grid_are_refused_unless_converting() -> None:
+    """A Sugeno system's rules are imported exactly or not at all."""
+    sugeno = (REWRITTEN.replace("Type='mamdani'", "Type='sugeno'")
+              .replace("AndMethod='prod'", "AndMethod='min'").replace("AggMethod='max'",
+                                                                      "AggMethod='sum'")
+              .replace("DefuzzMethod='centroid'", "DefuzzMethod='wtaver'")
+              .replace("'trimf',[-1 -0.5 0]", "'constant',[-0.5]")
+              .replace("'trimf',[-0.5 0 0.5]", "'constant',[0]")
+              .replace("'trapmf',[0 0.5 0.8 1]", "'constant',[0.5]"))
+    with pytest.raises(ExportError, match=r"mam.fis:37: a rule weight of 0.5"):
+        FisImporter().from_string(sugeno, "mam.fis")
+    with pytest.raises(ExportError, match=r"mam.fis:37: the rule leaves out input 'y'"):
+        FisImporter().from_string(sugeno.replace("(0.5)", "(1)"), "mam.fis")
+    with pytest.raises(ExportError, match=r"mam.fis:38: an OR rule: .*--mamdani-singletons"):
+        FisImporter().from_string(sugeno.replace("2 0, 3 (0.5)", "2 1, 3 (1)"), "mam.fis")
+
+
+def test_converting_expands_the_rules_and_merges_a_combination_given_two_commands() -> None:
+    importer = FisImporter(mamdani_singletons=True)
+    behaviour = importer.from_string(REWRITTEN, "mam.fis")
+    rules = {tuple(r.if_.values()): r.then for r in behaviour.rules}
+    # rule 1 (lo, lo) -> left, rule 2 (hi, *) -> right, rule 3 (lo, *) or (*, hi) -> mid
+    assert rules == {("lo", "lo"): "left_or_mid", ("hi", "lo"): "right",
+                     ("lo", "hi"): "mid", ("hi", "hi"): "mid_or_right"}
+    commands = behaviour.output.commands
+    assert commands["left_or_mid"] == (commands["left"] + commands["mid"]) / 2
+    assert "rules rewritten as flctool's" in importer.report
+    assert behaviour.is_deployable
+
+
+def test_a_rule_without_a_condition_is_refused_at_its_line() -> None:
+    text = REWRITTEN.replace("2 0, 3 (0.5) : 1", "0 0, 3 (1) : 1")
+    with pytest.raises(ExportError, match=r"mam.fis:37: the rule has no condition"):
+        FisImporter(mamdani_singletons=True).from_string(text, "mam.fis")
+
+
+@pytest.mark.slow
+def test_the_rewritten_rules_are_measured_against_fuzzylites_output(tmp_path: Path) -> None:
+    """The Mamdani output the measurement computes from the rules as written (weights, OR,
+    a left-out input, product) is fuzzylite 6's, and the converted controller stays within
+    the stated difference of it."""
+    reader = _FisReader("mam.fis", mamdani_singletons=True)
+    behaviour = build_behaviour(reader.read(REWRITTEN))
+    output = dataclasses.replace(reader.mamdani_output(), **as_written(reader.result))
+    assert output.conjunction == "AlgebraicProduct" and output.rewritten
+    rng = np.random.default_rng(5)
+    states = np.column_stack([rng.uniform(0, 1, 2000), rng.uniform(0, 10, 2000)])
+    want = fuzzylite_outputs(REWRITTEN, "fis", states, tmp_path)
+    assert np.max(np.abs(mamdani_outputs(behaviour, output, states) - want)) <= 1e-12
+    importer = FisImporter(mamdani_singletons=True)
+    converted = importer.from_string(REWRITTEN, "mam.fis")
+    deviation = float(importer.report.split(") is ")[-1].split()[0])
+    assert np.max(np.abs(compile_behaviour(converted).output(states) - want)) <= deviation
+
+
+def test_every_construct_that_keeps_a_file_out_is_reported_at_once() -> None:
+    """Not converting REWRITTEN: the Mamdani system, the product, the weight, the rule that
+    leaves out y and the OR rule, each at its line with its fix, in one error."""
+    with pytest.raises(ExportError) as caught:
+        FisImporter().from_string(REWRITTEN, "mam.fis")
+    text = str(caught.value)
+    assert text.startswith("mam.fis: 5 constructs flctool cannot import\n")
+    listed = text.splitlines()[1:]
+    assert [line.split(":")[1] for line in listed] == ["3", "7", "37", "37", "38"]
+    assert all("(fix: " in line for line in listed)
+    assert "AndMethod='prod'" in listed[1] and "a rule weight of 0.5" in text
+    assert "leaves out input 'y'" in text and "an OR rule" in listed[4]
