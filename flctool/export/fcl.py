@@ -314,9 +314,9 @@ class _FclParser:
         self.result = ImportedController(file)
         self.input_names: list[tuple[str, int]] = []
         self.outputs: list[_Output] = []
-        #: every rule as read: its antecedent (or an OR rule's conditions), its conclusions
-        #: (output, term, weight), line, text
-        self.rules: list[tuple[dict[str, str], list[tuple[str, str]],
+        #: every rule as read: its antecedent (or an OR rule's conditions), the inputs it
+        #: negates, its conclusions (output, term, weight), line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], set[str],
                                list[tuple[str, str, float]], int, str]] = []
         #: ACCU and ACT written in the RULEBLOCK (older IEC drafts and jFuzzyLogic put them
         #: there): they apply to every output without its own
@@ -375,8 +375,9 @@ class _FclParser:
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
-                    ImportedRule(dict(antecedent), term, line, text, list(disjuncts), weight)
-                    for antecedent, disjuncts, conclusions, line, text in self.rules
+                    ImportedRule(dict(antecedent), term, line, text, list(disjuncts), weight,
+                                 set(negated))
+                    for antecedent, disjuncts, negated, conclusions, line, text in self.rules
                     for name, term, weight in conclusions if name == output.name],
                 accumulation=None, pending=pending,
                 expand_rules=output.mamdani_terms and self.mamdani_singletons)
@@ -694,7 +695,7 @@ class _FclParser:
         self.take()  # the rule's number or name
         self.expect(":")
         self.expect("IF")
-        conditions: list[tuple[Token, str]] = []
+        conditions: list[tuple[Token, str, bool]] = []
         joints: set[str] = set()
         while True:
             conditions.append(self.proposition())
@@ -708,16 +709,24 @@ class _FclParser:
                 raise self.fail(joint, "a rule mixing AND and OR", "write one AND chain")
         antecedent: dict[str, str] = {}
         disjuncts: list[tuple[str, str]] = []
-        if "OR" in joints:  # refused unless a Mamdani output is converted (imported.py)
-            disjuncts = [(name.text, term) for name, term in conditions]
-        for name, term in [] if disjuncts else conditions:
+        # OR and NOT are refused unless a Mamdani output is converted (imported.py)
+        negated = {name.text for name, _, negation in conditions if negation}
+        named = [name.text for name, _, _ in conditions]
+        if any(named.count(n) > 1 for n in negated):
+            raise self.fail(start, "NOT on an input the rule names more than once",
+                            "write the sets meant instead")
+        if "OR" in joints:
+            disjuncts = [(name.text, term) for name, term, _ in conditions]
+        for name, term, _ in [] if disjuncts else conditions:
             if name.text in antecedent:
                 raise self.fail(name, f"the rule names input '{name.text}' twice")
             antecedent[name.text] = term
         conclusions: list[tuple[str, str, float]] = []
         names = [o.name for o in self.outputs]
         while True:
-            output, command = self.proposition()
+            output, command, negation = self.proposition()
+            if negation:
+                raise self.fail(output, "NOT in a rule's conclusion", "conclude on a term")
             if output.text not in names:
                 raise self.fail(output, f"the rule concludes on '{output.text}', which is not "
                                 f"an output ({', '.join(names)})")
@@ -737,9 +746,11 @@ class _FclParser:
             raise self.fail(end, f"'{end.text}' where the rule should end with ';'",
                             "end the rule with ';'")
         written = [t.text for t in self.tokens[first:self.at] if t.text != ";"]
-        self.rules.append((antecedent, disjuncts, conclusions, start.line, " ".join(written)))
+        self.rules.append((antecedent, disjuncts, negated, conclusions, start.line,
+                           " ".join(written)))
 
-    def proposition(self) -> tuple[Token, str]:
+    def proposition(self) -> tuple[Token, str, bool]:
+        """``variable IS [NOT] term``: the variable, the term and whether it is negated."""
         first = self.take()
         if first.word == "(":
             raise self.fail(first, "a rule with parentheses", "write one AND chain")
@@ -747,8 +758,9 @@ class _FclParser:
             raise self.fail(first, f"'{first.text}' where a variable name should be")
         self.expect("IS")
         term = self.take()
-        if term.word == "NOT":
-            raise self.fail(term, "NOT in a rule: flctool's rules use plain terms")
+        negation = term.word == "NOT"
+        if negation:
+            term = self.take()
         if term.kind != "name":
             raise self.fail(term, f"'{term.text}' where a term name should be")
         following = self.peek()
@@ -756,4 +768,4 @@ class _FclParser:
                                                                  "RULE", "END_RULEBLOCK"):
             raise self.fail(term, f"the hedge '{term.text}' before '{following.text}': "
                             "flctool's rules use plain terms")
-        return first, term.text
+        return first, term.text, negation

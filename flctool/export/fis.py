@@ -347,7 +347,8 @@ class _FisReader:
         elif key.startswith("MF"):
             self.mf_key(key, len(self.result.commands), line)
             name, kind, params = self.mf(value, line)
-            if kind in ("trimf", "trapmf") or shapes.read(shapes.MATLAB, kind, params):
+            if kind in ("trimf", "trapmf", "rampmf") or shapes.read(shapes.MATLAB, kind,
+                                                                     params):
                 constant = self.mamdani_set(name, kind, params, line)
             else:
                 constant = zero_order_constant(kind, params, len(self.result.inputs),
@@ -386,6 +387,12 @@ class _FisReader:
             row = set_row(shaped_set(name, found[0], found[1], self.file, line).shape_value())
             self.output_sets[name] = row
             return 0.0  # the centroid, once the output range is known (mamdani_output)
+        if kind == "rampmf":  # fuzzylite's shoulder, to the output range's end
+            if len(params) != 2:
+                raise self.fail(line, "a rampmf takes 2 parameters", "give it start and end")
+            ramp = fuzzylite_quad("Ramp", params, self.file, line)
+            self.output_sets[name] = (0, ramp)
+            return 0.0  # the centroid, once the output range is known (mamdani_output)
         n = 3 if kind == "trimf" else 4
         if len(params) != n or any(b < a for a, b in itertools.pairwise(params)):
             raise self.fail(line, f"a {kind} takes {n} increasing parameters",
@@ -399,9 +406,13 @@ class _FisReader:
         """The Mamdani output as read (its sets under their behaviour-file names)."""
         implication = {"min": "Minimum", "prod": "AlgebraicProduct"}
         aggregation = {"max": "Maximum", "probor": "AlgebraicSum"}
+        lo, hi = self.output_range
+        # a shoulder's infinite foot (rampmf): the centroid integrates over the range only
+        sets = {identifier(name): (code, row) if code else (0, (
+            max(row[0], lo), max(row[1], lo), min(row[2], hi), min(row[3], hi)))
+            for name, (code, row) in self.output_sets.items()}
         return MamdaniOutput(
-            {identifier(name): row for name, row in self.output_sets.items()},
-            self.output_range, CENTROID_RESOLUTION,
+            sets, self.output_range, CENTROID_RESOLUTION,
             implication[self.system.get("ImpMethod", ("min", 1))[0].lower()],
             aggregation[self.system.get("AggMethod", ("max", 1))[0].lower()])
 
@@ -520,15 +531,16 @@ class _FisReader:
                             f"indices; the system has {len(self.result.inputs)} inputs and 1 "
                             "output")
         antecedent: dict[str, str] = {}
+        negated = set()  # NOT (a negative index): refused unless converting (imported.py)
         for variable, index in zip(self.result.inputs, sets, strict=True):
             k = self.index(index, line, f"input '{variable.name}'")
             if k == 0:  # an input left out: build_behaviour refuses it, as in every format
                 continue
             if k < 0:
-                raise self.fail(line, f"NOT (a negative index) on input '{variable.name}'")
-            if k > len(variable.sets):
-                raise self.fail(line, f"input '{variable.name}' has no MF{k}")
-            antecedent[variable.name] = variable.sets[k - 1].name
+                negated.add(variable.name)
+            if abs(k) > len(variable.sets):
+                raise self.fail(line, f"input '{variable.name}' has no MF{abs(k)}")
+            antecedent[variable.name] = variable.sets[abs(k) - 1].name
         k = self.index(outputs[0], line, "the output")
         if not 1 <= k <= len(self.result.commands):
             raise self.fail(line, f"the output has no MF{k}" if k > 0 else
@@ -536,8 +548,8 @@ class _FisReader:
         command = self.result.commands[k - 1].name
         if connection != "1" and len(antecedent) > 1:  # OR: imported.py refuses it unless
             return ImportedRule({}, command, line, text, list(antecedent.items()),  # converting
-                                weight)
-        return ImportedRule(antecedent, command, line, text, weight=weight)
+                                weight, negated)
+        return ImportedRule(antecedent, command, line, text, weight=weight, negated=negated)
 
     def index(self, text: str, line: int, what: str) -> int:
         if len(text) > MAX_DIGITS + 3:

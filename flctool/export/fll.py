@@ -187,10 +187,10 @@ class _FllReader:
         self.result.disjunction = Method("disjunction none", 1, "use disjunction: Maximum")
         self.current: ImportedInput | None = None
         self.outputs: list[_Output] = []
-        #: every rule as read: its antecedent (or an OR rule's conditions), its conclusions
-        #: (output, term), weight, line, text
-        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], list[tuple[str, str]],
-                               float, int, str]] = []
+        #: every rule as read: its antecedent (or an OR rule's conditions), the inputs it
+        #: negates, its conclusions (output, term), weight, line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], set[str],
+                               list[tuple[str, str]], float, int, str]] = []
         self.implication = ("none", 0)
 
     def read_all(self, text: str) -> list[ImportedController]:
@@ -206,8 +206,10 @@ class _FllReader:
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
-                    ImportedRule(dict(antecedent), term, line, text_, list(disjuncts), weight)
-                    for antecedent, disjuncts, conclusions, weight, line, text_ in self.rules
+                    ImportedRule(dict(antecedent), term, line, text_, list(disjuncts), weight,
+                                 set(negated))
+                    for antecedent, disjuncts, negated, conclusions, weight, line, text_
+                    in self.rules
                     for name, term in conclusions if name == output.name],
                 accumulation=None, pending=pending)
             if len(self.outputs) > 1:
@@ -452,11 +454,17 @@ class _FllReader:
             raise self.fail(line, "a rule mixing 'and' and 'or'", "write one 'and' chain")
         antecedent: dict[str, str] = {}
         disjuncts: list[tuple[str, str]] = []
-        if "or" in condition:  # refused unless a Mamdani output is converted (imported.py)
-            disjuncts = [self.proposition(c, line, "condition") for c in _split(condition,
-                                                                               "or")]
-        for clause in [] if disjuncts else _split(condition, "and"):
-            name, term = self.proposition(clause, line, "condition")
+        # OR and NOT are refused unless a Mamdani output is converted (imported.py)
+        conditions = [self.condition(c, line) for c in
+                      _split(condition, "or" if "or" in condition else "and")]
+        negated = {name for name, _, negation in conditions if negation}
+        named = [name for name, _, _ in conditions]
+        if any(named.count(n) > 1 for n in negated):
+            raise self.fail(line, "'not' on an input the rule names more than once",
+                            "write the sets meant instead")
+        if "or" in condition:
+            disjuncts = [(name, term) for name, term, _ in conditions]
+        for name, term, _ in [] if disjuncts else conditions:
             if name in antecedent:
                 raise self.fail(line, f"the rule names input '{name}' twice")
             antecedent[name] = term
@@ -475,7 +483,15 @@ class _FllReader:
             if output in [name for name, _ in conclusions]:
                 raise self.fail(line, f"the rule concludes on '{output}' twice")
             conclusions.append((output, command))
-        self.rules.append((antecedent, disjuncts, conclusions, weight, line, text.strip()))
+        self.rules.append((antecedent, disjuncts, negated, conclusions, weight, line,
+                           text.strip()))
+
+    def condition(self, words: list[str], line: int) -> tuple[str, str, bool]:
+        """``variable is [not] term``: the variable, the term and whether it is negated."""
+        if len(words) == 4 and words[1] == "is" and words[2] == "not":
+            return words[0], words[3], True
+        name, term = self.proposition(words, line, "condition")
+        return name, term, False
 
     def proposition(self, words: list[str], line: int, part: str) -> tuple[str, str]:
         if len(words) == 3 and words[1] == "is":

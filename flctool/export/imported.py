@@ -196,6 +196,9 @@ class ImportedRule:
     #: The rule's weight (its activation is multiplied by it); not 1 only for a Mamdani
     #: output being converted, where the measurement takes it into account.
     weight: float = 1.0
+    #: The inputs whose condition is negated (NOT: membership 1 - mu), refused unless a
+    #: Mamdani output is converted, where it expands over the input's other sets.
+    negated: set[str] = field(default_factory=set)
 
     def named(self) -> str:
         """The rule as a message about another rule names it: by its line and its text."""
@@ -459,7 +462,8 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     found = list(imported.pending)
     checks = [_check_methods]
     if not imported.expand_rules:
-        checks = [_check_no_or_rule, _check_weights, _check_rules_cover_every_input, *checks]
+        checks = [_check_no_or_rule, _check_no_negation, _check_weights,
+                  _check_rules_cover_every_input, *checks]
     elif imported.disjunction is not None and any(r.disjuncts for r in imported.rules):
         method = imported.disjunction
         found.append(imported.error(method.line, f"{method.text}: the conversion of a "
@@ -519,25 +523,30 @@ def expanded_rules(imported: ImportedController) -> list[ImportedRule]:
                               "input left out), so it would fire everywhere with no "
                               "activation to weigh it by", "give the rule a condition, or "
                               "remove it")
-        for name, term in rule.disjuncts:
+        for name, term in rule.disjuncts or [(n, rule.antecedent.get(n, ""))
+                                             for n in rule.negated]:
             if term not in sets.get(name, []):
                 what = f"set '{term}' of input '{name}'" if name in sets else f"input '{name}'"
-                raise unsupported(imported.file, rule.line, f"the OR rule names {what}, which "
+                raise unsupported(imported.file, rule.line, f"the rule names {what}, which "
                                   "the file does not define", "correct the name")
+        def chosen(name: str, term: str, rule: ImportedRule = rule) -> list[str]:
+            """The sets of input ``name`` where the condition holds in the expansion."""
+            if name in rule.negated:  # NOT: the input's other sets
+                return [t for t in sets.get(name, []) if t != term]
+            return [term]
+
         if rule.disjuncts:
             cells: list[tuple[str, ...]] = []
             for name, term in rule.disjuncts:
-                choices = [[term] if n == name else sets.get(n, []) for n in names]
+                choices = [chosen(name, term) if n == name else sets.get(n, []) for n in names]
                 cells += list(itertools.product(*choices))
-        elif all(n in rule.antecedent for n in names) or any(
-                n not in sets for n in rule.antecedent):
-            cells = [tuple(rule.antecedent.get(n, "") for n in names)]
-            if len(rule.antecedent) != len(names):  # names an unknown input: checked later
-                result.append(rule)
-                continue
+        elif any(n not in sets for n in rule.antecedent):  # an unknown input: checked later
+            result.append(rule)
+            continue
         else:
-            cells = list(itertools.product(*([rule.antecedent[n]] if n in rule.antecedent
-                                              else sets[n] for n in names)))
+            cells = list(itertools.product(*(chosen(n, rule.antecedent[n])
+                                              if n in rule.antecedent else sets[n]
+                                              for n in names)))
         for cell in cells:
             if (cell, rule.command) not in seen:
                 seen.add((cell, rule.command))
@@ -572,9 +581,9 @@ def _merge_conflicts(imported: ImportedController, rules: list[ImportedRule]
     return merged
 
 
-#: A rule as written, for measuring against: its conditions (input, set), whether they are
-#: joined by OR (else AND), its command and its weight.
-OriginalRule = tuple[tuple[tuple[str, str], ...], bool, str, float]
+#: A rule as written, for measuring against: its conditions (input, set, negated), whether
+#: they are joined by OR (else AND), its command and its weight.
+OriginalRule = tuple[tuple[tuple[str, str, bool], ...], bool, str, float]
 
 
 def as_written(imported: ImportedController) -> dict[str, Any]:
@@ -584,11 +593,11 @@ def as_written(imported: ImportedController) -> dict[str, Any]:
     the ``conjunction`` (fuzzylite's name); for :class:`flctool.export.mamdani.
     MamdaniOutput`."""
     names = {v.name for v in imported.inputs}
-    rules = tuple((tuple(r.disjuncts), True, r.command, r.weight) if r.disjuncts else
-                  (tuple(r.antecedent.items()), False, r.command, r.weight)
+    rules = tuple((tuple((n, t, n in r.negated) for n, t in r.disjuncts or
+                         r.antecedent.items()), bool(r.disjuncts), r.command, r.weight)
                   for r in imported.rules)
     used = {r.command for r in imported.rules}
-    rewritten = any(r.disjuncts or set(r.antecedent) != names or r.weight != 1.0
+    rewritten = any(r.disjuncts or r.negated or set(r.antecedent) != names or r.weight != 1.0
                     for r in imported.rules) or any(c.name not in used
                                                     for c in imported.commands)
     product = imported.conjunction is not None and imported.conjunction.product
@@ -646,6 +655,7 @@ def _identifiers(imported: ImportedController) -> None:
     for rule in imported.rules:
         rule.antecedent = {inputs.get(n, n): s for n, s in rule.antecedent.items()}
         rule.disjuncts = [(inputs.get(n, n), t) for n, t in rule.disjuncts]
+        rule.negated = {inputs.get(n, n) for n in rule.negated}
     commands = {c.name: identifier(c.name) for c in imported.commands}
     _check_renames(file, [(c.name, commands[c.name], c.line) for c in imported.commands],
                    "output term")
@@ -683,6 +693,17 @@ def _check_rules_cover_every_input(imported: ImportedController) -> None:
                 f"{names}{written}: it fires with the other inputs' minimum alone, which no rule "
                 "of the full grid (eq. 1-2) does, so expanding it over the sets would change "
                 "the output", DONT_CARE_HINT)
+
+
+def _check_no_negation(imported: ImportedController) -> None:
+    for rule in imported.rules:
+        if rule.negated:
+            name = sorted(rule.negated)[0]
+            raise unsupported(imported.file, rule.line, f"NOT on input '{name}': flctool's "
+                              "rules use plain terms (eq. 1), and NOT's membership (1 - mu) is "
+                              "no sum of the other sets'", "name the sets meant instead, one "
+                              "rule each, or (a Mamdani output) import with "
+                              "--mamdani-singletons, which measures the difference")
 
 
 def _check_weights(imported: ImportedController) -> None:

@@ -12,6 +12,7 @@ good enough.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -118,8 +119,8 @@ def mamdani_outputs(behaviour: Behaviour, output: MamdaniOutput, states: np.ndar
 def written_activations(behaviour: Behaviour, output: MamdaniOutput, names: list[str],
                         states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(S, R) each written rule's activation, as fuzzylite and MATLAB compute it: its weight
-    times the minimum (eq. 2) or product of its conditions' memberships, or their maximum
-    for an OR rule; and (R,) the index in ``names`` of each rule's command."""
+    times the minimum (eq. 2) or product of its conditions' memberships (1 - mu for NOT), or
+    their maximum for an OR rule; and (R,) the index in ``names`` of each rule's command."""
     controller = compile_behaviour(behaviour)
     mus = controller.memberships(states)  # per input, (S, L_i)
     inputs = {name: (i, list(v.sets)) for i, (name, v) in enumerate(behaviour.inputs.items())}
@@ -127,7 +128,9 @@ def written_activations(behaviour: Behaviour, output: MamdaniOutput, names: list
                else np.minimum.reduce)
     alpha = np.empty((len(states), len(output.rules)))
     for r, (conditions, disjunction, _, weight) in enumerate(output.rules):
-        columns = [mus[inputs[n][0]][:, inputs[n][1].index(t)] for n, t in conditions]
+        columns = [mus[inputs[n][0]][:, inputs[n][1].index(t)] for n, t, _ in conditions]
+        columns = [1.0 - c if negated else c
+                   for c, (_, _, negated) in zip(columns, conditions, strict=True)]
         alpha[:, r] = weight * (np.maximum.reduce(columns) if disjunction
                                 else combine(columns))
     return alpha, np.array([names.index(c) for _, _, c, _ in output.rules])
@@ -144,16 +147,26 @@ class Conversion:
     resolution: int
     expanded: bool = False
 
+    def stated(self) -> float:
+        """The deviation rounded up to 4 significant digits, as the report states it (never
+        below the measured one)."""
+        x = self.deviation
+        if not (math.isfinite(x) and x > 0):
+            return x
+        step = 10.0 ** (math.floor(math.log10(x)) - 3)
+        return math.ceil(x / step) * step
+
     def report(self) -> str:
-        share = f" ({self.deviation / self.span:.2%} of the output range)" if self.span else ""
-        expanded = (" (and the rules rewritten as flctool's: OR rules and rules that leave "
-                    "out an input expanded over the sets, weights and a product conjunction "
-                    "dropped; measured against the rules as written)" if self.expanded else "")
+        stated = self.stated()
+        share = f" ({stated / self.span:.2%} of the output range)" if self.span else ""
+        expanded = (" (and the rules rewritten as flctool's: OR, NOT and rules that leave "
+                    "out an input expanded over the sets, a combination given several "
+                    "commands given their mean, weights and a product conjunction dropped; "
+                    "measured against the rules as written)" if self.expanded else "")
         return (f"Mamdani output sets replaced by singletons at their centroids{expanded}: "
-                f"the largest "
-                f"difference from the Mamdani output (centroid over {self.resolution} "
-                f"midpoints, as fuzzylite computes it) is {self.deviation:.4g}{share}, "
-                f"measured on {self.states} states")
+                f"the largest difference from the Mamdani output (centroid over "
+                f"{self.resolution} midpoints, as fuzzylite computes it) is {stated:.4g}"
+                f"{share}, measured on {self.states} states")
 
 
 def measurement_states(behaviour: Behaviour) -> np.ndarray:

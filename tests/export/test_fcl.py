@@ -100,7 +100,7 @@ def test_jfuzzylogics_terms_are_read_in_any_case() -> None:
     ("TERM up := 1;", "TERM up := (0, 0) (1, 1) (2, 0);",
      r"tiny.fcl:15: output term 'up' is not a singleton: a Mamdani output set"),
     ("IF x IS low THEN", "IF x IS low OR x IS high THEN", r"tiny.fcl:22: an OR rule"),
-    ("IF x IS low THEN", "IF x IS NOT low THEN", r"tiny.fcl:22: NOT in a rule"),
+    ("IF x IS low THEN", "IF x IS NOT low THEN", r"tiny.fcl:22: NOT on input 'x'"),
     ("IF x IS low THEN", "IF x IS very low THEN", r"tiny.fcl:22: the hedge 'very'"),
     ("THEN u IS up;", "THEN u IS up WITH 0.5;", r"tiny.fcl:22: a rule weight of 0.5"),
     ("TERM low := (0, 1) (0.2, 1) (0.8, 0);", "TERM low := (0, 1) (0.2, 0.5) (0.8, 0);",

@@ -130,7 +130,7 @@ def test_import_reads_the_subset() -> None:
     ("rule: if x is low then u is up", "rule: if x is very low then u is up",
      r"tiny.fll:19: the hedge 'very'"),
     ("rule: if x is low then u is up", "rule: if x is not low then u is up",
-     r"tiny.fll:19: the hedge 'not'"),
+     r"tiny.fll:19: NOT on input 'x'"),
     ("rule: if x is low then u is up", "rule: if x is low then u is up with 0.5",
      r"tiny.fll:19: a rule weight of 0.5"),
     ("term: low Trapezoid 0.0 0.0 0.2 0.8", "term: low Trapezoid 0.0 0.0 0.2 0.8 0.5",
