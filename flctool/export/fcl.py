@@ -32,6 +32,7 @@ from flctool.export.base import (
     sloped_quad,
 )
 from flctool.export.imported import (
+    QUAD0,
     ImportedCommand,
     ImportedController,
     ImportedInput,
@@ -281,6 +282,8 @@ class _Output:
     accumulation: tuple[str, int] | None = None
     range: tuple[float, float] | None = None
     implication: str = "Minimum"
+    #: Refusals of this output's terms, reported with the file's others
+    pending: list[ExportError] = field(default_factory=list)
 
     def mamdani(self) -> MamdaniOutput:
         return MamdaniOutput({identifier(n): row for n, row in self.sets.items()},
@@ -367,11 +370,11 @@ class _FclParser:
         self.parse()
         controllers = []
         for output in self.outputs:
+            pending = [*self.result.pending, *output.pending]
             try:
                 self.check_output(output)
-                pending = []
             except ExportError as error:  # reported with the rules' refusals
-                pending = [error]
+                pending.append(error)
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
@@ -522,7 +525,15 @@ class _FclParser:
                 term = self.name()
                 self.expect(":=")
                 if self.peek().kind == "name":  # fuzzylite's syntax: Trapezoid a b c d
-                    variable.sets.append(self.fuzzylite_term(term))
+                    start = self.at
+                    try:
+                        variable.sets.append(self.fuzzylite_term(term))
+                    except ExportError as error:  # reported with the file's other refusals
+                        self.at = start
+                        while self.peek().word != ";":  # the term's tokens, to go on reading
+                            self.take()
+                        variable.sets.append(self.result.put_off(
+                            error, ImportedSet(term.text, QUAD0, term.line)))
                 else:
                     terms.append((term, self.points(term)))
                 self.expect(";")
@@ -576,8 +587,14 @@ class _FclParser:
                     numbers.append(self.number())
                 if self.peek().word != ";":
                     numbers = []  # not numbers only: refused below as not a constant
-                return zero_order_constant(kind.text, numbers, len(self.input_names),
-                                           self.file, kind.line, term.text)
+                try:
+                    return zero_order_constant(kind.text, numbers, len(self.input_names),
+                                               self.file, kind.line, term.text)
+                except ExportError as error:  # reported with the output's other refusals
+                    while self.peek().word != ";":
+                        self.take()
+                    output.pending.append(error)
+                    return 0.0
             item = self.fuzzylite_term(term, kind)
             output.sets[term.text] = set_row(item.shape_value())
         elif self.peek().word == "(":

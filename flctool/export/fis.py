@@ -18,9 +18,11 @@ import re
 
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.shapes import ShapedSet, set_row
+from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
+    QUAD0,
     ImportedCommand,
     ImportedController,
     ImportedInput,
@@ -309,10 +311,12 @@ class _FisReader:
             if found is not None:
                 variable.sets.append(shaped_set(name, found[0], found[1], self.file, line))
                 return
-            if kind not in arity:
+            if kind not in arity:  # reported with the file's other refusals
                 known = ", ".join([*arity, *(n for n, _ in shapes.MATLAB.values())])
-                raise self.fail(line, f"membership function '{name}' is a {kind}, which "
-                                "flctool's sets do not include", f"use one of {known}")
+                variable.sets.append(self.result.put_off(self.fail(
+                    line, f"membership function '{name}' is a {kind}, which flctool's sets "
+                    "do not include", f"use one of {known}"), ImportedSet(name, QUAD0, line)))
+                return
             if len(params) != arity[kind]:
                 raise self.fail(line, f"a {kind} takes {arity[kind]} parameters",
                                 f"give it {arity[kind]} numbers")
@@ -351,8 +355,11 @@ class _FisReader:
                                                                      params):
                 constant = self.mamdani_set(name, kind, params, line)
             else:
-                constant = zero_order_constant(kind, params, len(self.result.inputs),
-                                               self.file, line, name)
+                try:  # a refusal is reported with the file's others
+                    constant = zero_order_constant(kind, params, len(self.result.inputs),
+                                                   self.file, line, name)
+                except ExportError as error:
+                    constant = self.result.put_off(error, 0.0)
             self.result.commands.append(ImportedCommand(name, constant, line))
         elif key == "NumMFs":
             self.output_mfs = (self.count(value, line, key), line)

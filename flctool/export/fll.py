@@ -25,10 +25,12 @@ from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, header_lines, number
 from flctool.export.imported import (
+    QUAD0,
     ImportedCommand,
     ImportedController,
     ImportedInput,
     ImportedRule,
+    ImportedSet,
     Method,
     as_written,
     build_behaviour,
@@ -167,6 +169,8 @@ class _Output:
         default_factory=dict)
     set_line: int = 0
     implication: str = "Minimum"
+    #: Refusals of this output's terms, reported with the file's others
+    pending: list[ExportError] = field(default_factory=list)
 
     def mamdani(self) -> MamdaniOutput:
         return MamdaniOutput({identifier(n): row for n, row in self.sets.items()}, self.range,
@@ -198,11 +202,11 @@ class _FllReader:
         self.read(text)
         controllers = []
         for output in self.outputs:
+            pending = [*self.result.pending, *output.pending]
             try:
                 self.check_output(output)
-                pending = []
             except ExportError as error:  # reported with the rules' refusals
-                pending = [error]
+                pending.append(error)
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
@@ -339,7 +343,11 @@ class _FllReader:
         elif key == "term":
             name, kind, params = self.term(value, line)
             values = [self.point(p, line, kind) for p in params]
-            self.current.sets.append(fuzzylite_set(name, kind, values, self.file, line))
+            try:
+                item = fuzzylite_set(name, kind, values, self.file, line)
+            except ExportError as error:  # reported with the file's other refusals
+                item = self.result.put_off(error, ImportedSet(name, QUAD0, line))
+            self.current.sets.append(item)
         else:
             raise self.fail(line, f"'{key}' in an InputVariable")
 
@@ -365,8 +373,12 @@ class _FllReader:
             name, kind, params = self.term(value, line)
             if kind in ("Constant", "Linear"):
                 numbers = [parse_number(p, self.file, line, f"term '{name}'") for p in params]
-                constant = zero_order_constant(kind, numbers, len(self.result.inputs),
-                                               self.file, line, name)
+                try:
+                    constant = zero_order_constant(kind, numbers, len(self.result.inputs),
+                                                   self.file, line, name)
+                except ExportError as error:  # reported with the output's other refusals
+                    output.pending.append(error)
+                    constant = 0.0
             else:  # a Mamdani output set: a singleton at its centroid, if converting
                 values = [self.point(p, line, kind) for p in params]
                 item = fuzzylite_set(name, kind, values, self.file, line)

@@ -14,7 +14,7 @@ import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 from flctool.behaviour import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
 from flctool.behaviour.shapes import ShapedSet, shape_problem, shaped
@@ -23,6 +23,7 @@ from flctool.errors import ExportError, PathPart
 from flctool.export import shapes
 
 Quad = tuple[float, float, float, float]
+_T = TypeVar("_T")
 
 
 #: What each format's importer reads, for refusals that have no more specific fix.
@@ -54,8 +55,22 @@ def _line_of(message: str) -> int:
 
 
 def refusals(file: str, errors: list[ExportError]) -> ExportError:
-    """One error for every construct in ``errors``: the error itself when there is one."""
-    return errors[0] if len(errors) == 1 else ImportRefusals(file, errors)
+    """One error for every construct in ``errors`` (the error itself when there is one); a
+    construct refused at several lines (one per output term, say) is listed once, at its
+    first line, naming the others."""
+    groups: dict[str, list[ExportError]] = {}
+    for error in errors:
+        text = str(error.args[0]).partition(": ")[2]  # without "file:line"
+        groups.setdefault(re.sub(r"'[^']*'|-?\d[\d.e+-]*", "_", text), []).append(error)
+    merged = []
+    for group in groups.values():
+        first = group[0]
+        if len(group) > 1:
+            lines = ", ".join(str(_line_of(str(e))) for e in group[1:])
+            first = ExportError(f"{first.args[0]}; the same at line{'s' * (len(group) > 2)} "
+                                f"{lines}", hint=first.hint)
+        merged.append(first)
+    return merged[0] if len(merged) == 1 else ImportRefusals(file, merged)
 
 
 def unsupported(file: str, line: int, construct: str, hint: str = "") -> ExportError:
@@ -72,6 +87,11 @@ def span(xs: Iterable[float]) -> tuple[float, float]:
     """The smallest range holding every finite x (0 to 1 when there is none)."""
     finite = [x for x in xs if math.isfinite(x)]
     return (min(finite), max(finite)) if finite else (0.0, 1.0)
+
+
+#: The corners a set refused while reading stands in with (never validated: the file is
+#: refused, see :meth:`ImportedController.put_off`).
+QUAD0: Quad = (0.0, 0.0, 0.0, 0.0)
 
 
 @dataclass
@@ -255,6 +275,12 @@ class ImportedController:
     #: Refusals the reader found and put off, so that :func:`build_behaviour` reports them
     #: with the rest (a Mamdani output not being converted, say).
     pending: list[ExportError] = field(default_factory=list)
+
+    def put_off(self, error: ExportError, fallback: _T) -> _T:
+        """Keep ``error`` for :func:`build_behaviour` to report with the file's other
+        refusals, and go on reading with ``fallback`` in place of what it refused."""
+        self.pending.append(error)
+        return fallback
 
     def error(self, line: int, construct: str, hint: str = "") -> ExportError:
         """An import error at ``line`` of this file (see :func:`unsupported`)."""
@@ -452,15 +478,10 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         raise unsupported(file, 1, "the controller has no input variable")
     if not imported.output_name:
         raise unsupported(file, 1, "the controller has no output variable")
-    check_unique(file, ((i.name, i.line) for i in imported.inputs), "input")
-    for variable in imported.inputs:
-        check_unique(file, ((s.name, s.line) for s in variable.sets), "set",
-                     f" of input '{variable.name}'")
-    check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
     # Every construct that keeps the file out is reported together (each at its first line):
     # the ones the reader put off (pending) and each of these checks'.
     found = list(imported.pending)
-    checks = [_check_methods]
+    checks = [_check_names_unique, _check_methods]
     if not imported.expand_rules:
         checks = [_check_no_or_rule, _check_no_negation, _check_weights,
                   _check_rules_cover_every_input, *checks]
@@ -693,6 +714,15 @@ def _check_rules_cover_every_input(imported: ImportedController) -> None:
                 f"{names}{written}: it fires with the other inputs' minimum alone, which no rule "
                 "of the full grid (eq. 1-2) does, so expanding it over the sets would change "
                 "the output", DONT_CARE_HINT)
+
+
+def _check_names_unique(imported: ImportedController) -> None:
+    file = imported.file
+    check_unique(file, ((i.name, i.line) for i in imported.inputs), "input")
+    for variable in imported.inputs:
+        check_unique(file, ((s.name, s.line) for s in variable.sets), "set",
+                     f" of input '{variable.name}'")
+    check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
 
 
 def _check_no_negation(imported: ImportedController) -> None:

@@ -315,15 +315,31 @@ REWRITTEN = (MAMDANI.replace("AndMethod='min'", "AndMethod='prod'").replace("Num
              .split("[Rules]")[0] + "[Rules]\n1 1, 1 (1) : 1\n2 0, 3 (0.5) : 1\n1 2, 2 (1) : 2\n")
 
 
+#: REWRITTEN as a Sugeno system (constant outputs), whose rules must be exact.
+SUGENO = (REWRITTEN.replace("Type='mamdani'", "Type='sugeno'")
+          .replace("AndMethod='prod'", "AndMethod='min'").replace("AggMethod='max'",
+                                                                  "AggMethod='sum'")
+          .replace("DefuzzMethod='centroid'", "DefuzzMethod='wtaver'")
+          .replace("'trimf',[-1 -0.5 0]", "'constant',[-0.5]")
+          .replace("'trimf',[-0.5 0 0.5]", "'constant',[0]")
+          .replace("'trapmf',[0 0.5 0.8 1]", "'constant',[0.5]"))
+
+
+def test_a_first_order_output_and_an_unknown_mf_are_listed_with_the_rules() -> None:
+    text = (SUGENO.replace("'constant',[0.5]", "'linear',[1 0 0.5]")
+            .replace("'trimf',[0 10 20]", "'discretemf',[0 0 10 1]"))
+    with pytest.raises(ExportError) as caught:
+        FisImporter().from_string(text, "mam.fis")
+    listed = str(caught.value).splitlines()
+    assert listed[0] == "mam.fis: 5 constructs flctool cannot import"
+    assert "mam.fis:25: membership function 'hi' is a discretemf" in listed[1]
+    assert "mam.fis:33: output term 'right' is first-order Takagi-Sugeno" in listed[2]
+    assert [line.split(":")[1] for line in listed[3:]] == ["37", "37", "38"]
+
+
 def test_rules_outside_the_grid_are_refused_unless_converting() -> None:
     """A Sugeno system's rules are imported exactly or not at all."""
-    sugeno = (REWRITTEN.replace("Type='mamdani'", "Type='sugeno'")
-              .replace("AndMethod='prod'", "AndMethod='min'").replace("AggMethod='max'",
-                                                                      "AggMethod='sum'")
-              .replace("DefuzzMethod='centroid'", "DefuzzMethod='wtaver'")
-              .replace("'trimf',[-1 -0.5 0]", "'constant',[-0.5]")
-              .replace("'trimf',[-0.5 0 0.5]", "'constant',[0]")
-              .replace("'trapmf',[0 0.5 0.8 1]", "'constant',[0.5]"))
+    sugeno = SUGENO
     with pytest.raises(ExportError, match=r"mam.fis:37: a rule weight of 0.5"):
         FisImporter().from_string(sugeno, "mam.fis")
     with pytest.raises(ExportError, match=r"mam.fis:37: the rule leaves out input 'y'"):
