@@ -92,7 +92,8 @@ def import_controller(
         "--format", "-f", help="fll, fcl or fis (default: from the file's suffix).")] = None,
     mamdani_singletons: Annotated[bool, typer.Option(
         "--mamdani-singletons", help="Replace a Mamdani system's output sets by "
-        "singletons at their centroids, and report the largest error this makes.")] = False,
+        "singletons at their centroids (and its OR, NOT, partial or weighted rules by "
+        "flctool's), and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
     from flctool.export import IMPORTERS
