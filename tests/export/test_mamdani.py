@@ -4,6 +4,7 @@ output the measurement uses is fuzzylite 6's."""
 from __future__ import annotations
 
 import dataclasses
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from flctool.export.fll import FllImporter
 from flctool.export.imported import as_written, build_behaviour
 from flctool.export.mamdani import MamdaniOutput, centroid, mamdani_outputs
 
-from .engines import fuzzylite_outputs
+from .engines import fuzzylite_binary, fuzzylite_outputs
 
 MAMDANI = """\
 [System]
@@ -415,3 +416,24 @@ def test_every_construct_that_keeps_a_file_out_is_reported_at_once() -> None:
     assert all("(fix: " in line for line in listed)
     assert "AndMethod='prod'" in listed[1] and "a rule weight of 0.5" in text
     assert "leaves out input 'y'" in text and "an OR rule" in listed[4]
+
+
+@pytest.mark.slow
+def test_fll_and_fcl_rewrite_and_measure_as_fis_does(tmp_path: Path) -> None:
+    """fuzzylite 6 writes NEGATED as FLL and FCL (`or`, `is not`, `with 0.5`, a left-out
+    input, AlgebraicProduct / AND : PROD); each imports to the same behaviour and states the
+    same difference as the FIS."""
+    source = tmp_path / "neg.fis"
+    source.write_text(NEGATED, encoding="utf-8")
+    results = []
+    for format, importer in (("fis", FisImporter), ("fll", FllImporter), ("fcl", FclImporter)):
+        path = tmp_path / f"neg.{format}"
+        if format != "fis":
+            subprocess.run([fuzzylite_binary(), "-i", str(source), "-if", "fis", "-of", format,
+                            "-o", str(path)], check=True, capture_output=True, timeout=60)
+        converting = importer(mamdani_singletons=True)
+        behaviour = converting.from_file(path)
+        results.append((behaviour.inputs, behaviour.output.commands,
+                        [(r.if_, r.then) for r in behaviour.rules],
+                        converting.report.split(") is ")[-1].split()[0]))
+    assert results[0] == results[1] == results[2]
