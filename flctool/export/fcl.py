@@ -382,7 +382,7 @@ class _FclParser:
                                  set(negated))
                     for antecedent, disjuncts, negated, conclusions, line, text in self.rules
                     for name, term, weight in conclusions if name == output.name],
-                accumulation=None, pending=pending,
+                accumulation=None, pending=pending, merged_commands=[],
                 expand_rules=output.mamdani_terms and self.mamdani_singletons)
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line

@@ -215,7 +215,7 @@ class _FllReader:
                     for antecedent, disjuncts, negated, conclusions, weight, line, text_
                     in self.rules
                     for name, term in conclusions if name == output.name],
-                accumulation=None, pending=pending)
+                accumulation=None, pending=pending, merged_commands=[])
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line
             imported.expand_rules = bool(output.sets) and self.mamdani_singletons

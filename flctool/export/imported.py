@@ -275,6 +275,8 @@ class ImportedController:
     #: Refusals the reader found and put off, so that :func:`build_behaviour` reports them
     #: with the rest (a Mamdani output not being converted, say).
     pending: list[ExportError] = field(default_factory=list)
+    #: The commands :func:`expanded_rules` added (the mean of several), none in the file.
+    merged_commands: list[str] = field(default_factory=list)
 
     def put_off(self, error: ExportError, fallback: _T) -> _T:
         """Keep ``error`` for :func:`build_behaviour` to report with the file's other
@@ -528,8 +530,9 @@ def expanded_rules(imported: ImportedController) -> list[ImportedRule]:
     """The rules with every OR rule and every rule that leaves out an input replaced by the
     full-grid rules (one set of each input) where it fires: for an AND rule, every set of
     each input it leaves out; for an OR rule, every combination in which some condition
-    holds. Each keeps its line. A combination two rules give the same command appears once;
-    two different commands are left for the behaviour's duplicate check to name.
+    holds (NOT: the input's other sets). Each keeps its line. A combination two rules give
+    the same command appears once; one given different commands gets their mean
+    (:func:`_merge_conflicts`).
 
     This is not exact (eq. 2 gives an expanded rule another activation), so it is done only
     for a Mamdani output being converted, whose measured deviation is taken against the
@@ -597,6 +600,7 @@ def _merge_conflicts(imported: ImportedController, rules: list[ImportedRule]
         if name not in values:
             values[name] = math.fsum(values[c] for c in commands) / len(commands)
             imported.commands.append(ImportedCommand(name, values[name], group[0].line))
+            imported.merged_commands.append(name)
         merged.append(ImportedRule(group[0].antecedent, name, group[0].line,
                                    " / ".join(dict.fromkeys(r.text for r in group))))
     return merged
@@ -617,10 +621,9 @@ def as_written(imported: ImportedController) -> dict[str, Any]:
     rules = tuple((tuple((n, t, n in r.negated) for n, t in r.disjuncts or
                          r.antecedent.items()), bool(r.disjuncts), r.command, r.weight)
                   for r in imported.rules)
-    used = {r.command for r in imported.rules}
-    rewritten = any(r.disjuncts or r.negated or set(r.antecedent) != names or r.weight != 1.0
-                    for r in imported.rules) or any(c.name not in used
-                                                    for c in imported.commands)
+    rewritten = bool(imported.merged_commands) or any(
+        r.disjuncts or r.negated or set(r.antecedent) != names or r.weight != 1.0
+        for r in imported.rules)
     product = imported.conjunction is not None and imported.conjunction.product
     return {"rules": rules, "rewritten": rewritten,
             "conjunction": "AlgebraicProduct" if product else "Minimum"}
