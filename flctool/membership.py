@@ -38,6 +38,12 @@ Their formulas are scikit-fuzzy's and fuzzylite's:
 - ``s_shape`` (a, b): 0 up to a, ``2 t * t`` with ``t = (x - a) / (b - a)`` up to the
   midpoint, ``1 - 2 u * u`` with ``u = (x - b) / (b - a)`` below b, then 1; ``z_shape`` is
   its mirror, and ``pi_shape`` (a, b, c, d) is ``s_shape(a, b) * z_shape(c, d)``.
+- ``cosine`` (c, w): ``0.5 * (1 + cos(2 / w * pi * (x - c)))`` from ``c - 0.5 * w`` to
+  ``c + 0.5 * w``, 0 elsewhere (fuzzylite's Cosine; ``math.cos`` is the C library's ``cos``)
+- ``concave`` (i, e): rising (``i < e``) ``(e - i) / (2 * e - i - x)`` below e, then 1;
+  falling (``i > e``) ``(i - e) / (i - 2 * e + x)`` above e, and 1 up to it (fuzzylite's
+  Concave)
+- ``spike`` (c, w): ``exp(-|10 / w * (x - c)|)`` (fuzzylite's Spike)
 
 This module imports numpy only inside :func:`trapezoid` and :func:`memberships`: ``flctool
 infer`` on a small table uses :func:`firing_sets` in a process that never loads numpy.
@@ -144,7 +150,7 @@ def _gauss(x: float, mean: float, sigma: float) -> float:
 
 
 def shape_membership(kind: int, p0: float, p1: float, p2: float, p3: float, x: float) -> float:
-    """The membership of ``x`` in the set of shape code ``kind`` (1-9, the shapes of
+    """The membership of ``x`` in the set of shape code ``kind`` (1-12, the shapes of
     :mod:`flctool.behaviour.shapes` in order) with parameters ``p0..p3`` (the formulas above)."""
     if kind == 1:
         return _gauss(x, p0, p1)
@@ -164,7 +170,24 @@ def shape_membership(kind: int, p0: float, p1: float, p2: float, p3: float, x: f
         return _s_shape(x, p0, p1)
     if kind == 8:
         return _z_shape(x, p0, p1)
-    return _s_shape(x, p0, p1) * _z_shape(x, p2, p3)
+    if kind == 9:
+        return _s_shape(x, p0, p1) * _z_shape(x, p2, p3)
+    if kind == 10:
+        if x < p0 - 0.5 * p1 or x > p0 + 0.5 * p1:
+            return 0.0
+        return 0.5 * (1.0 + math.cos(2.0 / p1 * math.pi * (x - p0)))
+    if kind == 11:
+        return _concave(x, p0, p1)
+    return _exp(-abs(10.0 / p1 * (x - p0)))
+
+
+def _concave(x: float, inflection: float, end: float) -> float:
+    if inflection <= end:
+        if x < end:
+            return (end - inflection) / (2.0 * end - inflection - x)
+    elif x > end:
+        return (inflection - end) / (inflection - 2.0 * end + x)
+    return 1.0
 
 
 def firing_sets(s: float, sets: Sequence[Sequence[float]],

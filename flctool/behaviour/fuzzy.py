@@ -67,7 +67,8 @@ class InputVariable(Section):
         "pc == pd a vertical edge), or a shape {gauss: [mean, sigma]}, {gauss2: [...]}, "
         "{bell: [width, slope, centre]}, {sigmoid: [centre, slope]}, {sigmoid_difference: "
         "[...]}, {sigmoid_product: [...]}, {s_shape: [foot, shoulder]}, {z_shape: "
-        "[shoulder, foot]} or {pi_shape: [...]} (docs/behaviour-files.md)"))
+        "[shoulder, foot]}, {pi_shape: [...]}, {cosine: [centre, width]}, {concave: "
+        "[inflection, end]} or {spike: [centre, width]} (docs/behaviour-files.md)"))
 
 
 class Output(Section):

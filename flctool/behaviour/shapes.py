@@ -1,4 +1,5 @@
-"""The set shapes besides the trapezoid: Gaussian, bell, sigmoids, S, Z and Pi.
+"""The set shapes besides the trapezoid: Gaussian, bell, sigmoids, S, Z, Pi, cosine, concave
+and spike.
 
 A set is a trapezoid quadruple ``[pa, pb, pc, pd]`` (the paper's sets, Sec. II, and the
 default), or one of these shapes written as a one-key mapping, ``near: {gauss: [0.5, 0.1]}``.
@@ -16,7 +17,13 @@ shape                     parameters                              scikit-fuzzy
 ``s_shape``               foot, shoulder                          ``smf``
 ``z_shape``               shoulder, foot                          ``zmf``
 ``pi_shape``              foot1, shoulder1, shoulder2, foot2      ``pimf``
+``cosine``                centre, width                           (fuzzylite's Cosine)
+``concave``               inflection, end                         (fuzzylite's Concave)
+``spike``                 centre, width                           (fuzzylite's Spike)
 ========================  ======================================  =======================
+
+scikit-fuzzy has no cosine, concave or spike: their formulas and parameters are fuzzylite's
+(the tests compare them with fuzzylite 6).
 
 The formulas are coded once in Python, in :mod:`flctool.membership`. Only trapezoids
 can be learned as sets; these shapes are fixed where the file puts them.
@@ -44,6 +51,9 @@ SHAPES: dict[str, tuple[str, ...]] = {
     "s_shape": ("foot", "shoulder"),
     "z_shape": ("shoulder", "foot"),
     "pi_shape": ("foot1", "shoulder1", "shoulder2", "foot2"),
+    "cosine": ("centre", "width"),
+    "concave": ("inflection", "end"),
+    "spike": ("centre", "width"),
 }
 #: The codes of the compiled layout: 0 the trapezoid, then the shapes in SHAPES' order.
 CODES: dict[str, int] = {"trapezoid": 0} | {name: k + 1 for k, name in enumerate(SHAPES)}
@@ -63,6 +73,9 @@ def shape_problem(kind: str, params: tuple[float, ...]) -> str | None:
         if name.startswith("sigma") and name in p and not 2.0 * p[name] * p[name] > 0:
             return (f"the {kind} set's {name} is {p[name]!r}, so small that its square is 0 "
                     "in floating point; give it a sigma above 1e-150")
+    if kind == "concave" and p["inflection"] == p["end"]:
+        return ("the concave set's inflection equals its end (a step, not a curve); put the "
+                "inflection below the end (rising) or above it (falling)")
     if kind == "bell" and not p["slope"] > 0:
         return f"the bell set's slope is {p['slope']!r}; it must be above 0"
     for name in ("slope", "slope1", "slope2"):
@@ -93,6 +106,9 @@ class ShapedSet(Section):
     s_shape: tuple[float, ...] | None = None
     z_shape: tuple[float, ...] | None = None
     pi_shape: tuple[float, ...] | None = None
+    cosine: tuple[float, ...] | None = None
+    concave: tuple[float, ...] | None = None
+    spike: tuple[float, ...] | None = None
 
     @model_validator(mode="after")
     def _one_shape(self) -> Any:

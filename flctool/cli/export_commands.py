@@ -91,8 +91,9 @@ def import_controller(
     format: Annotated[str | None, typer.Option(
         "--format", "-f", help="fll, fcl or fis (default: from the file's suffix).")] = None,
     mamdani_singletons: Annotated[bool, typer.Option(
-        "--mamdani-singletons", help="fis and fll: replace a Mamdani system's output sets by "
-        "singletons at their centroids, and report the largest error this makes.")] = False,
+        "--mamdani-singletons", help="Replace a Mamdani system's output sets by "
+        "singletons at their centroids (and its OR, NOT, partial or weighted rules by "
+        "flctool's), and report the largest error this makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
     from flctool.export import IMPORTERS
@@ -111,9 +112,6 @@ def import_controller(
                                f"suffix of {implied}",
                                hint="name it .yaml, or use 'flctool export' for other formats")
         importer_class = IMPORTERS.get(name)
-        if mamdani_singletons and name not in ("fis", "fll"):
-            raise FlcError("--mamdani-singletons applies to FIS and FLL files only",
-                           hint="leave it out")
         importer = (importer_class(mamdani_singletons=True)  # type: ignore[call-arg]
                     if mamdani_singletons else importer_class())
         behaviours = importer.from_file_all(file)

@@ -145,7 +145,20 @@ def _shaped(kind: int, p0: float, p1: float, p2: float, p3: float, x: float) -> 
         return _s_shape(x, p0, p1)
     if kind == 8:
         return _z_shape(x, p0, p1)
-    return _s_shape(x, p0, p1) * _z_shape(x, p2, p3)
+    if kind == 9:
+        return _s_shape(x, p0, p1) * _z_shape(x, p2, p3)
+    if kind == 10:
+        if x < p0 - 0.5 * p1 or x > p0 + 0.5 * p1:
+            return 0.0
+        return 0.5 * (1.0 + math.cos(2.0 / p1 * math.pi * (x - p0)))
+    if kind == 11:
+        if p0 <= p1:
+            if x < p1:
+                return (p1 - p0) / (2.0 * p1 - p0 - x)
+        elif x > p1:
+            return (p0 - p1) / (p0 - 2.0 * p1 + x)
+        return 1.0
+    return math.exp(-abs(10.0 / p1 * (x - p0)))
 
 
 @_jit

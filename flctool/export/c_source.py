@@ -108,7 +108,7 @@ class CExporter(Exporter):
         lines = ["/*", *(f" * {line}" for line in about), " *",
                  f" * A fuzzy logic controller: {len(behaviour.inputs)} inputs, "
                  f"{behaviour.rule_count} rules, {len(behaviour.output.commands)} commands.",
-                 " * C99, no heap, " + (f"libm's exp{' and pow' if shaped[2] else ''} (link "
+                 " * C99, no heap, " + (f"libm's {' and '.join(shaped[2])} (link "
                                      "with -lm: the sets include "
                                      f"a {shaped[1]})." if shaped else "no libm.")
                  + " The state holds the inputs in this order; a value outside",
@@ -232,19 +232,23 @@ def _wrapped(items: list[str], width: int = 96) -> list[str]:
     return [*lines, line]
 
 
-def _shaped_sets(behaviour: Behaviour) -> tuple[str, str, bool] | None:
-    """The first set of a shape other than the trapezoid (its name and shape), and whether
-    any such set is a bell (which needs pow); None if every set is a trapezoid."""
+def _shaped_sets(behaviour: Behaviour) -> tuple[str, str, list[str]] | None:
+    """The first set of a shape other than the trapezoid (its name and shape), and the libm
+    functions the sets use (exp; pow for a bell, cos for a cosine); None if every set is a
+    trapezoid."""
     found = [(name, value.kind) for v in behaviour.inputs.values()
              for name, value in v.sets.items() if not is_trapezoid(value)]
     if not found:
         return None
-    return found[0][0], found[0][1], any(kind == "bell" for _, kind in found)
+    kinds = {kind for _, kind in found}
+    functions = ["exp", *(["pow"] if "bell" in kinds else []),
+                 *(["cos"] if "cosine" in kinds else [])]
+    return found[0][0], found[0][1], functions
 
 
 def _shape_functions(prefix: str, real: str) -> list[str]:
     """The shapes of flctool.behaviour.shapes, coded as flctool/membership.py codes them
-    (``exp`` and ``pow`` are libm's, as Python's and numba's are)."""
+    (``exp``, ``pow`` and ``cos`` are libm's, as Python's and numba's are)."""
     return f"""\
 static {real} {prefix}sigmoid({real} x, {real} c, {real} a)
 {{
@@ -287,7 +291,8 @@ static {real} {prefix}z_shape({real} x, {real} a, {real} b)
 }}
 
 /* The membership of x in a set of shape `kind` with parameters p: 1 gauss, 2 gauss2, 3 bell,
-   4 sigmoid, 5 sigmoid_difference, 6 sigmoid_product, 7 s_shape, 8 z_shape, 9 pi_shape. */
+   4 sigmoid, 5 sigmoid_difference, 6 sigmoid_product, 7 s_shape, 8 z_shape, 9 pi_shape,
+   10 cosine, 11 concave, 12 spike (fuzzylite's formulas). */
 static {real} {prefix}shaped(int kind, {real} x, const {real} p[4])
 {{
     {real} left, right;
@@ -303,7 +308,18 @@ static {real} {prefix}shaped(int kind, {real} x, const {real} p[4])
     case 6: return {prefix}sigmoid(x, p[0], p[1]) * {prefix}sigmoid(x, p[2], p[3]);
     case 7: return {prefix}s_shape(x, p[0], p[1]);
     case 8: return {prefix}z_shape(x, p[0], p[1]);
-    default: return {prefix}s_shape(x, p[0], p[1]) * {prefix}z_shape(x, p[2], p[3]);
+    case 9: return {prefix}s_shape(x, p[0], p[1]) * {prefix}z_shape(x, p[2], p[3]);
+    case 10:
+        if (x < p[0] - 0.5 * p[1] || x > p[0] + 0.5 * p[1]) return 0.0;
+        return 0.5 * (1.0 + cos(2.0 / p[1] * 3.141592653589793 * (x - p[0])));
+    case 11:
+        if (p[0] <= p[1]) {{
+            if (x < p[1]) return (p[1] - p[0]) / (2.0 * p[1] - p[0] - x);
+        }} else if (x > p[1]) {{
+            return (p[0] - p[1]) / (p[0] - 2.0 * p[1] + x);
+        }}
+        return 1.0;
+    default: return exp(-fabs(10.0 / p[1] * (x - p[0])));
     }}
 }}
 """.splitlines()

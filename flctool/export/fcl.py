@@ -13,14 +13,16 @@ vertical (``pa == pb``) is two points at the same x.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.base import identifier
 from flctool.behaviour.fuzzy import FuzzySet
-from flctool.behaviour.shapes import ShapedSet
+from flctool.behaviour.shapes import ShapedSet, set_row
 from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import (
@@ -30,12 +32,14 @@ from flctool.export.base import (
     sloped_quad,
 )
 from flctool.export.imported import (
+    QUAD0,
     ImportedCommand,
     ImportedController,
     ImportedInput,
     ImportedRule,
     ImportedSet,
     Method,
+    as_written,
     build_behaviour,
     check_unique,
     fuzzylite_set,
@@ -45,6 +49,10 @@ from flctool.export.imported import (
     unsupported,
     zero_order_constant,
 )
+from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, mamdani_report
+
+#: fuzzylite 6's resolution of a Centroid read from FCL (the one FIS and FLL use).
+CENTROID_RESOLUTION = 100
 
 #: The reserved keywords of IEC 61131-7 FCL, and REAL (case does not matter): they cannot
 #: name a variable or a term.
@@ -219,23 +227,105 @@ def tokenize(text: str, file: str) -> list[Token]:
 
 
 class FclImporter(Importer):
-    """Reads the IEC 61131-7 subset that the FclExporter writes (singleton outputs, COGS)."""
+    """Reads the IEC 61131-7 subset that the FclExporter writes (singleton outputs, COGS), one
+    behaviour per output; with ``mamdani_singletons``, also Mamdani outputs (sets defuzzified
+    by COG, see :mod:`flctool.export.mamdani`), and then ``report`` says how far that moved
+    each."""
 
     format = "fcl"
 
+    def __init__(self, mamdani_singletons: bool = False) -> None:
+        self.mamdani_singletons = mamdani_singletons
+        self.report = ""
+
     def parse(self, text: str, file: str) -> Behaviour:
-        return build_behaviour(_FclParser(tokenize(text, file), file).parse())
+        return self.from_string(text, file)
+
+    def parse_all(self, text: str, file: str) -> list[Behaviour]:
+        parser = _FclParser(tokenize(text, file), file, self.mamdani_singletons)
+        controllers = parser.parse_all()
+        behaviours = [build_behaviour(c) for c in controllers]
+        notes = []
+        if len(behaviours) > 1:
+            notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
+                         "named after its output ("
+                         + ", ".join(f"'{b.name}'" for b in behaviours)
+                         + "); each keeps the rules that conclude on its output, which "
+                         "computes it exactly as the file does")
+        for behaviour, output, controller in zip(behaviours, parser.outputs, controllers,
+                                                 strict=True):
+            if output.sets:
+                mamdani = dataclasses.replace(output.mamdani(),
+                                              **as_written(controller))
+                notes.append(f"{file}: output '{output.name}': "
+                             + mamdani_report(behaviour, mamdani))
+        self.report = "\n".join(notes)
+        return behaviours
+
+
+@dataclass
+class _Output:
+    """One VAR_OUTPUT and its DEFUZZIFY block as read."""
+
+    name: str
+    line: int
+    defuzzified: bool = False
+    commands: list[ImportedCommand] = field(default_factory=list)
+    #: Mamdani output sets: name -> (shape code, row), and the line of the first
+    sets: dict[str, tuple[int, tuple[float, float, float, float]]] = field(
+        default_factory=dict)
+    set_line: int = 0
+    set_name: str = ""
+    #: Point-list sets, made trapezoids once the range is known: (name token, points)
+    point_sets: list[tuple[Token, list[tuple[float, float]]]] = field(default_factory=list)
+    method: tuple[str, int] | None = None
+    accumulation: tuple[str, int] | None = None
+    range: tuple[float, float] | None = None
+    implication: str = "Minimum"
+    #: Refusals of this output's terms, reported with the file's others
+    pending: list[ExportError] = field(default_factory=list)
+
+    def mamdani(self) -> MamdaniOutput:
+        return MamdaniOutput({identifier(n): row for n, row in self.sets.items()},
+                             self.resolved_range(), CENTROID_RESOLUTION, self.implication,
+                             "Maximum" if self.accumulation_word() == "MAX" else
+                             "AlgebraicSum")
+
+    def resolved_range(self) -> tuple[float, float]:
+        """The RANGE, or the span of the sets' points (as fuzzylite does without one)."""
+        if self.range is not None:
+            return self.range
+        return span(x for _, points in self.point_sets for x, _ in points)
+
+    @property
+    def mamdani_terms(self) -> bool:
+        """Whether any term is a set (a Mamdani output), not a singleton."""
+        return bool(self.sets or self.point_sets)
+
+    def accumulation_word(self) -> str:
+        """The accumulation, MAX when the file gives none (IEC's and fuzzylite's default)."""
+        return self.accumulation[0] if self.accumulation else "MAX"
 
 
 class _FclParser:
-    def __init__(self, tokens: list[Token], file: str) -> None:
+    def __init__(self, tokens: list[Token], file: str, mamdani_singletons: bool = False
+                 ) -> None:
         self.tokens = tokens
         self.file = file
+        self.mamdani_singletons = mamdani_singletons
         self.at = 0
         self.result = ImportedController(file)
         self.input_names: list[tuple[str, int]] = []
-        self.accu_seen = False
-        self.method: tuple[str, int] | None = None
+        self.outputs: list[_Output] = []
+        #: every rule as read: its antecedent (or an OR rule's conditions), the inputs it
+        #: negates, its conclusions (output, term, weight), line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], set[str],
+                               list[tuple[str, str, float]], int, str]] = []
+        #: ACCU and ACT written in the RULEBLOCK (older IEC drafts and jFuzzyLogic put them
+        #: there): they apply to every output without its own
+        self.block_accumulation: tuple[str, int] | None = None
+        self.implication: tuple[str, int] = ("MIN", 0)
+        self.blocks = 0
 
     # -- token helpers ---------------------------------------------------------------------
     def peek(self) -> Token:
@@ -274,6 +364,40 @@ class _FclParser:
         return self.result.error(token.line, construct, hint)
 
     # -- grammar ---------------------------------------------------------------------------
+    def parse_all(self) -> list[ImportedController]:
+        """One controller per output, each with the rules that conclude on it (outputs are
+        computed independently, so each is exact)."""
+        self.parse()
+        controllers = []
+        for output in self.outputs:
+            pending = [*self.result.pending, *output.pending]
+            try:
+                self.check_output(output)
+            except ExportError as error:  # reported with the rules' refusals
+                pending.append(error)
+            imported = dataclasses.replace(
+                self.result, output_name=output.name, output_line=output.line,
+                output_declared=True, commands=output.commands, rules=[
+                    ImportedRule(dict(antecedent), term, line, text, list(disjuncts), weight,
+                                 set(negated))
+                    for antecedent, disjuncts, negated, conclusions, line, text in self.rules
+                    for name, term, weight in conclusions if name == output.name],
+                accumulation=None, pending=pending, merged_commands=[],
+                expand_rules=output.mamdani_terms and self.mamdani_singletons)
+            if len(self.outputs) > 1:
+                imported.name, imported.name_line = output.name, output.line
+            word = output.accumulation_word()
+            if not output.mamdani_terms and word not in ("NSUM", "SUM"):
+                # NSUM (and jFuzzyLogic's SUM) keep every rule in COGS; MAX, BSUM and ASUM
+                # merge the rules that share a command
+                written = (f"ACCU : {word}" if output.accumulation else
+                           "the default accumulation (ACCU : MAX)")
+                imported.accumulation = Method(
+                    written, output.accumulation[1] if output.accumulation else output.line,
+                    "use ACCU : NSUM" if output.accumulation else "write ACCU : NSUM;")
+            controllers.append(imported)
+        return controllers
+
     def parse(self) -> ImportedController:
         self.expect("FUNCTION_BLOCK")
         if self.peek().kind == "name" and self.peek().word not in KEYWORDS:
@@ -287,7 +411,7 @@ class _FclParser:
             elif token.word == "VAR_OUTPUT":
                 outputs: list[tuple[str, int]] = []
                 self.variables(outputs)
-                self.outputs(outputs)
+                self.outputs += [_Output(name, line) for name, line in outputs]
             elif token.word == "FUZZIFY":
                 fuzzified.add(self.fuzzify())
             elif token.word == "DEFUZZIFY":
@@ -308,15 +432,73 @@ class _FclParser:
 
     def finish(self, fuzzified: set[str]) -> None:
         check_unique(self.file, self.input_names, "input")
+        check_unique(self.file, [(o.name, o.line) for o in self.outputs], "output")
         for name, line in self.input_names:
             if name not in fuzzified:
                 raise unsupported(self.file, line, f"input '{name}' has no FUZZIFY block")
-        if self.method is None:
-            raise unsupported(self.file, self.result.output_line,
-                              "the output has no 'METHOD : COGS'")
-        if not self.accu_seen:
-            self.result.accumulation = Method("the default accumulation (ACCU : MAX)",
-                                              self.result.output_line, "write ACCU : NSUM;")
+        if not self.outputs:
+            raise unsupported(self.file, 1, "the controller has no output variable",
+                              "declare one in VAR_OUTPUT ... END_VAR")
+        for output in self.outputs:
+            if not output.defuzzified:
+                raise unsupported(self.file, output.line,
+                                  f"output '{output.name}' has no DEFUZZIFY block")
+            if output.accumulation is None:
+                output.accumulation = self.block_accumulation
+
+    def check_output(self, output: _Output) -> None:
+        """An output's terms and method fit together: singletons and COGS, or (converting)
+        Mamdani sets and COG, with an accumulation and activation the conversion measures."""
+        if output.method is None:
+            raise unsupported(self.file, output.line, f"the output '{output.name}' has no "
+                              f"'METHOD : {'COG' if output.mamdani_terms else 'COGS'}'",
+                              "write METHOD : COGS; (singletons) or METHOD : COG; (sets)")
+        method, line = output.method
+        if not output.mamdani_terms:
+            if method != "COGS":
+                raise unsupported(self.file, line, f"METHOD : {method}: flctool's output is "
+                                  "the centre of gravity of singletons (eq. 3)",
+                                  "use METHOD : COGS")
+            return
+        if not self.mamdani_singletons:
+            raise unsupported(self.file, output.set_line, f"output term '{output.set_name}' "
+                              "is not a singleton: a Mamdani output set cannot be expressed "
+                              "exactly (flctool's commands are singletons, eq. 3)",
+                              MAMDANI_HINT)
+        if len(output.sets) + len(output.point_sets) != len(output.commands):
+            raise unsupported(self.file, output.set_line, f"output '{output.name}' mixes "
+                              "singletons and sets", "make every term of a Mamdani output a "
+                              "set")
+        if method != "COG":
+            raise unsupported(self.file, line, f"METHOD : {method} of the Mamdani output "
+                              f"'{output.name}': the conversion measures against the centre "
+                              "of gravity", "use METHOD : COG")
+        if output.accumulation_word() not in ("MAX", "ASUM"):
+            word, at = output.accumulation or ("MAX", output.line)
+            raise unsupported(self.file, at, f"ACCU : {word} of the Mamdani output "
+                              f"'{output.name}': the conversion measures ACCU : MAX or ASUM",
+                              "use ACCU : MAX")
+        implication, at = self.implication
+        if implication not in ("MIN", "PROD"):
+            raise unsupported(self.file, at, f"ACT : {implication}: the conversion of a "
+                              "Mamdani output measures ACT : MIN or PROD", "use ACT : MIN")
+        output.implication = "Minimum" if implication == "MIN" else "AlgebraicProduct"
+        lo, hi = output.resolved_range()
+        if not lo < hi:  # the centroid integrates over the range
+            raise unsupported(self.file, output.line, f"the range [{lo!r}, {hi!r}] of the "
+                              f"Mamdani output '{output.name}' is not low then high",
+                              "write RANGE := (low .. high); with low below high")
+        for term, points in output.point_sets:
+            quad = quad_from_points(points, (lo, hi), (self.file, term.line), term.text)
+            output.sets[term.text] = (0, quad)
+        for name, (code, row) in output.sets.items():
+            if code == 0:  # a shoulder's infinite foot: the same membership inside the range
+                pa, pb, pc, pd = (lo if v == -math.inf else hi if v == math.inf else v
+                                  for v in row)
+                output.sets[name] = (0, (pa, pb, pc, pd))
+        mamdani = output.mamdani()
+        for command in output.commands:
+            command.value = mamdani.singleton(identifier(command.name))
 
     def variables(self, into: list[tuple[str, int]]) -> None:
         while self.peek().word != "END_VAR":
@@ -329,10 +511,6 @@ class _FclParser:
             self.expect(";")
             into.append((name.text, name.line))
         self.take()
-
-    def outputs(self, outputs: list[tuple[str, int]]) -> None:
-        for name, line in outputs:
-            self.result.declare_output(name, line)
 
     def fuzzify(self) -> str:
         token = self.name()
@@ -347,7 +525,15 @@ class _FclParser:
                 term = self.name()
                 self.expect(":=")
                 if self.peek().kind == "name":  # fuzzylite's syntax: Trapezoid a b c d
-                    variable.sets.append(self.fuzzylite_term(term))
+                    start = self.at
+                    try:
+                        variable.sets.append(self.fuzzylite_term(term))
+                    except ExportError as error:  # reported with the file's other refusals
+                        self.at = start
+                        while self.peek().word != ";":  # the term's tokens, to go on reading
+                            self.take()
+                        variable.sets.append(self.result.put_off(
+                            error, ImportedSet(term.text, QUAD0, term.line)))
                 else:
                     terms.append((term, self.points(term)))
                 self.expect(";")
@@ -363,10 +549,8 @@ class _FclParser:
             variable.sets.append(ImportedSet(term.text, quad, term.line))
         return token.text
 
-    def fuzzylite_term(self, term: Token) -> ImportedSet:
-        """fuzzylite's term syntax, ``Trapezoid a b c d`` or ``Gaussian m s`` (see
-        fuzzylite_set), or jFuzzyLogic's (``trape a b c d``, ``gauss m s``), to ';'."""
-        kind = self.take()
+    def term_values(self, term: Token, kind: Token) -> list[float]:
+        """A fuzzylite or jFuzzyLogic term's numbers, up to ';'."""
         values: list[float] = []
         while self.peek().word != ";":
             token = self.take()
@@ -379,19 +563,49 @@ class _FclParser:
                                 f"'{term.text}'", "write the term's numbers, then ';'")
             if len(values) > 5:
                 break
+        return values
+
+    def fuzzylite_term(self, term: Token, kind: Token | None = None) -> ImportedSet:
+        """fuzzylite's term syntax, ``Trapezoid a b c d`` or ``Gaussian m s`` (see
+        fuzzylite_set), or jFuzzyLogic's (``trape a b c d``, ``gauss m s``), to ';'."""
+        kind = kind or self.take()
+        values = self.term_values(term, kind)
         name, values = shapes.from_jfuzzylogic(kind.text, values)  # gauss 0.2 0.1, ...
         return fuzzylite_set(term.text, name, values, self.file, kind.line)
 
-    def fuzzylite_output(self, term: Token) -> float:
-        """fuzzylite's ``Constant c`` or zero-order ``Linear 0 ... 0 c`` output term."""
-        kind = self.take()
-        numbers: list[float] = []
-        while self.peek().kind == "number" and len(numbers) <= len(self.input_names):
-            numbers.append(self.number())
-        if self.peek().word != ";":
-            numbers = []  # not numbers only: refused below as not a constant
-        return zero_order_constant(kind.text, numbers, len(self.input_names), self.file,
-                                   kind.line, term.text)
+    def output_term(self, term: Token, output: _Output) -> float:
+        """An output term: a singleton (``c``, fuzzylite's ``Constant c`` or zero-order
+        ``Linear 0 ... 0 c``), or a Mamdani set (points, or a fuzzylite or jFuzzyLogic term)
+        whose singleton :meth:`check_output` gives when converting."""
+        if self.peek().kind == "number":
+            return self.number()
+        if self.peek().kind == "name":
+            kind = self.take()
+            if kind.word in ("CONSTANT", "LINEAR"):
+                numbers: list[float] = []
+                while self.peek().kind == "number" and len(numbers) <= len(self.input_names):
+                    numbers.append(self.number())
+                if self.peek().word != ";":
+                    numbers = []  # not numbers only: refused below as not a constant
+                try:
+                    return zero_order_constant(kind.text, numbers, len(self.input_names),
+                                               self.file, kind.line, term.text)
+                except ExportError as error:  # reported with the output's other refusals
+                    while self.peek().word != ";":
+                        self.take()
+                    output.pending.append(error)
+                    return 0.0
+            item = self.fuzzylite_term(term, kind)
+            output.sets[term.text] = set_row(item.shape_value())
+        elif self.peek().word == "(":
+            output.point_sets.append((term, self.points(term)))
+        else:
+            found = self.peek()
+            raise self.fail(found, f"output term '{term.text}' is '{found.text} ...': "
+                            "neither a singleton nor a set", "write TERM name := value;")
+        if not output.set_line:
+            output.set_line, output.set_name = term.line, term.text
+        return 0.0  # the singleton, once the range is known (check_output)
 
     def points(self, term: Token) -> list[tuple[float, float]]:
         points = []
@@ -421,36 +635,31 @@ class _FclParser:
 
     def defuzzify(self) -> None:
         token = self.name()
-        if token.text != self.result.output_name:
-            raise self.fail(token, f"DEFUZZIFY of '{token.text}', which is not the VAR_OUTPUT")
-        self.result.output_line = token.line
+        output = next((o for o in self.outputs if o.name == token.text), None)
+        if output is None:
+            raise self.fail(token, f"DEFUZZIFY of '{token.text}', which is not a VAR_OUTPUT")
+        if output.defuzzified:
+            raise self.fail(token, f"a second DEFUZZIFY block of '{token.text}'",
+                            "merge them into one")
+        output.defuzzified = True
         while self.peek().word != "END_DEFUZZIFY":
             key = self.take()
             if key.word == "TERM":
                 term = self.name()
                 self.expect(":=")
-                if self.peek().kind == "name":  # fuzzylite's syntax: Constant c, Linear ...
-                    value = self.fuzzylite_output(term)
-                elif self.peek().kind != "number":
-                    raise self.fail(term, f"output term '{term.text}' is not a singleton: "
-                                    "a Mamdani output set cannot be expressed (flctool's "
-                                    "commands are singletons)", "write TERM name := value;")
-                else:
-                    value = self.number()
+                value = self.output_term(term, output)
                 self.expect(";")
-                self.result.commands.append(ImportedCommand(term.text, value, term.line))
+                output.commands.append(ImportedCommand(term.text, value, term.line))
             elif key.word == "METHOD":
                 self.expect(":")
                 method = self.take()
-                if method.word != "COGS":
-                    raise self.fail(method, f"METHOD : {method.text}: flctool's output is the "
-                                    "centre of gravity of singletons (eq. 3)",
-                                    "use METHOD : COGS")
-                self.method = (method.word, method.line)
+                output.method = (method.word, method.line)
                 self.expect(";")
             elif key.word == "ACCU":
-                self.accumulation()
-            elif key.word in ("DEFAULT", "RANGE"):
+                output.accumulation = self.accumulation()
+            elif key.word == "RANGE":
+                output.range = self.range_()
+            elif key.word == "DEFAULT":
                 # Never used: every state fires a rule, and COGS lies between the singletons.
                 while self.take().word != ";":
                     pass
@@ -458,17 +667,15 @@ class _FclParser:
                 raise self.fail(key, f"'{key.text}' in DEFUZZIFY {token.text}")
         self.take()
 
-    def accumulation(self) -> None:
+    def accumulation(self) -> tuple[str, int]:
         self.expect(":")
         method = self.take()
-        self.accu_seen = True
-        # NSUM (and jFuzzyLogic's SUM) keep every rule in COGS; MAX, BSUM and ASUM merge rules
-        self.result.accumulation = (None if method.word in ("NSUM", "SUM") else Method(
-            f"ACCU : {method.text}", method.line, "use ACCU : NSUM"))
         self.expect(";")
+        return method.word, method.line
 
     def ruleblock(self, start: Token) -> None:
-        if self.result.rules:
+        self.blocks += 1
+        if self.blocks > 1:
             raise self.fail(start, "a second RULEBLOCK", "put every rule in one block")
         if self.peek().kind == "name" and self.peek().word not in KEYWORDS:
             self.take()
@@ -478,15 +685,22 @@ class _FclParser:
                 self.expect(":")
                 method = self.take()
                 self.result.conjunction = (None if method.word == "MIN" else Method(
-                    f"AND : {method.text}", method.line, "use AND : MIN"))
+                    f"AND : {method.text}", method.line, "use AND : MIN",
+                    product=method.word == "PROD"))
                 self.expect(";")
-            elif key.word in ("OR", "ACT"):
-                # OR rules are refused one by one; activation does not change a singleton.
+            elif key.word == "OR":  # how OR rules fire (converted Mamdani outputs only)
                 self.expect(":")
-                self.take()
+                method = self.take()
+                self.result.disjunction = (None if method.word == "MAX" else Method(
+                    f"OR : {method.text}", method.line, "use OR : MAX"))
+                self.expect(";")
+            elif key.word == "ACT":  # a singleton's activation does not change it
+                self.expect(":")
+                method = self.take()
+                self.implication = (method.word, method.line)
                 self.expect(";")
             elif key.word == "ACCU":
-                self.accumulation()
+                self.block_accumulation = self.accumulation()
             elif key.word == "RULE":
                 self.rule(key)
             else:
@@ -498,41 +712,62 @@ class _FclParser:
         self.take()  # the rule's number or name
         self.expect(":")
         self.expect("IF")
-        antecedent: dict[str, str] = {}
+        conditions: list[tuple[Token, str, bool]] = []
+        joints: set[str] = set()
         while True:
-            name, term = self.proposition()
-            if name.text in antecedent:
-                raise self.fail(name, f"the rule names input '{name.text}' twice")
-            antecedent[name.text] = term
+            conditions.append(self.proposition())
             joint = self.take()
             if joint.word == "THEN":
                 break
-            if joint.word == "OR":
-                raise self.fail(joint, "an OR rule: flctool's rules are one AND chain (eq. 1)")
-            if joint.word != "AND":
+            if joint.word not in ("AND", "OR"):
                 raise self.fail(joint, f"'{joint.text}' in a rule's condition")
-        output, command = self.proposition()
-        if output.text != self.result.output_name:
-            raise self.fail(output, f"the rule concludes on '{output.text}', not on the "
-                            f"output '{self.result.output_name}'")
-        end = self.take()
-        if end.word == "WITH":
-            weight = self.number()
-            if weight != 1.0:
-                raise self.fail(end, f"a rule weight of {weight!r}: flctool's rules all weigh 1")
+            joints.add(joint.word)
+            if len(joints) > 1:
+                raise self.fail(joint, "a rule mixing AND and OR", "write one AND chain")
+        antecedent: dict[str, str] = {}
+        disjuncts: list[tuple[str, str]] = []
+        # OR and NOT are refused unless a Mamdani output is converted (imported.py)
+        negated = {name.text for name, _, negation in conditions if negation}
+        named = [name.text for name, _, _ in conditions]
+        if any(named.count(n) > 1 for n in negated):
+            raise self.fail(start, "NOT on an input the rule names more than once",
+                            "write the sets meant instead")
+        if "OR" in joints:
+            disjuncts = [(name.text, term) for name, term, _ in conditions]
+        for name, term, _ in [] if disjuncts else conditions:
+            if name.text in antecedent:
+                raise self.fail(name, f"the rule names input '{name.text}' twice")
+            antecedent[name.text] = term
+        conclusions: list[tuple[str, str, float]] = []
+        names = [o.name for o in self.outputs]
+        while True:
+            output, command, negation = self.proposition()
+            if negation:
+                raise self.fail(output, "NOT in a rule's conclusion", "conclude on a term")
+            if output.text not in names:
+                raise self.fail(output, f"the rule concludes on '{output.text}', which is not "
+                                f"an output ({', '.join(names)})")
+            if output.text in [name for name, _, _ in conclusions]:
+                raise self.fail(output, f"the rule concludes on '{output.text}' twice")
             end = self.take()
-        if end.word == ",":
-            raise self.fail(end, "a rule with several conclusions", "split it into rules")
+            weight = 1.0  # another is refused unless a Mamdani output is converted
+            if end.word == "WITH":
+                weight = self.number()
+                end = self.take()
+            conclusions.append((output.text, command, weight))
+            if end.word not in (",", "AND"):  # IEC separates conclusions by ',', fuzzylite
+                break                         # by 'and'
         if end.word in ("RULE", "END_RULEBLOCK"):  # fuzzylite ends rules at the line's end
             self.at -= 1
         elif end.word != ";":
             raise self.fail(end, f"'{end.text}' where the rule should end with ';'",
                             "end the rule with ';'")
         written = [t.text for t in self.tokens[first:self.at] if t.text != ";"]
-        self.result.rules.append(ImportedRule(antecedent, command, start.line,
-                                              " ".join(written)))
+        self.rules.append((antecedent, disjuncts, negated, conclusions, start.line,
+                           " ".join(written)))
 
-    def proposition(self) -> tuple[Token, str]:
+    def proposition(self) -> tuple[Token, str, bool]:
+        """``variable IS [NOT] term``: the variable, the term and whether it is negated."""
         first = self.take()
         if first.word == "(":
             raise self.fail(first, "a rule with parentheses", "write one AND chain")
@@ -540,8 +775,9 @@ class _FclParser:
             raise self.fail(first, f"'{first.text}' where a variable name should be")
         self.expect("IS")
         term = self.take()
-        if term.word == "NOT":
-            raise self.fail(term, "NOT in a rule: flctool's rules use plain terms")
+        negation = term.word == "NOT"
+        if negation:
+            term = self.take()
         if term.kind != "name":
             raise self.fail(term, f"'{term.text}' where a term name should be")
         following = self.peek()
@@ -549,5 +785,4 @@ class _FclParser:
                                                                  "RULE", "END_RULEBLOCK"):
             raise self.fail(term, f"the hedge '{term.text}' before '{following.text}': "
                             "flctool's rules use plain terms")
-        return first, term.text
-
+        return first, term.text, negation

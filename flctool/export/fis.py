@@ -12,20 +12,24 @@ MATLAB does not clip inputs to their range: clip states before evaluating to mat
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import re
 
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.shapes import ShapedSet, set_row
+from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, number, sloped_quad
 from flctool.export.imported import (
+    QUAD0,
     ImportedCommand,
     ImportedController,
     ImportedInput,
     ImportedRule,
     ImportedSet,
     Method,
+    as_written,
     build_behaviour,
     excerpt,
     fuzzylite_quad,
@@ -122,8 +126,10 @@ class FisImporter(Importer):
             if outputs > 1:  # named after its output
                 behaviour = behaviour.model_copy(update={"name": behaviour.output.name})
             if reader.output_sets:
+                mamdani = dataclasses.replace(reader.mamdani_output(),
+                                              **as_written(reader.result))
                 notes.append(f"{file}: output '{behaviour.output.name}': "
-                             f"{mamdani_report(behaviour, reader.mamdani_output())}")
+                             f"{mamdani_report(behaviour, mamdani)}")
             behaviours.append(behaviour)
         if outputs > 1:
             notes.insert(0, f"{file}: {outputs} outputs, imported as one behaviour each, named "
@@ -225,6 +231,11 @@ class _FisReader:
                 self.entry(key, value.strip(), line_number)
         self.check_system()
         self.check_counts()
+        self.result.expand_rules = bool(self.output_sets)  # a Mamdani output, converting
+        disjunction, at = self.system.get("OrMethod", ("max", 1))
+        if disjunction.lower() != "max":
+            self.result.disjunction = Method(f"OrMethod='{disjunction}'", at,
+                                             "use OrMethod='max'")
         for line, line_number in self.rule_lines:
             self.result.rules.append(self.rule(line, line_number))
         self.methods()
@@ -300,10 +311,12 @@ class _FisReader:
             if found is not None:
                 variable.sets.append(shaped_set(name, found[0], found[1], self.file, line))
                 return
-            if kind not in arity:
+            if kind not in arity:  # reported with the file's other refusals
                 known = ", ".join([*arity, *(n for n, _ in shapes.MATLAB.values())])
-                raise self.fail(line, f"membership function '{name}' is a {kind}, which "
-                                "flctool's sets do not include", f"use one of {known}")
+                variable.sets.append(self.result.put_off(self.fail(
+                    line, f"membership function '{name}' is a {kind}, which flctool's sets "
+                    "do not include", f"use one of {known}"), ImportedSet(name, QUAD0, line)))
+                return
             if len(params) != arity[kind]:
                 raise self.fail(line, f"a {kind} takes {arity[kind]} parameters",
                                 f"give it {arity[kind]} numbers")
@@ -338,11 +351,15 @@ class _FisReader:
         elif key.startswith("MF"):
             self.mf_key(key, len(self.result.commands), line)
             name, kind, params = self.mf(value, line)
-            if kind in ("trimf", "trapmf") or shapes.read(shapes.MATLAB, kind, params):
+            if kind in ("trimf", "trapmf", "rampmf") or shapes.read(shapes.MATLAB, kind,
+                                                                     params):
                 constant = self.mamdani_set(name, kind, params, line)
             else:
-                constant = zero_order_constant(kind, params, len(self.result.inputs),
-                                               self.file, line, name)
+                try:  # a refusal is reported with the file's others
+                    constant = zero_order_constant(kind, params, len(self.result.inputs),
+                                                   self.file, line, name)
+                except ExportError as error:
+                    constant = self.result.put_off(error, 0.0)
             self.result.commands.append(ImportedCommand(name, constant, line))
         elif key == "NumMFs":
             self.output_mfs = (self.count(value, line, key), line)
@@ -368,12 +385,20 @@ class _FisReader:
     def mamdani_set(self, name: str, kind: str, params: list[float], line: int) -> float:
         """A Mamdani output set, refused unless converting: then its centroid."""
         if not self.mamdani_singletons:
+            if self.mamdani:
+                return 0.0  # the Type='mamdani' refusal names the system (check_system)
             raise self.fail(line, f"output term '{name}' is a {kind}, a Mamdani output set: "
                             "flctool's commands are singletons", MAMDANI_HINT)
         found = shapes.read(shapes.MATLAB, kind, params)
         if found is not None:
             row = set_row(shaped_set(name, found[0], found[1], self.file, line).shape_value())
             self.output_sets[name] = row
+            return 0.0  # the centroid, once the output range is known (mamdani_output)
+        if kind == "rampmf":  # fuzzylite's shoulder, to the output range's end
+            if len(params) != 2:
+                raise self.fail(line, "a rampmf takes 2 parameters", "give it start and end")
+            ramp = fuzzylite_quad("Ramp", params, self.file, line)
+            self.output_sets[name] = (0, ramp)
             return 0.0  # the centroid, once the output range is known (mamdani_output)
         n = 3 if kind == "trimf" else 4
         if len(params) != n or any(b < a for a, b in itertools.pairwise(params)):
@@ -388,9 +413,13 @@ class _FisReader:
         """The Mamdani output as read (its sets under their behaviour-file names)."""
         implication = {"min": "Minimum", "prod": "AlgebraicProduct"}
         aggregation = {"max": "Maximum", "probor": "AlgebraicSum"}
+        lo, hi = self.output_range
+        # a shoulder's infinite foot (rampmf): the centroid integrates over the range only
+        sets = {identifier(name): (code, row) if code else (0, (
+            max(row[0], lo), max(row[1], lo), min(row[2], hi), min(row[3], hi)))
+            for name, (code, row) in self.output_sets.items()}
         return MamdaniOutput(
-            {identifier(name): row for name, row in self.output_sets.items()},
-            self.output_range, CENTROID_RESOLUTION,
+            sets, self.output_range, CENTROID_RESOLUTION,
             implication[self.system.get("ImpMethod", ("min", 1))[0].lower()],
             aggregation[self.system.get("AggMethod", ("max", 1))[0].lower()])
 
@@ -407,10 +436,20 @@ class _FisReader:
         return [parse_number(p, self.file, line, what)
                 for p in re.split(r"[\s,]+", inner[1:-1].strip()) if p]
 
+    @property
+    def mamdani(self) -> bool:
+        return self.system.get("Type", ("", 1))[0].lower() == "mamdani"
+
     def check_system(self) -> None:
         kind, line = self.system.get("Type", ("", 1))
         if kind.lower() == "mamdani" and self.mamdani_singletons:
             self.check_mamdani(line)
+            return
+        if kind.lower() == "mamdani":  # reported with the rules' refusals
+            self.result.pending.append(self.fail(
+                line, f"Type='{kind}': flctool reads Sugeno systems with constant outputs; "
+                "Mamdani output sets that are not singletons cannot be expressed exactly",
+                MAMDANI_HINT))
             return
         if kind.lower() != "sugeno":
             raise self.fail(line, f"Type='{kind}': flctool reads Sugeno systems with constant "
@@ -467,9 +506,9 @@ class _FisReader:
         method, line = self.system.get("AndMethod", ("min", 1))
         if method != "min":
             self.result.conjunction = Method(f"AndMethod='{method}'", line,
-                                             "use AndMethod='min'")
+                                             "use AndMethod='min'", product=method == "prod")
         method, line = self.system.get("AggMethod", ("sum", 1))
-        if method != "sum" and not self.output_sets:  # Mamdani: part of what is measured
+        if method != "sum" and not self.mamdani:  # Mamdani: part of what is measured
             self.result.accumulation = Method(f"AggMethod='{method}'", line,
                                               "use AggMethod='sum'")
 
@@ -492,32 +531,32 @@ class _FisReader:
 
     def rule(self, text: str, line: int) -> ImportedRule:
         sets, outputs, weight_text, connection = self.split_rule(text, line)
+        # a weight other than 1 is refused unless a Mamdani output is converted (imported.py)
         weight = parse_number(weight_text.strip(), self.file, line, "rule weight")
-        if weight != 1.0:
-            raise self.fail(line, f"a rule weight of {excerpt(weight_text.strip())}: "
-                            "flctool's rules all weigh 1")
-        if connection != "1" and len(sets) > 1:
-            raise self.fail(line, "an OR rule (connection 2): flctool's rules are one AND chain "
-                            "(eq. 1)")
         if len(sets) != len(self.result.inputs) or len(outputs) != 1:
             raise self.fail(line, f"the rule has {len(sets)} input and {len(outputs)} output "
                             f"indices; the system has {len(self.result.inputs)} inputs and 1 "
                             "output")
         antecedent: dict[str, str] = {}
+        negated = set()  # NOT (a negative index): refused unless converting (imported.py)
         for variable, index in zip(self.result.inputs, sets, strict=True):
             k = self.index(index, line, f"input '{variable.name}'")
             if k == 0:  # an input left out: build_behaviour refuses it, as in every format
                 continue
             if k < 0:
-                raise self.fail(line, f"NOT (a negative index) on input '{variable.name}'")
-            if k > len(variable.sets):
-                raise self.fail(line, f"input '{variable.name}' has no MF{k}")
-            antecedent[variable.name] = variable.sets[k - 1].name
+                negated.add(variable.name)
+            if abs(k) > len(variable.sets):
+                raise self.fail(line, f"input '{variable.name}' has no MF{abs(k)}")
+            antecedent[variable.name] = variable.sets[abs(k) - 1].name
         k = self.index(outputs[0], line, "the output")
         if not 1 <= k <= len(self.result.commands):
             raise self.fail(line, f"the output has no MF{k}" if k > 0 else
                             "the rule gives no (or a negated) output MF")
-        return ImportedRule(antecedent, self.result.commands[k - 1].name, line, text)
+        command = self.result.commands[k - 1].name
+        if connection != "1" and len(antecedent) > 1:  # OR: imported.py refuses it unless
+            return ImportedRule({}, command, line, text, list(antecedent.items()),  # converting
+                                weight, negated)
+        return ImportedRule(antecedent, command, line, text, weight=weight, negated=negated)
 
     def index(self, text: str, line: int, what: str) -> int:
         if len(text) > MAX_DIGITS + 3:

@@ -25,11 +25,14 @@ from flctool.errors import ExportError
 from flctool.export import shapes
 from flctool.export.base import Exporter, Importer, header_lines, number
 from flctool.export.imported import (
+    QUAD0,
     ImportedCommand,
     ImportedController,
     ImportedInput,
     ImportedRule,
+    ImportedSet,
     Method,
+    as_written,
     build_behaviour,
     excerpt,
     fuzzylite_set,
@@ -138,10 +141,13 @@ class FllImporter(Importer):
                          + ", ".join(f"'{b.name}'" for b in behaviours)
                          + "); each keeps the rules that conclude on its output, which "
                          "computes it exactly as the file does")
-        for behaviour, output in zip(behaviours, reader.outputs, strict=True):
+        for behaviour, output, controller in zip(behaviours, reader.outputs, controllers,
+                                                 strict=True):
             if output.sets:
+                mamdani = dataclasses.replace(output.mamdani(),
+                                              **as_written(controller))
                 notes.append(f"{file}: output '{output.name}': "
-                             + mamdani_report(behaviour, output.mamdani()))
+                             + mamdani_report(behaviour, mamdani))
         self.report = "\n".join(notes)
         return behaviours
 
@@ -163,6 +169,8 @@ class _Output:
         default_factory=dict)
     set_line: int = 0
     implication: str = "Minimum"
+    #: Refusals of this output's terms, reported with the file's others
+    pending: list[ExportError] = field(default_factory=list)
 
     def mamdani(self) -> MamdaniOutput:
         return MamdaniOutput({identifier(n): row for n, row in self.sets.items()}, self.range,
@@ -180,10 +188,13 @@ class _FllReader:
         self.blocks = 0
         # fuzzylite's default conjunction is none, which cannot combine two memberships
         self.result.conjunction = Method("conjunction none", 1, "use conjunction: Minimum")
+        self.result.disjunction = Method("disjunction none", 1, "use disjunction: Maximum")
         self.current: ImportedInput | None = None
         self.outputs: list[_Output] = []
-        #: every rule as read: its antecedent, its conclusions (output, term), line, text
-        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], int, str]] = []
+        #: every rule as read: its antecedent (or an OR rule's conditions), the inputs it
+        #: negates, its conclusions (output, term), weight, line, text
+        self.rules: list[tuple[dict[str, str], list[tuple[str, str]], set[str],
+                               list[tuple[str, str]], float, int, str]] = []
         self.implication = ("none", 0)
 
     def read_all(self, text: str) -> list[ImportedController]:
@@ -191,16 +202,23 @@ class _FllReader:
         self.read(text)
         controllers = []
         for output in self.outputs:
-            self.check_output(output)
+            pending = [*self.result.pending, *output.pending]
+            try:
+                self.check_output(output)
+            except ExportError as error:  # reported with the rules' refusals
+                pending.append(error)
             imported = dataclasses.replace(
                 self.result, output_name=output.name, output_line=output.line,
                 output_declared=True, commands=output.commands, rules=[
-                    ImportedRule(antecedent, term, line, text_)
-                    for antecedent, conclusions, line, text_ in self.rules
+                    ImportedRule(dict(antecedent), term, line, text_, list(disjuncts), weight,
+                                 set(negated))
+                    for antecedent, disjuncts, negated, conclusions, weight, line, text_
+                    in self.rules
                     for name, term in conclusions if name == output.name],
-                accumulation=None)
+                accumulation=None, pending=pending, merged_commands=[])
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line
+            imported.expand_rules = bool(output.sets) and self.mamdani_singletons
             if not output.sets and output.aggregation[0].lower() != "none":
                 imported.accumulation = Method(f"aggregation {output.aggregation[0]}",
                                                output.aggregation[1], "use aggregation: none")
@@ -325,7 +343,11 @@ class _FllReader:
         elif key == "term":
             name, kind, params = self.term(value, line)
             values = [self.point(p, line, kind) for p in params]
-            self.current.sets.append(fuzzylite_set(name, kind, values, self.file, line))
+            try:
+                item = fuzzylite_set(name, kind, values, self.file, line)
+            except ExportError as error:  # reported with the file's other refusals
+                item = self.result.put_off(error, ImportedSet(name, QUAD0, line))
+            self.current.sets.append(item)
         else:
             raise self.fail(line, f"'{key}' in an InputVariable")
 
@@ -351,8 +373,12 @@ class _FllReader:
             name, kind, params = self.term(value, line)
             if kind in ("Constant", "Linear"):
                 numbers = [parse_number(p, self.file, line, f"term '{name}'") for p in params]
-                constant = zero_order_constant(kind, numbers, len(self.result.inputs),
-                                               self.file, line, name)
+                try:
+                    constant = zero_order_constant(kind, numbers, len(self.result.inputs),
+                                                   self.file, line, name)
+                except ExportError as error:  # reported with the output's other refusals
+                    output.pending.append(error)
+                    constant = 0.0
             else:  # a Mamdani output set: a singleton at its centroid, if converting
                 values = [self.point(p, line, kind) for p in params]
                 item = fuzzylite_set(name, kind, values, self.file, line)
@@ -385,11 +411,16 @@ class _FllReader:
         if key == "implication":
             self.implication = (value, line)
             return
-        if self.common_entry(key, value, line) or key == "disjunction":
-            return  # OR rules are refused one by one
+        if key == "disjunction":  # how an OR rule (converted Mamdani outputs only) fires
+            self.result.disjunction = (None if value == "Maximum" else Method(
+                f"disjunction {value}", line, "use disjunction: Maximum"))
+            return
+        if self.common_entry(key, value, line):
+            return
         if key == "conjunction":
             self.result.conjunction = (None if value == "Minimum" else Method(
-                f"conjunction {value}", line, "use conjunction: Minimum"))
+                f"conjunction {value}", line, "use conjunction: Minimum",
+                product=value == "AlgebraicProduct"))
         elif key == "activation":
             if value != "General":
                 raise self.fail(line, f"activation {value}: flctool fires every rule",
@@ -431,20 +462,28 @@ class _FllReader:
         condition, conclusion = words[1:cut], words[cut + 1:]
         if "(" in text or ")" in text:
             raise self.fail(line, "a rule with parentheses", "write one 'and' chain")
-        if "or" in condition:
-            raise self.fail(line, "an 'or' rule: flctool's rules are one AND chain (eq. 1)")
+        if "or" in condition and "and" in condition:
+            raise self.fail(line, "a rule mixing 'and' and 'or'", "write one 'and' chain")
         antecedent: dict[str, str] = {}
-        for clause in _split(condition, "and"):
-            name, term = self.proposition(clause, line, "condition")
+        disjuncts: list[tuple[str, str]] = []
+        # OR and NOT are refused unless a Mamdani output is converted (imported.py)
+        conditions = [self.condition(c, line) for c in
+                      _split(condition, "or" if "or" in condition else "and")]
+        negated = {name for name, _, negation in conditions if negation}
+        named = [name for name, _, _ in conditions]
+        if any(named.count(n) > 1 for n in negated):
+            raise self.fail(line, "'not' on an input the rule names more than once",
+                            "write the sets meant instead")
+        if "or" in condition:
+            disjuncts = [(name, term) for name, term, _ in conditions]
+        for name, term, _ in [] if disjuncts else conditions:
             if name in antecedent:
                 raise self.fail(line, f"the rule names input '{name}' twice")
             antecedent[name] = term
+        weight = 1.0  # another is refused unless a Mamdani output is converted (imported.py)
         if "with" in conclusion:
             at = conclusion.index("with")
             weight = parse_number(" ".join(conclusion[at + 1:]), self.file, line, "weight")
-            if weight != 1.0:
-                raise self.fail(line, f"a rule weight of {conclusion[at + 1]}: flctool's "
-                                "rules all weigh 1")
             conclusion = conclusion[:at]
         conclusions: list[tuple[str, str]] = []
         names = [o.name for o in self.outputs]
@@ -456,7 +495,15 @@ class _FllReader:
             if output in [name for name, _ in conclusions]:
                 raise self.fail(line, f"the rule concludes on '{output}' twice")
             conclusions.append((output, command))
-        self.rules.append((antecedent, conclusions, line, text.strip()))
+        self.rules.append((antecedent, disjuncts, negated, conclusions, weight, line,
+                           text.strip()))
+
+    def condition(self, words: list[str], line: int) -> tuple[str, str, bool]:
+        """``variable is [not] term``: the variable, the term and whether it is negated."""
+        if len(words) == 4 and words[1] == "is" and words[2] == "not":
+            return words[0], words[3], True
+        name, term = self.proposition(words, line, "condition")
+        return name, term, False
 
     def proposition(self, words: list[str], line: int, part: str) -> tuple[str, str]:
         if len(words) == 3 and words[1] == "is":

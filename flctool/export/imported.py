@@ -14,7 +14,7 @@ import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 from flctool.behaviour import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
 from flctool.behaviour.shapes import ShapedSet, shape_problem, shaped
@@ -23,6 +23,7 @@ from flctool.errors import ExportError, PathPart
 from flctool.export import shapes
 
 Quad = tuple[float, float, float, float]
+_T = TypeVar("_T")
 
 
 #: What each format's importer reads, for refusals that have no more specific fix.
@@ -35,6 +36,41 @@ SUBSET = {
     "fis": "Type='sugeno' with constant outputs, trapmf/trimf/gaussmf/gbellmf/sigmf/... "
            "inputs, AndMethod='min', DefuzzMethod='wtaver', AND rules of weight 1",
 }
+
+
+class ImportRefusals(ExportError):
+    """Several constructs keep one file out: each is an :class:`ExportError` of its own
+    (file, line, construct and fix), listed together so that one attempt shows them all."""
+
+    def __init__(self, file: str, errors: list[ExportError]) -> None:
+        self.errors = errors
+        lines = sorted(errors, key=lambda e: _line_of(str(e)))
+        super().__init__(f"{file}: {len(errors)} constructs flctool cannot import"
+                         + "".join(f"\n  {e}" for e in lines))
+
+
+def _line_of(message: str) -> int:
+    found = re.match(r".*?:(\d+):", message)
+    return int(found.group(1)) if found else 0
+
+
+def refusals(file: str, errors: list[ExportError]) -> ExportError:
+    """One error for every construct in ``errors`` (the error itself when there is one); a
+    construct refused at several lines (one per output term, say) is listed once, at its
+    first line, naming the others."""
+    groups: dict[str, list[ExportError]] = {}
+    for error in errors:
+        text = str(error.args[0]).partition(": ")[2]  # without "file:line"
+        groups.setdefault(re.sub(r"'[^']*'|-?\d[\d.e+-]*", "_", text), []).append(error)
+    merged = []
+    for group in groups.values():
+        first = group[0]
+        if len(group) > 1:
+            lines = ", ".join(str(_line_of(str(e))) for e in group[1:])
+            first = ExportError(f"{first.args[0]}; the same at line{'s' * (len(group) > 2)} "
+                                f"{lines}", hint=first.hint)
+        merged.append(first)
+    return merged[0] if len(merged) == 1 else ImportRefusals(file, merged)
 
 
 def unsupported(file: str, line: int, construct: str, hint: str = "") -> ExportError:
@@ -51,6 +87,11 @@ def span(xs: Iterable[float]) -> tuple[float, float]:
     """The smallest range holding every finite x (0 to 1 when there is none)."""
     finite = [x for x in xs if math.isfinite(x)]
     return (min(finite), max(finite)) if finite else (0.0, 1.0)
+
+
+#: The corners a set refused while reading stands in with (never validated: the file is
+#: refused, see :meth:`ImportedController.put_off`).
+QUAD0: Quad = (0.0, 0.0, 0.0, 0.0)
 
 
 @dataclass
@@ -168,6 +209,16 @@ class ImportedRule:
     command: str
     line: int
     text: str = ""
+    #: An OR rule's conditions (input, set), the antecedent then being empty; fuzzylite and
+    #: MATLAB fire it with their maximum. Imported only by a Mamdani conversion (see
+    #: :func:`expanded_rules`), as is a rule that leaves out an input.
+    disjuncts: list[tuple[str, str]] = field(default_factory=list)
+    #: The rule's weight (its activation is multiplied by it); not 1 only for a Mamdani
+    #: output being converted, where the measurement takes it into account.
+    weight: float = 1.0
+    #: The inputs whose condition is negated (NOT: membership 1 - mu), refused unless a
+    #: Mamdani output is converted, where it expands over the input's other sets.
+    negated: set[str] = field(default_factory=set)
 
     def named(self) -> str:
         """The rule as a message about another rule names it: by its line and its text."""
@@ -187,6 +238,8 @@ class Method:
     text: str  # the setting as the format spells it, e.g. "AND : PROD"
     line: int
     hint: str = ""
+    #: A conjunction by the product, which a Mamdani conversion measures against.
+    product: bool = False
 
 
 @dataclass
@@ -213,6 +266,23 @@ class ImportedController:
     accumulation: Method | None = None
     #: How the format writes that a rule leaves an input out, when it has a way (FIS: index 0).
     omission: str = ""
+    #: A Mamdani output converted to singletons: its OR rules and rules that leave out an
+    #: input are expanded over the sets (:func:`expanded_rules`), since the conversion is an
+    #: approximation measured against the rules as written (:mod:`flctool.export.mamdani`).
+    expand_rules: bool = False
+    #: How the file combines an OR rule's conditions, when not by the maximum (refused then).
+    disjunction: Method | None = None
+    #: Refusals the reader found and put off, so that :func:`build_behaviour` reports them
+    #: with the rest (a Mamdani output not being converted, say).
+    pending: list[ExportError] = field(default_factory=list)
+    #: The commands :func:`expanded_rules` added (the mean of several), none in the file.
+    merged_commands: list[str] = field(default_factory=list)
+
+    def put_off(self, error: ExportError, fallback: _T) -> _T:
+        """Keep ``error`` for :func:`build_behaviour` to report with the file's other
+        refusals, and go on reading with ``fallback`` in place of what it refused."""
+        self.pending.append(error)
+        return fallback
 
     def error(self, line: int, construct: str, hint: str = "") -> ExportError:
         """An import error at ``line`` of this file (see :func:`unsupported`)."""
@@ -387,7 +457,9 @@ def zero_order_constant(kind: str, params: list[float], inputs: int, file: str, 
 #: The fix for an imported rule that leaves out an input.
 DONT_CARE_HINT = ("name a set of every input in each rule (one rule per set of the input left "
                   "out), accepting the change in weight, or write the rules in a behaviour "
-                  "file, where leaving out an input means just that expansion")
+                  "file, where leaving out an input means just that expansion; a Mamdani "
+                  "output imported with --mamdani-singletons is expanded so, and the "
+                  "difference measured")
 
 
 def check_unique(file: str, items: Iterable[tuple[str, int]], kind: str, of: str = "") -> None:
@@ -408,14 +480,27 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         raise unsupported(file, 1, "the controller has no input variable")
     if not imported.output_name:
         raise unsupported(file, 1, "the controller has no output variable")
-    check_unique(file, ((i.name, i.line) for i in imported.inputs), "input")
-    for variable in imported.inputs:
-        check_unique(file, ((s.name, s.line) for s in variable.sets), "set",
-                     f" of input '{variable.name}'")
-    check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
-    _check_rules_cover_every_input(imported)
-    _check_methods(imported)
+    # Every construct that keeps the file out is reported together (each at its first line):
+    # the ones the reader put off (pending) and each of these checks'.
+    found = list(imported.pending)
+    checks = [_check_names_unique, _check_methods]
+    if not imported.expand_rules:
+        checks = [_check_no_or_rule, _check_no_negation, _check_weights,
+                  _check_rules_cover_every_input, *checks]
+    elif imported.disjunction is not None and any(r.disjuncts for r in imported.rules):
+        method = imported.disjunction
+        found.append(imported.error(method.line, f"{method.text}: the conversion of a "
+                                    "Mamdani output measures OR rules by the maximum",
+                                    method.hint))
+    for check in checks:
+        try:
+            check(imported)
+        except ExportError as error:
+            found.append(error)
+    if found:
+        raise refusals(file, found)
     _identifiers(imported)
+    rules = expanded_rules(imported) if imported.expand_rules else imported.rules
     marks: dict[tuple[PathPart, ...], tuple[int, int]] = {
         (): (1, 1), ("name",): (imported.name_line, 1), ("output",): (imported.output_line, 1)}
     data: dict[str, Any] = {"flctool": FORMAT_VERSION, "name": imported.name or "imported"}
@@ -432,14 +517,127 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         marks[("output", "commands", command.name)] = (command.line, 1)
     data["output"] = {"name": imported.output_name,
                       "commands": {c.name: c.value for c in imported.commands}}
-    for index, rule in enumerate(imported.rules):
+    for index, rule in enumerate(rules):
         marks[("rules", index)] = (rule.line, 1)
-    data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command}
-                     for rule in imported.rules]
-    # A rule check that names another rule names it by line, as the file does. No rule is
-    # expanded as a don't-care (those were refused above), so index k is the file's k-th.
+    data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command} for rule in rules]
+    # A rule check that names another rule names it by line, as the file does (an expanded
+    # rule by the line of the rule it came from).
     return behaviour_from_data(data, SourceMap(file, marks),
-                               rule_names=lambda index: imported.rules[index].named())
+                               rule_names=lambda index: rules[index].named())
+
+
+def expanded_rules(imported: ImportedController) -> list[ImportedRule]:
+    """The rules with every OR rule and every rule that leaves out an input replaced by the
+    full-grid rules (one set of each input) where it fires: for an AND rule, every set of
+    each input it leaves out; for an OR rule, every combination in which some condition
+    holds (NOT: the input's other sets). Each keeps its line. A combination two rules give
+    the same command appears once; one given different commands gets their mean
+    (:func:`_merge_conflicts`).
+
+    This is not exact (eq. 2 gives an expanded rule another activation), so it is done only
+    for a Mamdani output being converted, whose measured deviation is taken against the
+    rules as written (:func:`as_written`)."""
+    names = [v.name for v in imported.inputs]
+    sets = {v.name: [s.name for s in v.sets] for v in imported.inputs}
+    seen: set[tuple[tuple[str, ...], str]] = set()
+    result: list[ImportedRule] = []
+    for rule in imported.rules:
+        if not rule.antecedent and not rule.disjuncts:
+            raise unsupported(imported.file, rule.line, "the rule has no condition (every "
+                              "input left out), so it would fire everywhere with no "
+                              "activation to weigh it by", "give the rule a condition, or "
+                              "remove it")
+        for name, term in rule.disjuncts or [(n, rule.antecedent.get(n, ""))
+                                             for n in rule.negated]:
+            if term not in sets.get(name, []):
+                what = f"set '{term}' of input '{name}'" if name in sets else f"input '{name}'"
+                raise unsupported(imported.file, rule.line, f"the rule names {what}, which "
+                                  "the file does not define", "correct the name")
+        def chosen(name: str, term: str, rule: ImportedRule = rule) -> list[str]:
+            """The sets of input ``name`` where the condition holds in the expansion."""
+            if name in rule.negated:  # NOT: the input's other sets
+                return [t for t in sets.get(name, []) if t != term]
+            return [term]
+
+        if rule.disjuncts:
+            cells: list[tuple[str, ...]] = []
+            for name, term in rule.disjuncts:
+                choices = [chosen(name, term) if n == name else sets.get(n, []) for n in names]
+                cells += list(itertools.product(*choices))
+        elif any(n not in sets for n in rule.antecedent):  # an unknown input: checked later
+            result.append(rule)
+            continue
+        else:
+            cells = list(itertools.product(*(chosen(n, rule.antecedent[n])
+                                              if n in rule.antecedent else sets[n]
+                                              for n in names)))
+        for cell in cells:
+            if (cell, rule.command) not in seen:
+                seen.add((cell, rule.command))
+                result.append(ImportedRule(dict(zip(names, cell, strict=True)), rule.command,
+                                           rule.line, rule.text))
+    return _merge_conflicts(imported, result)
+
+
+def _merge_conflicts(imported: ImportedController, rules: list[ImportedRule]
+                     ) -> list[ImportedRule]:
+    """One rule per combination of sets: where expanded rules give one combination several
+    commands (the Mamdani output fires all their sets there), it gets a new command, the
+    mean of their singletons, named after them (``cheap_or_average``) and added to the
+    output. Part of the approximation the conversion measures."""
+    by_cell: dict[tuple[tuple[str, str], ...], list[ImportedRule]] = {}
+    for rule in rules:
+        by_cell.setdefault(tuple(rule.antecedent.items()), []).append(rule)
+    values = {c.name: c.value for c in imported.commands}
+    merged = []
+    for group in by_cell.values():
+        commands = sorted({r.command for r in group}, key=list(values).index) if all(
+            r.command in values for r in group) else []
+        if len(commands) <= 1:
+            merged += group
+            continue
+        name = "_or_".join(commands)
+        if name not in values:
+            values[name] = math.fsum(values[c] for c in commands) / len(commands)
+            imported.commands.append(ImportedCommand(name, values[name], group[0].line))
+            imported.merged_commands.append(name)
+        merged.append(ImportedRule(group[0].antecedent, name, group[0].line,
+                                   " / ".join(dict.fromkeys(r.text for r in group))))
+    return merged
+
+
+#: A rule as written, for measuring against: its conditions (input, set, negated), whether
+#: they are joined by OR (else AND), its command and its weight.
+OriginalRule = tuple[tuple[tuple[str, str, bool], ...], bool, str, float]
+
+
+def as_written(imported: ImportedController) -> dict[str, Any]:
+    """What a Mamdani conversion's measurement needs of the rules as the file writes them
+    (after :func:`build_behaviour` renamed them to behaviour-file names): ``rules``, whether
+    the behaviour's rules differ from them (``rewritten``: expanded, merged or weighted) and
+    the ``conjunction`` (fuzzylite's name); for :class:`flctool.export.mamdani.
+    MamdaniOutput`."""
+    names = {v.name for v in imported.inputs}
+    rules = tuple((tuple((n, t, n in r.negated) for n, t in r.disjuncts or
+                         r.antecedent.items()), bool(r.disjuncts), r.command, r.weight)
+                  for r in imported.rules)
+    rewritten = bool(imported.merged_commands) or any(
+        r.disjuncts or r.negated or set(r.antecedent) != names or r.weight != 1.0
+        for r in imported.rules)
+    product = imported.conjunction is not None and imported.conjunction.product
+    return {"rules": rules, "rewritten": rewritten,
+            "conjunction": "AlgebraicProduct" if product else "Minimum"}
+
+
+def _check_no_or_rule(imported: ImportedController) -> None:
+    for rule in imported.rules:
+        if rule.disjuncts:
+            raise unsupported(imported.file, rule.line, "an OR rule: flctool's rules are one "
+                              "AND chain (eq. 1), and an OR rule's activation (the maximum "
+                              "of its conditions) is no sum of such rules' activations",
+                              "write it as AND rules over every input, accepting the change, "
+                              "or (a Mamdani output) import with --mamdani-singletons, which "
+                              "measures the difference")
 
 
 _NOT_IDENTIFIER = re.compile(r"[^A-Za-z0-9_]")
@@ -472,12 +670,16 @@ def _identifiers(imported: ImportedController) -> None:
             term = rule.antecedent.get(variable.name)
             if term is not None:  # (an unknown term is left for the rule checks to name)
                 rule.antecedent[variable.name] = sets.get(term, term)
+            rule.disjuncts = [(n, sets.get(t, t) if n == variable.name else t)
+                              for n, t in rule.disjuncts]
     inputs = {v.name: identifier(v.name) for v in imported.inputs}
     _check_renames(file, [(v.name, inputs[v.name], v.line) for v in imported.inputs], "input")
     for variable in imported.inputs:
         variable.name = inputs[variable.name]
     for rule in imported.rules:
         rule.antecedent = {inputs.get(n, n): s for n, s in rule.antecedent.items()}
+        rule.disjuncts = [(inputs.get(n, n), t) for n, t in rule.disjuncts]
+        rule.negated = {inputs.get(n, n) for n in rule.negated}
     commands = {c.name: identifier(c.name) for c in imported.commands}
     _check_renames(file, [(c.name, commands[c.name], c.line) for c in imported.commands],
                    "output term")
@@ -517,9 +719,41 @@ def _check_rules_cover_every_input(imported: ImportedController) -> None:
                 "the output", DONT_CARE_HINT)
 
 
+def _check_names_unique(imported: ImportedController) -> None:
+    file = imported.file
+    check_unique(file, ((i.name, i.line) for i in imported.inputs), "input")
+    for variable in imported.inputs:
+        check_unique(file, ((s.name, s.line) for s in variable.sets), "set",
+                     f" of input '{variable.name}'")
+    check_unique(file, ((c.name, c.line) for c in imported.commands), "output term")
+
+
+def _check_no_negation(imported: ImportedController) -> None:
+    for rule in imported.rules:
+        if rule.negated:
+            name = sorted(rule.negated)[0]
+            raise unsupported(imported.file, rule.line, f"NOT on input '{name}': flctool's "
+                              "rules use plain terms (eq. 1), and NOT's membership (1 - mu) is "
+                              "no sum of the other sets'", "name the sets meant instead, one "
+                              "rule each, or (a Mamdani output) import with "
+                              "--mamdani-singletons, which measures the difference")
+
+
+def _check_weights(imported: ImportedController) -> None:
+    for rule in imported.rules:
+        if rule.weight != 1.0:
+            raise unsupported(imported.file, rule.line, f"a rule weight of {rule.weight!r}: "
+                              "flctool's rules all weigh 1",
+                              "remove the weight (accepting the change), or (a Mamdani "
+                              "output) import with --mamdani-singletons, which measures the "
+                              "difference")
+
+
 def _check_methods(imported: ImportedController) -> None:
     conjunction = imported.conjunction
-    if conjunction is not None and any(len(r.antecedent) > 1 for r in imported.rules):
+    if imported.expand_rules and conjunction is not None and conjunction.product:
+        pass  # a Mamdani conversion: the measurement computes the product (mamdani.py)
+    elif conjunction is not None and any(len(r.antecedent) > 1 for r in imported.rules):
         raise imported.error(conjunction.line, f"{conjunction.text}: flctool's rules combine "
                              "their memberships by the minimum (eq. 2)", conjunction.hint)
     if imported.accumulation is not None:

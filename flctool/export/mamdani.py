@@ -12,6 +12,7 @@ good enough.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -20,6 +21,7 @@ import numpy as np
 from flctool.behaviour import Behaviour
 from flctool.behaviour.shapes import set_row
 from flctool.compile import compile_behaviour
+from flctool.export.imported import OriginalRule
 from flctool.membership import memberships
 
 Quad = tuple[float, float, float, float]
@@ -52,6 +54,16 @@ class MamdaniOutput:
     resolution: int
     implication: str = "Minimum"
     aggregation: str = "Maximum"
+    #: The rules as the file writes them (:func:`flctool.export.imported.as_written`): the
+    #: Mamdani output is computed from them, so that OR rules and rules that leave out an
+    #: input (expanded over the sets), weights and a product conjunction (which the
+    #: converted controller does not have) are part of what is measured. Empty: the
+    #: behaviour's rules, which are then the file's.
+    rules: tuple[OriginalRule, ...] = ()
+    #: Whether the behaviour's rules differ from ``rules`` (said in the report).
+    rewritten: bool = False
+    #: How a rule's conditions combine: Minimum (eq. 2) or AlgebraicProduct.
+    conjunction: str = "Minimum"
 
     def midpoints(self) -> np.ndarray:
         lo, hi = self.range
@@ -77,19 +89,24 @@ def mamdani_outputs(behaviour: Behaviour, output: MamdaniOutput, states: np.ndar
     its command's set, the implied sets aggregate, and the output is their centroid over
     the midpoints of the output range (as fuzzylite computes it); NaN where no rule fires."""
     controller = compile_behaviour(behaviour)
-    alpha = controller.activations(states)  # (S, M)
-    assert controller.consequents is not None  # measured for complete rule bases only
     names = list(behaviour.output.commands)
+    if output.rules:
+        names = list(output.sets)  # (merged commands of the behaviour are not the file's)
+        alpha, consequents = written_activations(behaviour, output, names, states)
+    else:
+        alpha = controller.activations(states)  # (S, M)
+        assert controller.consequents is not None  # measured for complete rule bases only
+        consequents = controller.consequents
     y = output.midpoints()
     rows = np.array([output.sets[n][1] for n in names], dtype=np.float64)
     shapes = memberships(y, rows, [output.sets[n][0] for n in names])  # (Y, K)
     result = np.empty(len(states))
-    chunk = max(1, 2_000_000 // max(1, len(y) * controller.n_rules))
+    chunk = max(1, 2_000_000 // max(1, len(y) * alpha.shape[1]))
     for start in range(0, len(states), chunk):
         a = alpha[start:start + chunk]
         merged = np.zeros((len(a), len(y)))
         for m in np.flatnonzero(a.any(axis=0)):  # rules in order; one that never fires adds 0
-            mu = shapes[:, controller.consequents[m]][None, :]
+            mu = shapes[:, consequents[m]][None, :]
             implied = (np.minimum(a[:, m, None], mu) if output.implication == "Minimum"
                        else a[:, m, None] * mu)
             merged = (np.maximum(merged, implied) if output.aggregation == "Maximum"
@@ -97,6 +114,26 @@ def mamdani_outputs(behaviour: Behaviour, output: MamdaniOutput, states: np.ndar
         with np.errstate(invalid="ignore", divide="ignore"):
             result[start:start + chunk] = (merged @ y) / merged.sum(axis=1)
     return result
+
+
+def written_activations(behaviour: Behaviour, output: MamdaniOutput, names: list[str],
+                        states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(S, R) each written rule's activation, as fuzzylite and MATLAB compute it: its weight
+    times the minimum (eq. 2) or product of its conditions' memberships (1 - mu for NOT), or
+    their maximum for an OR rule; and (R,) the index in ``names`` of each rule's command."""
+    controller = compile_behaviour(behaviour)
+    mus = controller.memberships(states)  # per input, (S, L_i)
+    inputs = {name: (i, list(v.sets)) for i, (name, v) in enumerate(behaviour.inputs.items())}
+    combine = (np.multiply.reduce if output.conjunction == "AlgebraicProduct"
+               else np.minimum.reduce)
+    alpha = np.empty((len(states), len(output.rules)))
+    for r, (conditions, disjunction, _, weight) in enumerate(output.rules):
+        columns = [mus[inputs[n][0]][:, inputs[n][1].index(t)] for n, t, _ in conditions]
+        columns = [1.0 - c if negated else c
+                   for c, (_, _, negated) in zip(columns, conditions, strict=True)]
+        alpha[:, r] = weight * (np.maximum.reduce(columns) if disjunction
+                                else combine(columns))
+    return alpha, np.array([names.index(c) for _, _, c, _ in output.rules])
 
 
 @dataclass(frozen=True)
@@ -108,13 +145,28 @@ class Conversion:
     states: int
     span: float
     resolution: int
+    expanded: bool = False
+
+    def stated(self) -> float:
+        """The deviation rounded up to 4 significant digits, as the report states it (never
+        below the measured one)."""
+        x = self.deviation
+        if not (math.isfinite(x) and x > 0):
+            return x
+        step = 10.0 ** (math.floor(math.log10(x)) - 3)
+        return math.ceil(x / step) * step
 
     def report(self) -> str:
-        share = f" ({self.deviation / self.span:.2%} of the output range)" if self.span else ""
-        return (f"Mamdani output sets replaced by singletons at their centroids: the largest "
-                f"difference from the Mamdani output (centroid over {self.resolution} "
-                f"midpoints, as fuzzylite computes it) is {self.deviation:.4g}{share}, "
-                f"measured on {self.states} states")
+        stated = self.stated()
+        share = f" ({stated / self.span:.2%} of the output range)" if self.span else ""
+        expanded = (" (and the rules rewritten as flctool's: OR, NOT and rules that leave "
+                    "out an input expanded over the sets, a combination given several "
+                    "commands given their mean, weights and a product conjunction dropped; "
+                    "measured against the rules as written)" if self.expanded else "")
+        return (f"Mamdani output sets replaced by singletons at their centroids{expanded}: "
+                f"the largest difference from the Mamdani output (centroid over "
+                f"{self.resolution} midpoints, as fuzzylite computes it) is {stated:.4g}"
+                f"{share}, measured on {self.states} states")
 
 
 def measurement_states(behaviour: Behaviour) -> np.ndarray:
@@ -142,7 +194,8 @@ def measure(behaviour: Behaviour, output: MamdaniOutput) -> Conversion:
     finite = np.isfinite(want)
     deviation = float(np.max(np.abs(got[finite] - want[finite]))) if finite.any() else 0.0
     lo, hi = output.range
-    return Conversion(deviation, len(states), hi - lo, output.resolution)
+    return Conversion(deviation, len(states), hi - lo, output.resolution,
+                      output.rewritten or output.conjunction != "Minimum")
 
 
 #: The fix offered when a Mamdani output is imported without the conversion.

@@ -17,7 +17,8 @@ from flctool.behaviour.shapes import SHAPES
 #: fuzzylite 6 / pyfuzzylite terms: Gaussian(mean, sd), GaussianProduct(meanA, sdA, meanB,
 #: sdB), Bell(center, width, slope), Sigmoid(inflection, slope), SigmoidDifference(left,
 #: rising, falling, right), SigmoidProduct(left, rising, falling, right), SShape(start, end),
-#: ZShape(start, end), PiShape(bottomLeft, topLeft, topRight, bottomRight).
+#: ZShape(start, end), PiShape(bottomLeft, topLeft, topRight, bottomRight), Cosine(center,
+#: width), Concave(inflection, end), Spike(center, width).
 FUZZYLITE: dict[str, tuple[str, tuple[int, ...]]] = {
     "gauss": ("Gaussian", (0, 1)),
     "gauss2": ("GaussianProduct", (0, 1, 2, 3)),
@@ -28,11 +29,16 @@ FUZZYLITE: dict[str, tuple[str, tuple[int, ...]]] = {
     "s_shape": ("SShape", (0, 1)),
     "z_shape": ("ZShape", (0, 1)),
     "pi_shape": ("PiShape", (0, 1, 2, 3)),
+    "cosine": ("Cosine", (0, 1)),
+    "concave": ("Concave", (0, 1)),
+    "spike": ("Spike", (0, 1)),
 }
 
 #: MATLAB / Octave membership functions: gaussmf [sigma c], gauss2mf [sig1 c1 sig2 c2],
 #: gbellmf [a b c], sigmf [a c], dsigmf / psigmf [a1 c1 a2 c2], smf [a b], zmf [a b],
-#: pimf [a b c d].
+#: pimf [a b c d]; and fuzzylite's own FIS names for the shapes MATLAB and Octave lack,
+#: cosinemf [center width], concavemf [inflection end], spikemf [center width] (fuzzylite
+#: reads them; MATLAB and Octave do not).
 MATLAB: dict[str, tuple[str, tuple[int, ...]]] = {
     "gauss": ("gaussmf", (1, 0)),
     "gauss2": ("gauss2mf", (1, 0, 3, 2)),
@@ -43,6 +49,9 @@ MATLAB: dict[str, tuple[str, tuple[int, ...]]] = {
     "s_shape": ("smf", (0, 1)),
     "z_shape": ("zmf", (0, 1)),
     "pi_shape": ("pimf", (0, 1, 2, 3)),
+    "cosine": ("cosinemf", (0, 1)),
+    "concave": ("concavemf", (0, 1)),
+    "spike": ("spikemf", (0, 1)),
 }
 
 

@@ -30,15 +30,38 @@ REFERENCE = [
     ("z_shape", (-1.0, 1.5), lambda x: skm.zmf(x, -1.0, 1.5)),
     ("pi_shape", (-2.0, -1.0, 0.5, 2.0), lambda x: skm.pimf(x, -2.0, -1.0, 0.5, 2.0)),
 ]
+
+
+def _cosine(x: np.ndarray, c: float, w: float) -> np.ndarray:
+    inside = (x >= c - 0.5 * w) & (x <= c + 0.5 * w)
+    return np.where(inside, 0.5 * (1.0 + np.cos(2.0 / w * np.pi * (x - c))), 0.0)
+
+
+def _concave(x: np.ndarray, i: float, e: float) -> np.ndarray:
+    with np.errstate(divide="ignore"):
+        if i <= e:
+            return np.where(x < e, (e - i) / (2.0 * e - i - x), 1.0)
+        return np.where(x > e, (i - e) / (i - 2.0 * e + x), 1.0)
+
+
+#: scikit-fuzzy has no cosine, concave or spike: the reference is fuzzylite's formulas as
+#: pyfuzzylite 8 writes them in numpy (the slow export tests compare with fuzzylite 6 itself).
+FUZZYLITE_REFERENCE = [
+    ("cosine", (0.3, 1.7), lambda x: _cosine(x, 0.3, 1.7)),
+    ("concave", (0.5, 1.5), lambda x: _concave(x, 0.5, 1.5)),
+    ("concave", (-0.5, -1.5), lambda x: _concave(x, -0.5, -1.5)),
+    ("spike", (0.25, 2.0), lambda x: np.exp(-np.abs(10.0 / 2.0 * (x - 0.25)))),
+]
 X = np.concatenate([np.linspace(-3.0, 3.0, 4001), [-1.0, -0.5, 0.25, 0.3, 0.5, 1.5, 2.0]])
 
 
-@pytest.mark.parametrize(("kind", "params", "reference"), REFERENCE,
-                         ids=[case[0] for case in REFERENCE])
+@pytest.mark.parametrize(("kind", "params", "reference"), REFERENCE + FUZZYLITE_REFERENCE,
+                         ids=[f"{case[0]}{case[1]}" for case in REFERENCE + FUZZYLITE_REFERENCE])
 def test_each_shape_is_scikit_fuzzys(kind: str, params: tuple[float, ...],
                                      reference: object) -> None:
-    """Within 2 ulps of 1 (numpy's exp and power round differently from the C library's,
-    which flctool, fuzzylite and the C export use)."""
+    """Within 2 ulps of 1 (numpy's exp, cos and power round differently from the C
+    library's, which flctool, fuzzylite and the C export use); fuzzylite's formulas for the
+    shapes scikit-fuzzy lacks."""
     padded = (*params, *(0.0,) * (4 - len(params)))
     rows = np.array([padded])
     got = memberships(X, rows, [CODES[kind]])[:, 0]
@@ -83,17 +106,51 @@ output:
 """
 
 
-def every_shape_behaviour():  # type: ignore[no-untyped-def]
-    """A controller with every shape (and a trapezoid), its 36 rules seeded at random."""
+#: The shapes fuzzylite has and MATLAB / Octave lack (their FIS names are fuzzylite's own),
+#: with trapezoids: a controller Octave cannot read, kept apart from EVERY_SHAPE.
+FUZZYLITE_SHAPES = """\
+flctool: 1
+name: fuzzylite_shapes
+inputs:
+  a:
+    range: [-1, 1]
+    sets:
+      low: [-1, -1, -0.5, 0]
+      mid: {cosine: [0.0, 1.2]}
+      high: [0, 0.5, 1, 1]
+  d:
+    range: [0, 1]
+    sets:
+      low: {concave: [0.4, 0.0]}
+      mid: {cosine: [0.5, 0.6]}
+      peak: {spike: [0.7, 0.5]}
+      high: {concave: [0.6, 1.0]}
+output:
+  name: turn
+  commands: {hard_left: -1, left: -0.4, none: 0, right: 0.5, hard_right: 1}
+"""
+
+
+def every_shape_behaviour(text: str = EVERY_SHAPE):  # type: ignore[no-untyped-def]
+    """A controller with every shape of scikit-fuzzy's (and a trapezoid), or ``text``'s,
+    its rules (one per combination of sets) seeded at random."""
+    import itertools
+
     import yaml
 
-    data = yaml.safe_load(EVERY_SHAPE)
+    data = yaml.safe_load(text)
     rng = np.random.default_rng(3)
     commands = list(data["output"]["commands"])
-    data["rules"] = [{"if": {"a": a, "b": b, "c": c}, "then": commands[rng.integers(5)]}
-                     for a in data["inputs"]["a"]["sets"] for b in data["inputs"]["b"]["sets"]
-                     for c in data["inputs"]["c"]["sets"]]
+    names = list(data["inputs"])
+    data["rules"] = [{"if": dict(zip(names, sets, strict=True)),
+                      "then": commands[rng.integers(5)]}
+                     for sets in itertools.product(*(data["inputs"][n]["sets"] for n in names))]
     return behaviour_from_data(data)
+
+
+def fuzzylite_shapes_behaviour():  # type: ignore[no-untyped-def]
+    """The cosine, concave and spike sets (:data:`FUZZYLITE_SHAPES`)."""
+    return every_shape_behaviour(FUZZYLITE_SHAPES)
 
 
 def reference_outputs(behaviour, states: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
@@ -112,11 +169,13 @@ def reference_outputs(behaviour, states: np.ndarray) -> np.ndarray:  # type: ign
     return np.clip(numerator / total, controller.singletons.min(), controller.singletons.max())
 
 
-def test_every_inference_path_computes_the_same_bits() -> None:
-    behaviour = every_shape_behaviour()
+@pytest.mark.parametrize("text", [EVERY_SHAPE, FUZZYLITE_SHAPES], ids=["skfuzzy", "fuzzylite"])
+def test_every_inference_path_computes_the_same_bits(text: str) -> None:
+    behaviour = every_shape_behaviour(text)
     controller = compile_behaviour(behaviour)
     rng = np.random.default_rng(0)
-    states = rng.uniform([-1.2, -1.0, -0.1], [1.2, 11.0, 1.1], (3_000, 3))
+    lo, hi = controller.ranges[:, 0], controller.ranges[:, 1]
+    states = rng.uniform(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), (3_000, len(lo)))
     out = controller.output(states)
     assert np.max(np.abs(out - reference_outputs(behaviour, states))) <= 1e-15
     assert np.array_equal(controller.output(states[:5]), out[:5])  # state by state

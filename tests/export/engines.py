@@ -38,8 +38,10 @@ def fuzzylite_binary() -> str:
     return found
 
 
-def fuzzylite_outputs(text: str, format: str, states: np.ndarray, folder: Path) -> np.ndarray:
-    """fuzzylite 6's outputs for (S, N) ``states`` of the engine in ``text`` (fll/fis/fcl)."""
+def fuzzylite_outputs(text: str, format: str, states: np.ndarray, folder: Path,
+                      outputs: int = 1) -> np.ndarray:
+    """fuzzylite 6's outputs for (S, N) ``states`` of the engine in ``text`` (fll/fis/fcl):
+    (S,), or (S, outputs) for an engine of several outputs."""
     engine = folder / f"engine.{format}"
     engine.write_text(text, encoding="utf-8")
     data = folder / "states.fld"
@@ -51,8 +53,8 @@ def fuzzylite_outputs(text: str, format: str, states: np.ndarray, folder: Path) 
         capture_output=True, text=True, timeout=120, check=False)
     assert result.returncode == 0, result.stderr + result.stdout
     values = np.array([float(line) for line in result.stdout.split()])
-    assert values.shape == (len(states),), result.stdout[:500]
-    return values
+    assert values.shape == (len(states) * outputs,), result.stdout[:500]
+    return values if outputs == 1 else values.reshape(len(states), outputs)
 
 
 def outside_tolerance(behaviour: Behaviour, states: np.ndarray, corners: list[np.ndarray]

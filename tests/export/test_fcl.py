@@ -100,7 +100,7 @@ def test_jfuzzylogics_terms_are_read_in_any_case() -> None:
     ("TERM up := 1;", "TERM up := (0, 0) (1, 1) (2, 0);",
      r"tiny.fcl:15: output term 'up' is not a singleton: a Mamdani output set"),
     ("IF x IS low THEN", "IF x IS low OR x IS high THEN", r"tiny.fcl:22: an OR rule"),
-    ("IF x IS low THEN", "IF x IS NOT low THEN", r"tiny.fcl:22: NOT in a rule"),
+    ("IF x IS low THEN", "IF x IS NOT low THEN", r"tiny.fcl:22: NOT on input 'x'"),
     ("IF x IS low THEN", "IF x IS very low THEN", r"tiny.fcl:22: the hedge 'very'"),
     ("THEN u IS up;", "THEN u IS up WITH 0.5;", r"tiny.fcl:22: a rule weight of 0.5"),
     ("TERM low := (0, 1) (0.2, 1) (0.8, 0);", "TERM low := (0, 1) (0.2, 0.5) (0.8, 0);",
@@ -108,7 +108,8 @@ def test_jfuzzylogics_terms_are_read_in_any_case() -> None:
     ("TERM low := (0, 1) (0.2, 1) (0.8, 0);", "TERM low := cosine 0.2 0.1;",
      r"tiny.fcl:9: a cosine term: flctool's sets do not include it"),
     ("METHOD : COGS;", "METHOD : COG;", r"tiny.fcl:16: METHOD : COG"),
-    ("    u : REAL;\n", "    u : REAL;\n    v : REAL;\n", r"tiny.fcl:7: a second output 'v'"),
+    ("    u : REAL;\n", "    u : REAL;\n    v : REAL;\n",
+     r"tiny.fcl:7: output 'v' has no DEFUZZIFY block"),
     ("ACCU : NSUM;", "ACCU : MAX;", None),  # no two rules share a term: MAX changes nothing
 ])
 def test_import_names_what_it_cannot_express(old: str, new: str, message: str | None) -> None:

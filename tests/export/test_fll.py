@@ -119,18 +119,18 @@ def test_import_reads_the_subset() -> None:
 
 
 @pytest.mark.parametrize(("old", "new", "message"), [
-    ("term: high Triangle 0.2 1.0 1.0", "term: high Cosine 0.8 0.1",
-     r"tiny.fll:7: a Cosine term"),
+    ("term: high Triangle 0.2 1.0 1.0", "term: high Discrete 0.2 0.0 1.0 1.0",
+     r"tiny.fll:7: a Discrete term"),
     ("term: high Triangle 0.2 1.0 1.0", "term: high Gaussian 0.8 0.1 0.5",
      r"tiny.fll:7: the term 'high' has height 0.5"),
     ("term: up Constant 1.0", "term: up Triangle 0.0 0.5 1.0",
      r"tiny.fll:14: output 'u' has Mamdani sets.*\(fix: import with --mamdani-singletons"),
     ("rule: if x is low then u is up", "rule: if x is low or x is high then u is up",
-     r"tiny.fll:19: an 'or' rule"),
+     r"tiny.fll:19: an OR rule: flctool's rules are one AND chain"),
     ("rule: if x is low then u is up", "rule: if x is very low then u is up",
      r"tiny.fll:19: the hedge 'very'"),
     ("rule: if x is low then u is up", "rule: if x is not low then u is up",
-     r"tiny.fll:19: the hedge 'not'"),
+     r"tiny.fll:19: NOT on input 'x'"),
     ("rule: if x is low then u is up", "rule: if x is low then u is up with 0.5",
      r"tiny.fll:19: a rule weight of 0.5"),
     ("term: low Trapezoid 0.0 0.0 0.2 0.8", "term: low Trapezoid 0.0 0.0 0.2 0.8 0.5",

@@ -14,7 +14,7 @@ from flctool.export import EXPORTERS, IMPORTERS, ExportOptions
 from flctool.export.base import MAX_IMPORT_CHARS
 from flctool.export.fis import FisExporter
 from flctool.export.fll import FllExporter, FllImporter
-from flctool.export.imported import imported_yaml, quad_from_points
+from flctool.export.imported import ImportRefusals, imported_yaml, quad_from_points
 
 from .controllers import random_behaviour
 
@@ -55,8 +55,11 @@ def test_imported_file_has_no_learning_section() -> None:
 
 # -- hostile imports: bounded in size and time, every error located -------------------------
 def _located(error: FlcError, file: str) -> bool:
-    """The message starts with the file and a line number (``file:line:``)."""
+    """The message starts with the file and a line number (``file:line:``), each listed
+    construct's when it lists several."""
     text = str(error)
+    if isinstance(error, ImportRefusals):
+        return all(_located(e, file) for e in error.errors)
     if isinstance(error, SpecError):
         return all(p.file == file and p.line is not None for p in error.problems)
     return re.match(re.escape(file) + r":\d+:", text) is not None

@@ -18,15 +18,18 @@ from flctool.export.fcl import FclExporter, FclImporter
 from flctool.export.fis import FisExporter, FisImporter
 from flctool.export.fll import FllExporter, FllImporter
 
-from ..compile.test_shapes import every_shape_behaviour
+from ..compile.test_shapes import every_shape_behaviour, fuzzylite_shapes_behaviour
 from .engines import assert_fuzzylite_agrees, octave_outputs
 from .test_c_source import CC, FLAGS, needs_cc
 
+#: Every shape: scikit-fuzzy's (which Octave reads too) and fuzzylite's own.
+BEHAVIOURS = {"skfuzzy": every_shape_behaviour, "fuzzylite": fuzzylite_shapes_behaviour}
 
-def inside_states(count: int, seed: int) -> np.ndarray:
+
+def inside_states(count: int, seed: int, shapes: str = "skfuzzy") -> np.ndarray:
     """States inside the ranges: MATLAB and fuzzylite's FCL do not clip inputs, and a
     Gaussian goes on past a range's end where flctool's input stops."""
-    behaviour = every_shape_behaviour()
+    behaviour = BEHAVIOURS[shapes]()
     controller = compile_behaviour(behaviour)
     rng = np.random.default_rng(seed)
     states = rng.uniform(controller.ranges[:, 0], controller.ranges[:, 1],
@@ -42,21 +45,24 @@ EXPORTS = {"fll": lambda b: FllExporter().to_string(b),
 IMPORTERS = {"fll": FllImporter, "fis": FisImporter, "fcl": FclImporter}
 
 
+@pytest.mark.parametrize("shapes", list(BEHAVIOURS))
 @pytest.mark.parametrize("format", list(EXPORTS))
 @pytest.mark.slow
-def test_fuzzylite6_computes_every_shape_as_flctool(format: str, tmp_path: Path) -> None:
+def test_fuzzylite6_computes_every_shape_as_flctool(format: str, shapes: str,
+                                                    tmp_path: Path) -> None:
     """Within 1e-12 wherever fuzzylite's 1e-6 tolerance cannot matter (it drops the rules
     whose activation is below 1e-6, which Gaussians' tails have over much of a range)."""
-    behaviour = every_shape_behaviour()
+    behaviour = BEHAVIOURS[shapes]()
     text = EXPORTS[format](behaviour)
     quads = [list(v.sets.values()) for v in behaviour.inputs.values()]
-    assert_fuzzylite_agrees(behaviour, text, format, inside_states(10_000, seed=1), quads,
+    assert_fuzzylite_agrees(behaviour, text, format, inside_states(10_000, 1, shapes), quads,
                             tmp_path, comparable=0.5)
 
 
+@pytest.mark.parametrize("shapes", list(BEHAVIOURS))
 @pytest.mark.parametrize("format", list(EXPORTS))
-def test_every_shape_reads_back(format: str) -> None:
-    behaviour = every_shape_behaviour()
+def test_every_shape_reads_back(format: str, shapes: str) -> None:
+    behaviour = BEHAVIOURS[shapes]()
     imported = IMPORTERS[format]().from_string(EXPORTS[format](behaviour), f"x.{format}")
     assert imported.inputs == behaviour.inputs
     assert [r.then for r in imported.rules] == [r.then for r in behaviour.rules]
@@ -81,21 +87,24 @@ def test_iec_fcl_refuses_a_shape_it_cannot_write() -> None:
 
 
 @needs_cc
-def test_c_computes_every_shape_bit_for_bit(tmp_path: Path) -> None:
-    behaviour = every_shape_behaviour()
+@pytest.mark.parametrize("shapes", list(BEHAVIOURS))
+def test_c_computes_every_shape_bit_for_bit(shapes: str, tmp_path: Path) -> None:
+    behaviour = BEHAVIOURS[shapes]()
     header, source = CExporter().to_file(behaviour, tmp_path / "shapes")
-    assert "libm's exp and pow (link with -lm" in header.read_text()
+    assert "(link with -lm" in header.read_text()
     assert "#include <math.h>" in source.read_text()
     driver = tmp_path / "driver.c"
+    n = len(behaviour.inputs)
     driver.write_text('#include <stdio.h>\n#include "shapes.h"\nint main(void)\n{\n'
-                      "    double s[3];\n"
-                      '    while (scanf("%lf %lf %lf", &s[0], &s[1], &s[2]) == 3)\n'
+                      f"    double s[{n}];\n"
+                      f'    while (scanf("{" ".join(["%lf"] * n)}", '
+                      f'{", ".join(f"&s[{i}]" for i in range(n))}) == {n})\n'
                       '        printf("%.17g\\n", flc_output(s));\n    return 0;\n}\n')
     program = tmp_path / "driver"
     assert CC is not None
     subprocess.run([CC, *FLAGS, "-o", str(program), str(driver), str(source), "-lm"],
                    check=True, capture_output=True, text=True)
-    states = inside_states(10_000, seed=3)
+    states = inside_states(10_000, 3, shapes)
     states[:2_000] *= 1.3  # beyond the ranges too: C clips as flctool does
     text = "\n".join(" ".join(repr(float(v)) for v in row) for row in states) + "\n"
     result = subprocess.run([str(program)], input=text, check=True, capture_output=True,
