@@ -103,15 +103,6 @@ def _composition(behaviour: Behaviour) -> Deployable:
     return Deployable(behaviour.name, names, commands, act, composed=True)
 
 
-def require_single(behaviour: Behaviour, how: str) -> None:
-    """Refuse a composition where only one controller can run."""
-    if is_composed(behaviour):
-        raise FlcError(f"{behaviour.name} is a composed behaviour: {how} deploys one "
-                       "controller", hint="deploy a composition over the robot link (flctool "
-                       "run FILE --link HOST:PORT against flctool serve FILE) or with its "
-                       "bundle (flctool export --format bundle, docs/formats/bundle.md)")
-
-
 @dataclass(frozen=True)
 class Episode:
     seed: int

@@ -66,6 +66,20 @@ def _renamed(value: Any, namespace: str) -> Any:
     return value
 
 
+def composition_robot(names: tuple[str, ...], namespace: str = "/robot",
+                      **environment: Any) -> Behaviour:
+    """A robot file for a composition: behaviours/ballchase-ros2.yaml's topics with an input
+    for each channel the composition reads (``deployable(...).observations``), each on
+    ``NAMESPACE/<channel>`` as ``flctool serve --ros2`` publishes it."""
+    data = behaviour_to_data(load_behaviour(ROBOT_FILE))
+    data["inputs"] = {name: {"range": [-1e4, 1e4], "sets": {"any": [-1e4, -1e4, 1e4, 1e4]}}
+                      for name in names}
+    data["environment"] = {**_renamed(data["environment"], namespace),
+                           "inputs": {name: f"{namespace}/{name} std_msgs/Float64 .data"
+                                      for name in names}, **environment}
+    return behaviour_from_data(data)
+
+
 def handmade_rules(behaviour: Behaviour) -> Behaviour:
     """``behaviour`` with the handmade controller's rules (a deployable controller)."""
     data = behaviour_to_data(behaviour)

@@ -553,8 +553,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("flctool.cli.run", "Deploy a controller on a robot. --ros2: publish its command "
             "at the control rate from the latest inputs, with a watchdog that publishes stop "
             "at once on a stale, NaN or out-of-range input or a lost publisher, and again on "
-            "Ctrl-C. --link: run episodes on a robot-link robot, a composed behaviour's "
-            "arbiter and parts included."),
+            "Ctrl-C. --link: run episodes on a robot-link robot. Either way a composed "
+            "behaviour runs whole, its arbiter and parts here."),
     "serve": ("flctool.cli.serve", "Serve a behaviour's simulator over the robot-link "
               "protocol (docs/robot-link.md), for trying the link without a robot and as an "
               "example for bridge writers."),

@@ -1,8 +1,8 @@
 """``flctool run CONTROLLER --ros2``: deploy a controller as a ROS 2 node (docs/ros2.md);
 ``flctool run CONTROLLER --link HOST:PORT``: drive a robot (or ``flctool serve``) over the
-robot link (docs/robot-link.md), one episode at a time. A composed behaviour deploys over the
-link as a whole: the arbiter and its parts run here, the robot only walks
-(:mod:`flctool.deployable`).
+robot link (docs/robot-link.md), one episode at a time. A composed behaviour deploys either
+way as a whole: the arbiter and its parts run here, the robot only walks
+(:mod:`flctool.deployable`); over ROS 2 its robot file maps every channel the tree reads.
 
 The ROS 2 node logs on stderr: when it starts driving, every watchdog stop and recovery, each
 episode's end (with a status topic), and the stop it publishes before it leaves.
@@ -67,7 +67,7 @@ def run(
     """Deploy a controller on a robot. --ros2: publish its command at the control rate from
     the latest inputs, with a watchdog that publishes stop at once on a stale, NaN or
     out-of-range input or a lost publisher, and again on Ctrl-C. --link: run episodes on a
-    robot-link robot, a composed behaviour's arbiter and parts included."""
+    robot-link robot. Either way a composed behaviour runs whole, its arbiter and parts here."""
     with user_errors():
         # an export bundle (flctool export --format bundle) deploys its controller.yaml
         bundled = file / "controller.yaml"
@@ -84,9 +84,6 @@ def run(
                                hint="use --ros2, or leave --record out with --link")
             _run_link(behaviour, link, episodes or 1, seed)
             return
-        from flctool.deployable import require_single
-
-        require_single(behaviour, "flctool run --ros2")
         _run_ros2(behaviour, source, robot, episodes, duration, rate, record)
 
 
@@ -126,25 +123,20 @@ def _run_link(behaviour: Behaviour, link: str, episodes: int, seed: int) -> None
 
 def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: int | None,
               duration: float | None, rate: float | None, record: Path | None) -> None:
-    from flctool.compile import compile_behaviour
+    from flctool.deployable import deployable
     from flctool.ros2.section import ros2_section
 
-    config, where = ros2_section(behaviour, str(source), robot)
+    # compiled (and the kernels loaded) now: the first tick must not stall the node for seconds
+    deployment = deployable(behaviour)
+    # a composition reads every channel of its arbiter and parts: its robot file maps them all
+    config, where = ros2_section(behaviour, str(source), robot,
+                                 inputs=deployment.observations)
     if rate is not None:
         config = config.model_copy(update={"rate": rate})
     if episodes is not None and config.episode.status is None:
         raise FlcError("--episodes needs an episode status topic to count episodes",
                        hint=f"add environment.episode.status to {where}, or use --duration")
-    import numpy as np
-
     from flctool.ros2.deploy import ControllerNode
-
-    flc = compile_behaviour(behaviour)
-    # Load (or compile) the kernels now: the first tick must not stall the node for seconds.
-    flc.output_one(np.array([sum(spec.range) / 2 for spec in behaviour.inputs.values()]))
-
-    def act(values: list[float]) -> float:
-        return flc.output_one(np.array(values, dtype=np.float64))
 
     recorder = None
     if record is not None:
@@ -157,15 +149,16 @@ def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: 
         # in the graph before the node publishes, so that its first commands are recorded
         recorder = BagRecorder(record, topics)
     try:
-        node = ControllerNode(config, behaviour.input_names, dict(behaviour.output.commands),
-                              act, _log)
+        node = ControllerNode(config, deployment.observations, deployment.commands,
+                              deployment.act, _log)
     except BaseException:
         if recorder is not None:
             recorder.close()
         raise
     try:
-        _log(f"{behaviour.name} at {config.rate:g} Hz: {', '.join(s.topic for s in node.sources)}"
-             f" -> {config.command.topic}")
+        what = " (composition)" if deployment.composed else ""
+        _log(f"{behaviour.name}{what} at {config.rate:g} Hz: "
+             f"{', '.join(s.topic for s in node.sources)} -> {config.command.topic}")
         if recorder is not None:
             _start_recording(recorder, record, config.startup_timeout)
         published = node.commands_sent + len(node.stop_times)

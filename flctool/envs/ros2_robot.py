@@ -87,8 +87,11 @@ class SimRobot:
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour, **options: Any) -> SimRobot:
-        """Serve the simulator adapter of a behaviour's ``environment:`` section."""
+        """Serve the simulator adapter of a behaviour's ``environment:`` section; for a
+        composed behaviour, its world as the robot a deployment of it drives (every channel
+        the tree reads, the parts' walking commands: :func:`composition_world`)."""
         from flctool.envs import make_env
+        from flctool.envs.robot_server import composition_world
 
         env = behaviour.environment
         if env is not None and env.adapter in ("ros2", "robot-link"):
@@ -96,6 +99,8 @@ class SimRobot:
                            "environment; serving needs a simulator",
                            hint="serve a behaviour with e.g. 'environment: {adapter: "
                            "ballchase-sim}'")
+        if getattr(env, "compose", None):
+            return cls(composition_world(behaviour), **options)
         return cls(make_env(behaviour, 1), **options)
 
     # -- callbacks (the executor's thread) ------------------------------------------------------

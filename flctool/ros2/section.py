@@ -18,13 +18,16 @@ from flctool.errors import FlcError, SpecError
 
 
 def ros2_section(behaviour: Behaviour, where: str, robot: Path | None = None,
-                 own: Ros2Config | None = None) -> tuple[Ros2Config, str]:
+                 own: Ros2Config | None = None,
+                 inputs: tuple[str, ...] | None = None) -> tuple[Ros2Config, str]:
     """The ROS 2 section for ``behaviour`` (read from ``where``) and the file it came from:
     ``robot``'s when given, else ``own`` (a section found beside the controller, e.g. an
     export bundle's wiring), else the behaviour's own. A missing section, or one that does not
-    map exactly the behaviour's inputs, is a located error."""
+    map exactly what the deployment reads -- ``inputs``, by default the behaviour's inputs (a
+    composition reads every channel of its arbiter and parts) -- is a located error."""
     from flctool.behaviour import load_behaviour
 
+    read = behaviour.input_names if inputs is None else inputs
     config = own if own is not None else behaviour.environment
     holder = behaviour if own is None else None  # whose source map places a problem
     if robot is not None:
@@ -36,8 +39,9 @@ def ros2_section(behaviour: Behaviour, where: str, robot: Path | None = None,
                            hint="see docs/ros2.md for the topics a robot file maps")
         raise FlcError(f"{where}'s environment is not a ROS 2 robot",
                        hint="name the robot's topics with --robot ROBOT.yaml (a behaviour "
-                       "with environment: {adapter: ros2, ...}, docs/ros2.md)")
-    problems = config.fit_problems(behaviour.input_names, tuple(behaviour.output.commands))
+                       "with environment: {adapter: ros2, ...} whose inputs are "
+                       f"{', '.join(read)}, docs/ros2.md)")
+    problems = config.fit_problems(read, tuple(behaviour.output.commands))
     if problems:
         error = SpecError(problems, where)
         raise error if holder is None else locate_error(holder, error)

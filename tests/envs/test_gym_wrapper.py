@@ -40,7 +40,8 @@ def test_every_shipped_pitch_behaviour_is_registered_and_passes_check_env() -> N
     from flctool.envs.gym_wrapper import shipped_pitch_behaviours
 
     names = shipped_pitch_behaviours()
-    assert {"dribble", "face-goal", "return-home", "avoid-obstacle"} <= set(names)
+    assert {"dribble", "face-goal", "return-home", "avoid-obstacle", "defend", "shoot",
+            "approach", "striker"} <= set(names)
     for name in names:
         for env_id in (f"flctool/{name}-v0", f"flctool/{name}-discrete-v0"):
             env = gym.make(env_id)

@@ -165,15 +165,31 @@ def test_composition_mistakes_are_located(tmp_path: Path) -> None:
     assert "reads 'guard'" in str(caught.value)
 
 
-def test_flctool_run_refuses_a_composition_clearly(tmp_path: Path) -> None:
+def test_flctool_run_ros2_needs_a_robot_file_mapping_every_channel_of_the_tree(
+        tmp_path: Path) -> None:
+    """Over ROS 2 a composition deploys whole too (tests/ros2/test_deploy.py drives one); its
+    own environment is the pitch world, so the topics come from --robot, which must map every
+    channel the arbiter and its parts read: a clear error otherwise, at the robot file's line."""
     from typer.testing import CliRunner
 
     from flctool.cli.app import app
 
-    result = CliRunner().invoke(app, ["run", str(_write(tmp_path)), "--ros2"])
-    assert result.exit_code != 0
-    assert "is a composed behaviour: flctool run --ros2 deploys one controller" in result.output
-    assert "--link" in result.output and "--format bundle" in result.output
+    from ..ros2_support import composition_robot
+
+    path = _write(tmp_path)
+    result = CliRunner().invoke(app, ["run", str(path), "--ros2"])
+    assert result.exit_code == 1, result.output
+    text = " ".join(result.output.split())
+    assert "arbiter.yaml's environment is not a ROS 2 robot" in text
+    assert "--robot ROBOT.yaml" in text and "inputs are behind, pan, goal_bearing" in text
+    robot = tmp_path / "robot.yaml"
+    robot.write_text(behaviour_to_yaml(composition_robot(("behind", "pan"))))
+    result = CliRunner().invoke(app, ["run", str(path), "--ros2", "--robot", str(robot)])
+    assert result.exit_code == 1, result.output
+    text = " ".join(result.output.split())
+    assert "robot.yaml:" in text and "environment.inputs: input 'goal_bearing' has no source" \
+        in text, text
+    assert "Traceback" not in result.output
 
 
 def _nearest_chase(folder: Path) -> Path:
