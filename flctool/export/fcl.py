@@ -39,7 +39,6 @@ from flctool.export.imported import (
     ImportedRule,
     ImportedSet,
     Method,
-    as_written,
     build_behaviour,
     check_unique,
     fuzzylite_set,
@@ -49,7 +48,7 @@ from flctool.export.imported import (
     unsupported,
     zero_order_constant,
 )
-from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, mamdani_report
+from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, import_notes
 
 #: fuzzylite 6's resolution of a Centroid read from FCL (the one FIS and FLL use).
 CENTROID_RESOLUTION = 100
@@ -245,21 +244,9 @@ class FclImporter(Importer):
         parser = _FclParser(tokenize(text, file), file, self.mamdani_singletons)
         controllers = parser.parse_all()
         behaviours = [build_behaviour(c) for c in controllers]
-        notes = []
-        if len(behaviours) > 1:
-            notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
-                         "named after its output ("
-                         + ", ".join(f"'{b.name}'" for b in behaviours)
-                         + "); each keeps the rules that conclude on its output, which "
-                         "computes it exactly as the file does")
-        for behaviour, output, controller in zip(behaviours, parser.outputs, controllers,
-                                                 strict=True):
-            if output.sets:
-                mamdani = dataclasses.replace(output.mamdani(),
-                                              **as_written(controller))
-                notes.append(f"{file}: output '{output.name}': "
-                             + mamdani_report(behaviour, mamdani))
-        self.report = "\n".join(notes)
+        self.report = import_notes(file, behaviours, [
+            (controller, output.mamdani()) if output.sets else None
+            for output, controller in zip(parser.outputs, controllers, strict=True)])
         return behaviours
 
 

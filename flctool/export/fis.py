@@ -12,7 +12,6 @@ MATLAB does not clip inputs to their range: clip states before evaluating to mat
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import re
 
@@ -29,7 +28,6 @@ from flctool.export.imported import (
     ImportedRule,
     ImportedSet,
     Method,
-    as_written,
     build_behaviour,
     excerpt,
     fuzzylite_quad,
@@ -38,7 +36,7 @@ from flctool.export.imported import (
     shaped_set,
     zero_order_constant,
 )
-from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, centroid, mamdani_report
+from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, centroid, import_notes
 
 
 def _vector(values: list[float]) -> str:
@@ -118,25 +116,18 @@ class FisImporter(Importer):
     def parse_all(self, text: str, file: str) -> list[Behaviour]:
         """One behaviour per output: each output's system (:func:`one_output`) read alone."""
         outputs = output_count(text)
-        behaviours, notes = [], []
+        behaviours: list[Behaviour] = []
+        conversions: list[tuple[ImportedController, MamdaniOutput] | None] = []
         for k in range(1, outputs + 1):
             reader = _FisReader(file, self.mamdani_singletons)
             behaviour = build_behaviour(reader.read(one_output(text, k) if outputs > 1
                                                    else text))
             if outputs > 1:  # named after its output
                 behaviour = behaviour.model_copy(update={"name": behaviour.output.name})
-            if reader.output_sets:
-                mamdani = dataclasses.replace(reader.mamdani_output(),
-                                              **as_written(reader.result))
-                notes.append(f"{file}: output '{behaviour.output.name}': "
-                             f"{mamdani_report(behaviour, mamdani)}")
             behaviours.append(behaviour)
-        if outputs > 1:
-            notes.insert(0, f"{file}: {outputs} outputs, imported as one behaviour each, named "
-                         "after its output (" + ", ".join(f"'{b.name}'" for b in behaviours)
-                         + "); each keeps the rules that conclude on its output, which "
-                         "computes it exactly as the file does")
-        self.report = "\n".join(notes)
+            conversions.append((reader.result, reader.mamdani_output()) if reader.output_sets
+                               else None)
+        self.report = import_notes(file, behaviours, conversions)
         return behaviours
 
 

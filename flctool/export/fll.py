@@ -32,7 +32,6 @@ from flctool.export.imported import (
     ImportedRule,
     ImportedSet,
     Method,
-    as_written,
     build_behaviour,
     excerpt,
     fuzzylite_set,
@@ -44,7 +43,7 @@ from flctool.export.mamdani import (
     IMPLICATIONS,
     MAMDANI_HINT,
     MamdaniOutput,
-    mamdani_report,
+    import_notes,
 )
 
 #: Words a fuzzylite rule reads as keywords or hedges, so they cannot name a variable or term.
@@ -134,21 +133,9 @@ class FllImporter(Importer):
         reader = _FllReader(file, self.mamdani_singletons)
         controllers = reader.read_all(text)
         behaviours = [build_behaviour(c) for c in controllers]
-        notes = []
-        if len(behaviours) > 1:
-            notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
-                         "named after its output ("
-                         + ", ".join(f"'{b.name}'" for b in behaviours)
-                         + "); each keeps the rules that conclude on its output, which "
-                         "computes it exactly as the file does")
-        for behaviour, output, controller in zip(behaviours, reader.outputs, controllers,
-                                                 strict=True):
-            if output.sets:
-                mamdani = dataclasses.replace(output.mamdani(),
-                                              **as_written(controller))
-                notes.append(f"{file}: output '{output.name}': "
-                             + mamdani_report(behaviour, mamdani))
-        self.report = "\n".join(notes)
+        self.report = import_notes(file, behaviours, [
+            (controller, output.mamdani()) if output.sets else None
+            for output, controller in zip(reader.outputs, controllers, strict=True)])
         return behaviours
 
 

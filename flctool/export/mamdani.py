@@ -12,8 +12,9 @@ good enough.
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,7 +22,7 @@ import numpy as np
 from flctool.behaviour import Behaviour
 from flctool.behaviour.shapes import set_row
 from flctool.compile import compile_behaviour
-from flctool.export.imported import OriginalRule
+from flctool.export.imported import ImportedController, OriginalRule, as_written
 from flctool.membership import memberships
 
 Quad = tuple[float, float, float, float]
@@ -212,3 +213,23 @@ def mamdani_report(behaviour: Behaviour, output: MamdaniOutput) -> str:
     return ("Mamdani output sets replaced by singletons at their centroids; the difference "
             "is not measured, since the rules do not give every combination of sets a "
             "command")
+
+
+def import_notes(file: str, behaviours: Sequence[Behaviour],
+                 conversions: Sequence[tuple[ImportedController, MamdaniOutput] | None]) -> str:
+    """What importing ``file`` did, for the user: how a file of several outputs was split,
+    then, for each output read as Mamdani sets (its controller as read and its sets; None
+    for a Sugeno output), what converting it to singletons changed."""
+    notes = []
+    if len(behaviours) > 1:
+        notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
+                     "named after its output (" + ", ".join(f"'{b.name}'" for b in behaviours)
+                     + "); each keeps the rules that conclude on its output, which computes "
+                     "it exactly as the file does")
+    for behaviour, conversion in zip(behaviours, conversions, strict=True):
+        if conversion is not None:
+            controller, output = conversion
+            written = dataclasses.replace(output, **as_written(controller))
+            notes.append(f"{file}: output '{behaviour.output.name}': "
+                         + mamdani_report(behaviour, written))
+    return "\n".join(notes)
