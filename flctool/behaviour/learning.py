@@ -16,6 +16,8 @@ from flctool.behaviour.set_learning import SetLearningConfig
 
 #: The learner of a ``learning:`` section that names none: the paper's method.
 DEFAULT_LEARNER = "hybrid"
+#: ``selection.race`` unless the file gives it (measured in docs/learning.md).
+RACE_DEFAULT = 60
 
 
 class QConfig(Section):
@@ -52,7 +54,13 @@ class SelectionConfig(Section):
     candidates: int = Field(10, ge=0, description=(
         "controllers kept for validation (0: no selection, best.yaml is the last "
         "generation's best by its training trials)"))
-    episodes: int = Field(20, ge=1, description="validation episodes per candidate")
+    episodes: int = Field(20, ge=1, description=(
+        "validation episodes per candidate (a race's first round)"))
+    race: int = Field(RACE_DEFAULT, ge=0, description=(
+        "validation episodes a race takes its finalists to: when the run ends, the validated "
+        "candidates race -- each round the best third (at least two) run on three times the "
+        "episodes, up to this many -- and the winner is returned; 0 (or at most episodes): "
+        "no race, the best on episodes is returned"))
     confirmation: int = Field(50, ge=0, description=(
         "fresh episodes the returned controller is confirmed on: the figure the run reports "
         "and stop.target is checked on (0: none)"))

@@ -358,7 +358,8 @@ class Learner(ABC):
             generator.bit_generator.state = checkpoint.rng[name]
         if checkpoint.selection is not None:  # None: a checkpoint of a run without one
             saved = checkpoint.selection
-            self.selection.restore(saved.hall, saved.best, saved.finalized, saved.validated)
+            self.selection.restore(saved.hall, saved.best, saved.finalized, saved.validated,
+                                   saved.racing, saved.race)
             self.budget.restore(saved.usage, saved.stop_reason)
             self.confirmation.restore(checkpoint.selection.confirmations)
             self.baseline_check.restore(checkpoint.selection.baselines,
