@@ -290,6 +290,7 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
         tmp_path: Path, learner: str, stop: dict[str, object]) -> None:
     behaviour = ballchase(learner=learner, seed=5, generations=12, **stop,
                           **{"selection.candidates": 3, "selection.episodes": 8,
+                             "selection.race": 24,
                              "selection.confirmation": 8})
     whole = create_run(behaviour, tmp_path / "a")
     whole_summary = whole.train()
@@ -310,6 +311,10 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
     assert info["selection"] == json.loads((part.path / "run.json").read_text())["selection"]
     assert resumed.usage == whole_summary.usage
     assert resumed.usage is not None and resumed.usage.selection_episodes > 0
+    # the candidates raced, unless a target ended the run (then none is validated after)
+    assert info["selection"]["race"]["episodes"] == 24
+    assert bool(info["selection"]["race"]["rounds"]) == (
+        info["selection"]["stop_reason"] != "target")
 
 
 @pytest.mark.parametrize("learner", names("learner"))
