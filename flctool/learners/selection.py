@@ -14,11 +14,20 @@ When candidates are validated:
 - after the last generation, every candidate still unvalidated: the hall's top
   ``selection.candidates`` and the final population's elites.
 
+Then the validated candidates **race** (:meth:`ModelSelection.race`, successive halving by
+thirds): on ``selection.episodes`` episodes a lucky candidate often validates above a better
+one, so the best third run on three times the episodes, and so on up to ``selection.race``;
+the winner of the last round is returned. Selection's episodes then go to the candidates
+still in contention. While racing is on, a validated candidate stays in the hall until the
+run ends, so that it can race; ``selection.race: 0`` is the selection of earlier versions,
+bit for bit.
+
 Seeds: training episodes use seeds in [2^32, 2^62) (drawn from the run's ``env`` stream),
 ``flctool evaluate`` uses seeds below 2^31 (drawn from its ``--seed``), and validation uses
 the fixed seeds :func:`validation_seeds` draws in [2^62, 2^63) from the run's seed: the three
 sets never meet. Every candidate meets the same validation episodes (common random numbers),
-so their differences come from the controllers.
+so their differences come from the controllers; a race's rounds take the next seeds of the
+same draw.
 
 Episodes already known: with a simulator (``env.replayable``: an episode is a function of
 its seed and the actions) a validation episode is not run again for a candidate that gives
