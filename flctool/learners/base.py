@@ -110,7 +110,8 @@ class Learner(ABC):
                                           self.controller.n_commands)
         # selection leaves room, within stop.episodes, for what the end of the run needs
         self.selection = ModelSelection(config.selection, config.seed, self.usage, limit,
-                                        self.rank_by, reserve=self.episodes_at_end)
+                                        self.rank_by, reserve=self.episodes_at_end,
+                                        race=config.race_episodes)
         self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
                              reserve=self.episodes_at_end)
         check_target(behaviour, env)

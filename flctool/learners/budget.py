@@ -195,9 +195,12 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
         for part in path[:-1]:
             section = getattr(section, part)
         value = getattr(section, path[-1])
+        if path == ("selection", "race") and value is None:
+            value = config.race_episodes  # unset: the learner's reading
         full = ("learning", *path)
         mark = source_map.mark(full)
-        default = type(section).model_fields[path[-1]].default
+        default = (config.default_race if path == ("selection", "race")
+                   else type(section).model_fields[path[-1]].default)
         given = next((where for given, where in source_map.overrides.items()
                       if full[:len(given)] == given), None)
         if given is not None:  # "command line (--set trials)": the option says it
@@ -214,8 +217,8 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     validated = (config.generations + selection.candidates + int(getattr(config, "elites", 1))
                  if selection.candidates else 0)
     most_selection = validated * selection.episodes
-    if selection.race > selection.episodes:
-        most_selection += race_cost(validated, selection.episodes, selection.race)
+    if config.race_episodes > selection.episodes:
+        most_selection += race_cost(validated, selection.episodes, config.race_episodes)
     commands = len(behaviour.output.commands)
     confirming = selection.confirmation
     return BudgetPlan(settings, len(behaviour.missing_rules()), commands,

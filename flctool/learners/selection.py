@@ -244,8 +244,11 @@ class ModelSelection(RunCallback[SelectionRun]):
 
     def __init__(self, config: SelectionConfig, run_seed: int, usage: Usage,
                  episode_limit: int | None = None, rank_by: str = "fitness",
-                 reserve: Callable[[], int] = lambda: 0) -> None:
+                 reserve: Callable[[], int] = lambda: 0, race: int | None = None) -> None:
         self.config = config
+        #: The episodes a race takes its finalists to: ``race``, else ``selection.race``,
+        #: else none (a learner passes its reading of an unset key).
+        self.race_to = race if race is not None else (config.race or 0)
         self.reserve = reserve  # episodes the end of the run needs after selection
         self.run_seed = run_seed
         self.usage = usage
@@ -257,10 +260,10 @@ class ModelSelection(RunCallback[SelectionRun]):
         self.validated: list[dict[str, Any]] = []  # every validation, in order
         #: Whether candidates race when the run ends (``selection.race``); a run started by
         #: a version without races continues without them (:meth:`restore`).
-        self.racing = config.race > config.episodes
+        self.racing = self.race_to > config.episodes
         self.rounds: list[dict[str, Any]] = []  # the last race's rounds (run.json)
         # a prefix of the longer draw: the first `episodes` seeds are the same either way
-        self.seeds = validation_seeds(run_seed, max(config.episodes, config.race))
+        self.seeds = validation_seeds(run_seed, max(config.episodes, self.race_to))
         # by validation seed and set genome (other sets: other episodes)
         self._known: dict[tuple[int, bytes], list[_KnownEpisode]] = {}
 
@@ -290,7 +293,7 @@ class ModelSelection(RunCallback[SelectionRun]):
         if self.racing:
             validated = sum(1 for c in self.hall.values() if c.validation is not None)
             episodes += race_cost(validated + 1 + self.config.candidates,
-                                  self.config.episodes, self.config.race)
+                                  self.config.episodes, self.race_to)
         return episodes
 
     # -- the hall of fame ------------------------------------------------------------------
@@ -428,8 +431,8 @@ class ModelSelection(RunCallback[SelectionRun]):
                              if len(c.episode_fitness) >= episodes),
                             key=lambda c: -c.mean_of(episodes))
         self.rounds = []
-        while len(contenders) > 1 and episodes < self.config.race:
-            episodes = min(episodes * RACE_FACTOR, self.config.race)
+        while len(contenders) > 1 and episodes < self.race_to:
+            episodes = min(episodes * RACE_FACTOR, self.race_to)
             survivors = contenders[:max(2, math.ceil(len(contenders) / RACE_FACTOR))]
             if not self.fits_episodes(sum(max(0, episodes - len(c.episode_fitness))
                                           for c in survivors)):
@@ -472,7 +475,7 @@ class ModelSelection(RunCallback[SelectionRun]):
         # the best is the same object as its hall entry, so later validations update both
         self.best = self.hall.get(best.key(), best) if best is not None else None
         self.finalized, self.validated = finalized, validated
-        self.racing = racing and self.config.race > self.config.episodes
+        self.racing = racing and self.race_to > self.config.episodes
         self.rounds = list(rounds or [])
 
     def record(self) -> dict[str, Any]:
@@ -483,6 +486,6 @@ class ModelSelection(RunCallback[SelectionRun]):
                 "seeds": f"{len(self.seeds)} fixed seeds in [2^62, 2^63) drawn from the "
                          "run's seed",
                 "validated": self.validated,
-                "race": {"episodes": self.config.race if self.racing else 0,
+                "race": {"episodes": self.race_to if self.racing else 0,
                          "rounds": self.rounds},
                 "best": None if self.best is None else self.best.record()}

@@ -21,15 +21,17 @@ def test_the_paper_s_protocol_is_stated_as_the_default() -> None:
     selection = behaviour.learning.selection
     assert (plan.rules, plan.commands, plan.training) == (15, 5, 300)
     validated = 30 + selection.candidates + 1  # every leader, the last candidates, the elite
+    race = behaviour.learning.race_episodes
+    assert race == 60 and selection.race is None  # unset: the hybrid's reading
     assert plan.selection == validated * selection.episodes + race_cost(
-        validated, selection.episodes, selection.race)
+        validated, selection.episodes, race)
     assert (plan.confirmation, plan.baselines) == (50, (5 + 3) * 10 + 40)
     assert plan.most == 300 + plan.selection + 50 + 120 and plan.limit is None
     assert all(s.source == "default" for s in plan.settings.values())
     lines = plan.lines()
     assert lines[0].startswith(f"budget: at most {plan.most:,} episodes: 300 training")
     assert "30 generations x 10 individuals x 1 trial (the paper's protocol" in lines[1]
-    assert f"raced on to {selection.race} episodes" in lines[2]
+    assert "raced on to 60 episodes" in lines[2] and "selection.race 60 (default)" in lines[2]
 
 
 def test_each_setting_says_where_it_came_from() -> None:
@@ -50,6 +52,19 @@ def test_each_setting_says_where_it_came_from() -> None:
     no_selection = resolve_behaviour(load_behaviour(path), {"selection.candidates": 0})
     assert plan_budget(no_selection).selection == 0
     assert "selection: none" in plan_budget(no_selection).lines()[2]
+
+
+def test_fuzzy_q_does_not_race_unless_the_file_says() -> None:
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                                  {"learner": "fuzzy_q"})
+    plan = plan_budget(behaviour)
+    assert behaviour.learning.race_episodes == 0
+    assert plan.settings["selection.race"].value == 0
+    assert plan.settings["selection.race"].source == "default"
+    assert "no race" in plan.lines()[2]
+    raced = resolve_behaviour(behaviour, {"selection.race": 60})
+    assert raced.learning.race_episodes == 60
+    assert make_learner(raced).selection.racing and not make_learner(behaviour).selection.racing
 
 
 @pytest.mark.parametrize("name", names("learner"))
