@@ -7,6 +7,9 @@ confirmation reaches ``stop.target`` (:mod:`flctool.learners.confirmation`). Bud
 training and selection episodes alike and are checked between generations, from counts saved
 in every checkpoint, so that a run stopped by ``episodes``, ``steps`` or ``target`` is as
 reproducible as one that runs all its generations; only ``seconds`` depends on the machine.
+
+Before a run starts, :func:`plan_budget` says what it will spend and why: each number with
+where it came from (``flctool validate`` and ``flctool learn`` print it).
 """
 
 from __future__ import annotations
