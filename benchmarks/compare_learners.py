@@ -8,8 +8,10 @@ behaviour's model selection (``learning.selection``). Its ``best.yaml`` is then 
 below 2^31; training uses seeds in [2^32, 2^62), selection in [2^62, 2^63), so none is
 shared). Prints, per learner, the median, mean and worst held-out success over the seeds,
 the area under the mean-fitness curve (sum over generations of the generation's mean
-fitness), and the episodes every run used -- training and selection, both counted -- and
-writes everything as JSON.
+fitness), the episodes every run used -- training, selection, confirmation and baselines,
+all counted -- the calibration (in how many runs the confirmation's interval contains the
+held-out mean fitness) and the runs that ended ``not_learned``, and writes everything as
+JSON.
 
     python benchmarks/compare_learners.py                     # 30 seeds, 1,000 episodes
     python benchmarks/compare_learners.py --set selection.candidates=0   # no selection
@@ -56,6 +58,12 @@ def run_one(behaviour_path: Path, learner: str, seed: int, overrides: dict[str, 
             "heldout_fitness": float(result.mean_fitness.value)}
 
 
+def calibrated(row: dict[str, Any]) -> bool:
+    """Whether the run's confirmation interval contains its held-out mean fitness."""
+    interval = row["confirmed_fitness"]
+    return bool(interval) and interval["low"] <= row["heldout_fitness"] <= interval["high"]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--behaviour", type=Path, default=ROOT / "behaviours/ballchase.yaml")
@@ -81,7 +89,8 @@ def main() -> None:
     print(f"{args.behaviour.name}: {args.seeds} training seeds from {args.first_seed}, "
           f"best.yaml on {args.episodes} held-out episodes; overrides {overrides or 'none'}")
     print(f"{'learner':8} {'median':>7} {'mean':>7} {'worst':>7} {'(seed)':>6} {'AUC':>7} "
-          f"{'cpu s':>6} {'training':>8} {'selection':>9} {'episodes':>8}")
+          f"{'cpu s':>6} {'training':>8} {'selection':>9} {'episodes':>8} {'calibrated':>9} "
+          f"{'not_learned':>11}")
     for learner in learners:
         rows = [r for r in results if r["learner"] == learner]
         success = [r["success"] for r in rows]
@@ -93,12 +102,15 @@ def main() -> None:
             "mean_train_cpu_seconds": statistics.mean(r["train_cpu_seconds"] for r in rows),
             "mean_training_episodes": statistics.mean(r["training_episodes"] for r in rows),
             "mean_selection_episodes": statistics.mean(r["selection_episodes"] for r in rows),
-            "mean_episodes": statistics.mean(r["episodes"] for r in rows)}
+            "mean_episodes": statistics.mean(r["episodes"] for r in rows),
+            "calibrated": sum(calibrated(r) for r in rows),
+            "not_learned": sum(r["status"] == "not_learned" for r in rows)}
         s = summary[learner]
         print(f"{learner:8} {s['median_success']:7.3f} {s['mean_success']:7.3f} "
               f"{s['worst_success']:7.3f} {s['worst_seed']:6d} {s['mean_auc']:7.2f} "
               f"{s['mean_train_cpu_seconds']:6.2f} {s['mean_training_episodes']:8.0f} "
-              f"{s['mean_selection_episodes']:9.0f} {s['mean_episodes']:8.0f}")
+              f"{s['mean_selection_episodes']:9.0f} {s['mean_episodes']:8.0f} "
+              f"{s['calibrated']:4d}/{len(rows):<4d} {s['not_learned']:11d}")
     if "pitt" in summary and "hybrid" in summary:
         ratio = summary["hybrid"]["mean_auc"] / summary["pitt"]["mean_auc"]
         print(f"hybrid AUC / pitt AUC = {ratio:.3f}")

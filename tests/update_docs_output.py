@@ -19,6 +19,8 @@ from pathlib import Path
 from tests.test_docs import Block, _run, _workspace, console_commands, extract_blocks, run_block
 
 _VARYING = ((re.compile(r"^\w+ gen ━.*$", re.MULTILINE), "..."),
+            # a slow run's plain progress lines (tests.test_docs ignores them)
+            (re.compile(r"^\w+ generation \d+/\d+ .*\(\d+ s\)\n", re.MULTILINE), ""),
             (re.compile(r"; [\d.]+ s of training"), "; ... s of training"))
 
 

@@ -323,6 +323,8 @@ EQUATIONS: dict[str, str] = {
                                "on, the figure a run reports (seeds disjoint from all others)"),
     "selection.episodes": ("an addition: validation episodes per candidate (seeds disjoint from "
                            "training and from evaluate)"),
+    "selection.race": ("an addition: racing the validated candidates (successive halving by "
+                       "thirds) up to this many validation episodes before one is returned"),
     "stop": "an addition: the run's budget; the paper stops after a number of generations",
     "stop.episodes": "an addition: stop after this many episodes, selection included",
     "stop.steps": "an addition: stop after this many environment steps",

@@ -52,7 +52,16 @@ class SelectionConfig(Section):
     candidates: int = Field(10, ge=0, description=(
         "controllers kept for validation (0: no selection, best.yaml is the last "
         "generation's best by its training trials)"))
-    episodes: int = Field(20, ge=1, description="validation episodes per candidate")
+    episodes: int = Field(20, ge=1, description=(
+        "validation episodes per candidate (a race's first round)"))
+    # One default for the key every learner reads (an experiment's one file carries it for
+    # all); what an unset key means is the learner's: LearningConfig.race_episodes.
+    race: int | None = Field(None, ge=0, description=(
+        "validation episodes a race takes its finalists to: when the run ends, the validated "
+        "candidates race -- each round the best third (at least two) run on three times the "
+        "episodes, up to this many -- and the winner is returned; 0 (or at most episodes): "
+        "no race, the best on episodes is returned; unset: 60 under pitt and hybrid, 0 "
+        "under fuzzy_q"))
     confirmation: int = Field(50, ge=0, description=(
         "fresh episodes the returned controller is confirmed on: the figure the run reports "
         "and stop.target is checked on (0: none)"))
@@ -147,6 +156,16 @@ class LearningConfig(Section):
         "learn the fuzzy sets of some inputs with the consequents (docs/learning.md); "
         "without it only the consequents are learned"))
 
+    #: What an unset ``selection.race`` means for this learner. Measured (docs/learning.md):
+    #: a race to 60 episodes lifts the GAs' worst seeds; fuzzy_q's greedy controllers of
+    #: the latest generations are alike, and racing them changed nothing but the cost.
+    default_race: ClassVar[int] = 60
+
+    @property
+    def race_episodes(self) -> int:
+        """``selection.race`` as the run reads it: the file's, or the learner's default."""
+        return self.default_race if self.selection.race is None else self.selection.race
+
 
 class GeneticConfig(LearningConfig):
     """The genetic algorithm's keys, shared by the ``pitt`` and ``hybrid`` learners
@@ -198,6 +217,8 @@ class FuzzyQConfig(LearningConfig):
     learner: Literal["fuzzy_q"] = Field("fuzzy_q", description="fuzzy Q-learning of one controller")
     q: QConfig = QConfig()
     exploration: ExplorationConfig = ExplorationConfig()
+
+    default_race: ClassVar[int] = 0
 
 
 class HybridConfig(GeneticConfig):

@@ -69,7 +69,7 @@ def _check(path: Path) -> tuple[dict[str, Any], FlcError | None]:
     error that made it invalid."""
     result: dict[str, Any] = {"file": str(path), "valid": False, "behaviour": None,
                               "deployable": None, "rules": None, "rules_to_learn": None,
-                              "problems": [], "warnings": [], "notes": []}
+                              "budget": None, "problems": [], "warnings": [], "notes": []}
     try:
         report = validate_file(controller_file(path))
     except FlcError as error:
@@ -91,9 +91,23 @@ def _check(path: Path) -> tuple[dict[str, Any], FlcError | None]:
     behaviour = report.behaviour
     result.update(valid=True, behaviour=behaviour.name, deployable=behaviour.is_deployable,
                   rules=behaviour.rule_count, rules_to_learn=len(behaviour.missing_rules()),
+                  budget=None if behaviour.is_deployable else _budget(behaviour),
                   warnings=[_problem(w) for w in report.warnings],
                   notes=[report.adapter_note] if report.adapter_note else [])
     return result, None
+
+
+def _budget(behaviour: Behaviour) -> dict[str, Any]:
+    """What learning the file would spend, and why (``validate --json``'s ``budget``)."""
+    from flctool.learners.budget import plan_budget
+
+    plan = plan_budget(behaviour)
+    return {"most_episodes": plan.most, "training_episodes": plan.training,
+            "selection_episodes_at_most": plan.selection,
+            "confirmation_episodes": plan.confirmation,
+            "baseline_episodes": plan.baselines, "statement": plan.lines(),
+            "settings": {key: {"value": s.value, "from": s.source}
+                         for key, s in plan.settings.items()}}
 
 
 def _problem(problem: Problem) -> dict[str, Any]:
@@ -119,6 +133,8 @@ def _say(result: dict[str, Any], error: FlcError | None) -> None:
     state = ("deployable" if result["deployable"]
              else f"{result['rules_to_learn']} of {result['rules']} rules to learn")
     say(f"{result['file']}: {result['behaviour']} ({state})", "ok")
+    if result["budget"] is not None:
+        console.print(escape("\n".join(result["budget"]["statement"])), highlight=False)
 
 
 def validate_file(path: Path) -> FileReport:
@@ -179,6 +195,18 @@ def show(
         console.print(_rule_grid(behaviour))
     elif behaviour.rules:
         console.print(_rule_list(behaviour))
+    if missing:
+        console.print(escape(_similar(missing, k)), highlight=False)
+
+
+def _similar(rules: int, commands: int) -> str:
+    """What the measured tasks nearest in size needed (flctool.learners.measured)."""
+    from flctool.learners.measured import similar_tasks
+
+    return "\n".join([
+        "similar problems measured (docs/learning.md, seeds 100-109, each file's defaults; "
+        "selection, confirmation and baselines on top of the training episodes):",
+        *(f"  {task.line()}" for task in similar_tasks(rules, commands))])
 
 
 def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) -> Table:

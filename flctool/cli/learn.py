@@ -107,7 +107,8 @@ def learn(
                           f"{escape(str(run.path))}", highlight=False)
         from flctool.learners.budget import describe_budget
 
-        err_console.print(escape(describe_budget(training.learner)), highlight=False)
+        err_console.print(escape(describe_budget(
+            behaviour, len(training.learner.baseline_check.given))), highlight=False)
         try:
             summary = _train(training, show_progress=not as_json)
         except KeyboardInterrupt:

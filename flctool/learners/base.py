@@ -110,7 +110,8 @@ class Learner(ABC):
                                           self.controller.n_commands)
         # selection leaves room, within stop.episodes, for what the end of the run needs
         self.selection = ModelSelection(config.selection, config.seed, self.usage, limit,
-                                        self.rank_by, reserve=self.episodes_at_end)
+                                        self.rank_by, reserve=self.episodes_at_end,
+                                        race=config.race_episodes)
         self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
                              reserve=self.episodes_at_end)
         check_target(behaviour, env)
@@ -358,7 +359,8 @@ class Learner(ABC):
             generator.bit_generator.state = checkpoint.rng[name]
         if checkpoint.selection is not None:  # None: a checkpoint of a run without one
             saved = checkpoint.selection
-            self.selection.restore(saved.hall, saved.best, saved.finalized, saved.validated)
+            self.selection.restore(saved.hall, saved.best, saved.finalized, saved.validated,
+                                   saved.racing, saved.race)
             self.budget.restore(saved.usage, saved.stop_reason)
             self.confirmation.restore(checkpoint.selection.confirmations)
             self.baseline_check.restore(checkpoint.selection.baselines,

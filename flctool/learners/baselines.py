@@ -84,6 +84,14 @@ NOT_LEARNED_HINT = ("give it more budget (--generations, --set trials=2, --set "
                     "use coarser sets (fewer rules to learn)")
 
 
+def baseline_episodes(n_commands: int, given: int, confirmed: int) -> int:
+    """The episodes the comparison with baselines takes after a confirmation of
+    ``confirmed`` episodes, with ``given`` hand-made tables: every baseline on the screening
+    episodes, the strongest on the rest."""
+    screen = min(SCREEN_EPISODES, confirmed)
+    return (n_commands + RANDOM_TABLES + given) * screen + confirmed - screen
+
+
 class ComparedRun(Protocol):
     """What the comparison with baselines reads of the run it is part of (a
     :class:`~flctool.learners.base.Learner` is one)."""
@@ -113,10 +121,9 @@ class BaselineCheck(RunCallback[ComparedRun]):
         self.verdict: Verdict | None = None
 
     def episodes_needed(self, n_commands: int, confirmed: int) -> int:
-        """The episodes the comparison takes after a confirmation of ``confirmed`` episodes:
-        every baseline on the screening episodes, the strongest on the rest."""
-        screen = min(SCREEN_EPISODES, confirmed)
-        return (n_commands + RANDOM_TABLES + len(self.given)) * screen + confirmed - screen
+        """The episodes the comparison takes after a confirmation of ``confirmed`` episodes
+        (:func:`baseline_episodes`)."""
+        return baseline_episodes(n_commands, len(self.given), confirmed)
 
     def on_finish(self, learner: ComparedRun) -> None:
         final = self.confirmation.final

@@ -7,22 +7,25 @@ confirmation reaches ``stop.target`` (:mod:`flctool.learners.confirmation`). Bud
 training and selection episodes alike and are checked between generations, from counts saved
 in every checkpoint, so that a run stopped by ``episodes``, ``steps`` or ``target`` is as
 reproducible as one that runs all its generations; only ``seconds`` depends on the machine.
+
+Before a run starts, :func:`plan_budget` says what it will spend and why: each number with
+where it came from (``flctool validate`` and ``flctool learn`` print it).
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
-from dataclasses import fields
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Protocol
 
 from flctool.behaviour.learning import LearningConfig, StopConfig
 from flctool.learners.confirmation import ConfirmedRun
-from flctool.learners.metrics import GenerationResult, IntArray, Usage
+from flctool.learners.metrics import GenerationResult, Usage
 from flctool.learners.run_callback import RunCallback
 
 if TYPE_CHECKING:
     from flctool.behaviour.models import Behaviour
-    from flctool.compile.controller import Controller
     from flctool.learners.confirmation import Confirmation
     from flctool.learners.selection import ModelSelection
 
@@ -38,27 +41,6 @@ class BudgetedRun(ConfirmedRun, Protocol):
     def elapsed(self) -> float: ...
 
     def episodes_per_generation(self) -> int: ...
-
-
-class PlannedRun(Protocol):
-    """What :func:`describe_budget` reads of a run before it starts."""
-
-    @property
-    def config(self) -> LearningConfig: ...
-
-    @property
-    def behaviour(self) -> Behaviour: ...
-
-    @property
-    def controller(self) -> Controller: ...
-
-    @property
-    def fixed_rules(self) -> IntArray: ...
-
-    @property
-    def confirmation(self) -> Confirmation: ...
-
-    def episodes_at_end(self) -> int: ...
 
 
 class Budget(RunCallback[BudgetedRun]):
@@ -114,34 +96,141 @@ class Budget(RunCallback[BudgetedRun]):
         self.stop_reason = stop_reason
 
 
-def describe_budget(learner: PlannedRun) -> str:
-    """What the run will spend and why, in one line for ``flctool learn`` to say: its
-    training episodes (generations x population x trials, from the file or the defaults, the
-    paper's protocol), for how many rules and commands, and what selection, confirmation
-    and the comparison with baselines add."""
-    from flctool.behaviour.located import source_of
+@dataclass(frozen=True)
+class Setting:
+    """One setting of a run's budget: its key, value, and where the value came from."""
 
-    config = learner.config
-    source_map = source_of(learner.behaviour)
-    given = [key for key in ("generations", "population", "trials")
-             if source_map.mark(("learning", key)) is not None
-             or ("learning", key) in source_map.overrides]
-    source = ("the paper's protocol: the file sets none of generations, population, trials"
-              if not given else f"{', '.join(given)} as given, the rest the paper's protocol")
-    free = learner.controller.n_rules - len(learner.fixed_rules)
-    training = config.generations * config.population * config.trials
-    confirming = learner.confirmation.episodes
-    end = learner.episodes_at_end()
+    key: str  # as the file writes it: "generations", "selection.episodes"
+    value: int | None
+    #: "the file's line 12", "--set trials" (a command-line override), "overrides (trials)"
+    #: (one given in Python), "given" (a behaviour built in Python), or "default"
+    source: str
+
+    def text(self) -> str:
+        return f"{self.key} {self.value} ({self.source})"
+
+
+#: The settings a budget statement names, as field paths under ``learning``.
+_SETTINGS = (("generations",), ("population",), ("trials",), ("selection", "candidates"),
+             ("selection", "episodes"), ("selection", "race"), ("selection", "confirmation"),
+             ("stop", "episodes"))
+
+
+@dataclass(frozen=True)
+class BudgetPlan:
+    """What a run will spend, and why: :func:`plan_budget` makes it before the run starts
+    (``flctool validate`` and ``flctool learn`` say it)."""
+
+    settings: dict[str, Setting]
+    rules: int  # rules to learn (M less the rules the file gives)
+    commands: int  # K
+    training: int  # generations x population x trials
+    selection: int  # the most validation episodes selection and its race may spend
+    confirmation: int
+    baselines: int  # the comparison with baselines, after a full confirmation
+    limit: int | None  # stop.episodes
+
+    @property
+    def most(self) -> int:
+        """The most episodes the run may spend in all (``stop.episodes`` if lower)."""
+        total = self.training + self.selection + self.confirmation + self.baselines
+        return total if self.limit is None else min(total, self.limit)
+
+    def lines(self) -> list[str]:
+        """The statement, first line a summary, the rest indented: every number and where
+        it came from."""
+        s = self.settings
+        protocol = [s[key] for key in ("generations", "population", "trials")]
+        source = ("the paper's protocol: the file gives none of them"
+                  if all(x.source == "default" for x in protocol) else
+                  ", ".join(f"{x.key} from {x.source}" for x in protocol
+                            if x.source != "default") + ", the rest the paper's protocol")
+        lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
+                 f"{self.selection:,} selection, {self.confirmation} confirmation and "
+                 f"{self.baselines} against baselines, for {self.rules} rules to learn x "
+                 f"{self.commands} commands",
+                 f"  training: {_count(s['generations'].value, 'generation')} x "
+                 f"{s['population'].value} individuals x "
+                 f"{_count(s['trials'].value, 'trial')} ({source})"]
+        if s["selection.candidates"].value:
+            race = s["selection.race"]
+            raced = (f"; the best raced on to {race.value} episodes"
+                     if (race.value or 0) > (s["selection.episodes"].value or 0)
+                     else "; no race")
+            lines.append(f"  selection: each generation's leader and the last "
+                         f"{s['selection.candidates'].value} candidates on "
+                         f"{s['selection.episodes'].value} validation episodes each{raced} "
+                         f"({', '.join(s[k].text() for k in _SELECTION)})")
+        else:
+            lines.append(f"  selection: none ({s['selection.candidates'].text()})")
+        lines.append(f"  confirmation: {s['selection.confirmation'].text()}; the comparison "
+                     f"with baselines runs every constant command and random table on 10 of "
+                     f"its episodes, the strongest on the rest")
+        if self.limit is not None:
+            lines.append(f"  limit: {s['stop.episodes'].text()}")
+        return lines
+
+
+_SELECTION = ("selection.candidates", "selection.episodes", "selection.race")
+
+
+def _count(number: int | None, noun: str) -> str:
+    return f"{number} {noun}{'' if number == 1 else 's'}"
+
+
+def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
+    """The budget a run of ``behaviour`` will use (``baselines``: hand-made tables given
+    with ``--baseline``), each setting with where it came from: a line of the file, a
+    ``--set``, or the default (the paper's protocol for generations, population, trials).
+
+    Selection's figure is a bound: every generation's leader and the last candidates and
+    elites validated (a run usually meets fewer distinct leaders), and the race
+    (:func:`~flctool.learners.selection.race_cost`) over all of them."""
+    from flctool.behaviour.located import source_of
+    from flctool.learners.baselines import baseline_episodes
+    from flctool.learners.selection import race_cost
+
+    config = behaviour.learning
+    source_map = source_of(behaviour)
+
+    def setting(path: tuple[str, ...]) -> Setting:
+        section: Any = config
+        for part in path[:-1]:
+            section = getattr(section, part)
+        value = getattr(section, path[-1])
+        if path == ("selection", "race") and value is None:
+            value = config.race_episodes  # unset: the learner's reading
+        full = ("learning", *path)
+        mark = source_map.mark(full)
+        default = (config.default_race if path == ("selection", "race")
+                   else type(section).model_fields[path[-1]].default)
+        given = next((where for given, where in source_map.overrides.items()
+                      if full[:len(given)] == given), None)
+        if given is not None:  # "command line (--set trials)": the option says it
+            inner = re.fullmatch(r"command line \((.*)\)", given)
+            source = inner.group(1) if inner else given
+        elif mark is not None:
+            source = f"the file's line {mark[0]}"
+        else:
+            source = "default" if value == default else "given"
+        return Setting(".".join(path), value, source)
+
+    settings = {".".join(path): setting(path) for path in _SETTINGS}
     selection = config.selection
-    validation = (f"selection validates candidates on {selection.episodes} episodes each"
-                  if selection.candidates else "no selection")
-    stop = config.stop
-    limit = f"; at most {stop.episodes} episodes in all (stop.episodes)" \
-        if stop.episodes is not None else ""
-    generations = f"{config.generations} generation{'s' if config.generations != 1 else ''}"
-    return (f"budget: {generations} x {config.population} individuals x "
-            f"{config.trials} trial{'s' if config.trials != 1 else ''} = {training} training "
-            f"episodes ({source}) for {free} rules to learn x "
-            f"{learner.controller.n_commands} commands; {validation}; the returned controller "
-            f"is confirmed on {confirming} fresh episodes and compared with baselines "
-            f"({end - confirming} episodes){limit}")
+    validated = (config.generations + selection.candidates + int(getattr(config, "elites", 1))
+                 if selection.candidates else 0)
+    most_selection = validated * selection.episodes
+    if config.race_episodes > selection.episodes:
+        most_selection += race_cost(validated, selection.episodes, config.race_episodes)
+    commands = len(behaviour.output.commands)
+    confirming = selection.confirmation
+    return BudgetPlan(settings, len(behaviour.missing_rules()), commands,
+                      config.generations * config.population * config.trials, most_selection,
+                      confirming,
+                      baseline_episodes(commands, baselines, confirming) if confirming >= 2
+                      else 0, config.stop.episodes)
+
+
+def describe_budget(behaviour: Behaviour, baselines: int = 0) -> str:
+    """:func:`plan_budget`'s statement, as ``flctool validate`` and ``learn`` print it."""
+    return "\n".join(plan_budget(behaviour, baselines).lines())

@@ -75,6 +75,10 @@ class SelectionState:
     #: Hand-made baseline tables (name, consequents (M,)) and the end-of-run verdict.
     baselines: list[tuple[str, IntArray]] = field(default_factory=list)
     verdict: Verdict | None = None
+    #: Whether candidates race when the run ends (False: a version without races wrote
+    #: it), and the last race's rounds.
+    racing: bool = False
+    race: list[dict[str, Any]] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -283,6 +287,8 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
         stop_reason = state["stop_reason"]
         finalized = bool(state["finalized"])
         validated = [dict(v) for v in state["validated"]]
+        racing = state.get("racing", False)
+        race = [dict(r) for r in state.get("race", [])]
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
         raise damaged(f"'s selection record is damaged ({exc!r})") from None
     for candidate in [*hall, *([best] if best else [])]:
@@ -306,5 +312,7 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
                 genes.min() < 0 or genes.max() >= expected.n_commands)):
             raise damaged("'s confirmation or baseline record holds a controller that is not "
                           "one of this behaviour")
+    if not isinstance(racing, bool):
+        raise damaged("'s selection record is damaged (racing is not true or false)")
     return SelectionState(hall, best, usage, stop_reason, finalized, validated, confirmations,
-                          given, verdict)
+                          given, verdict, racing, race)

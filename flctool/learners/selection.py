@@ -14,11 +14,20 @@ When candidates are validated:
 - after the last generation, every candidate still unvalidated: the hall's top
   ``selection.candidates`` and the final population's elites.
 
+Then the validated candidates **race** (:meth:`ModelSelection.race`, successive halving by
+thirds): on ``selection.episodes`` episodes a lucky candidate often validates above a better
+one, so the best third run on three times the episodes, and so on up to ``selection.race``;
+the winner of the last round is returned. Selection's episodes then go to the candidates
+still in contention. While racing is on, a validated candidate stays in the hall until the
+run ends, so that it can race; ``selection.race: 0`` is the selection of earlier versions,
+bit for bit.
+
 Seeds: training episodes use seeds in [2^32, 2^62) (drawn from the run's ``env`` stream),
 ``flctool evaluate`` uses seeds below 2^31 (drawn from its ``--seed``), and validation uses
 the fixed seeds :func:`validation_seeds` draws in [2^62, 2^63) from the run's seed: the three
 sets never meet. Every candidate meets the same validation episodes (common random numbers),
-so their differences come from the controllers.
+so their differences come from the controllers; a race's rounds take the next seeds of the
+same draw.
 
 Episodes already known: with a simulator (``env.replayable``: an episode is a function of
 its seed and the actions) a validation episode is not run again for a candidate that gives
@@ -36,7 +45,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
@@ -56,6 +65,8 @@ VALIDATION_SEED_LOW = 2**62
 VALIDATION_SEED_HIGH = 2**63 - 1
 #: Index of the validation seeds' child in the run's SeedSequence (after ga, env, explore).
 _VALIDATION_STREAM = 3
+#: A race's rounds keep the best third of the candidates, on three times the episodes.
+RACE_FACTOR = 3
 
 
 def validation_seeds(run_seed: int, episodes: int) -> NDArray[np.int64]:
@@ -85,6 +96,11 @@ class Candidate:
     #: by a version that did not record them).
     validation_success: float | None = None
     validation_return: float | None = None
+    #: Each validation episode's fitness, success and return, in seed order (empty: not
+    #: validated, or by a version that did not record them): what a race extends.
+    episode_fitness: list[float] = field(default_factory=list)
+    episode_success: list[bool] = field(default_factory=list)
+    episode_return: list[float] = field(default_factory=list)
 
     @property
     def fitness(self) -> float:
@@ -98,6 +114,11 @@ class Candidate:
         """The validated mean fitness; -inf before validation."""
         return -math.inf if self.validation is None else self.validation.value
 
+    def mean_of(self, episodes: int) -> float:
+        """The mean fitness over its first ``episodes`` validation episodes (a race compares
+        candidates on the same episodes)."""
+        return math.fsum(self.episode_fitness[:episodes]) / episodes
+
     def to_dict(self) -> dict[str, Any]:
         return {"consequents": self.consequents.tolist(), "generation": self.generation,
                 "individual": self.individual, "fitness_sum": self.fitness_sum,
@@ -106,12 +127,18 @@ class Candidate:
                     self.validation),
                 "validation_success": self.validation_success,
                 "validation_return": self.validation_return,
+                **({} if not self.episode_fitness else {
+                    "episodes": [self.episode_fitness, self.episode_success,
+                                 self.episode_return]}),
                 **({} if self.sets is None else {"sets": self.sets.tolist()})}
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Candidate:
         validation = data["validation"]
         success, mean_return = data.get("validation_success"), data.get("validation_return")
+        fitness, won, returns = data.get("episodes") or ([], [], [])
+        if not len(fitness) == len(won) == len(returns):
+            raise ValueError("a candidate's validation episodes differ in length")
         return cls(np.array(data["consequents"], dtype=np.intp), int(data["generation"]),
                    int(data["individual"]), float(data["fitness_sum"]), int(data["trials"]),
                    None if validation is None else _estimate(validation),
@@ -119,7 +146,9 @@ class Candidate:
                    None if data.get("sets") is None else np.array(data["sets"],
                                                                   dtype=np.float64),
                    None if success is None else float(success),
-                   None if mean_return is None else float(mean_return))
+                   None if mean_return is None else float(mean_return),
+                   [float(v) for v in fitness], [bool(v) for v in won],
+                   [float(v) for v in returns])
 
     def validation_in(self, unit: str) -> float:
         """The validated figure in ``unit`` (``fitness``, ``success`` or ``return``); -inf
@@ -136,6 +165,18 @@ class Candidate:
                 else self.validation.to_dict(),
                 "validation_success": self.validation_success,
                 "validation_return": self.validation_return}
+
+
+def race_cost(candidates: int, first: int, last: int) -> int:
+    """The most episodes a race of ``candidates`` validated on ``first`` episodes each costs
+    when it takes its finalists to ``last`` (see :meth:`ModelSelection.race`)."""
+    episodes, cost = first, 0
+    while candidates > 1 and episodes < last:
+        more = min(episodes * RACE_FACTOR, last)
+        candidates = max(2, math.ceil(candidates / RACE_FACTOR))
+        cost += candidates * (more - episodes)
+        episodes = more
+    return cost
 
 
 def _key(consequents: IntArray, sets: FloatArray | None = None) -> bytes:
@@ -203,8 +244,11 @@ class ModelSelection(RunCallback[SelectionRun]):
 
     def __init__(self, config: SelectionConfig, run_seed: int, usage: Usage,
                  episode_limit: int | None = None, rank_by: str = "fitness",
-                 reserve: Callable[[], int] = lambda: 0) -> None:
+                 reserve: Callable[[], int] = lambda: 0, race: int | None = None) -> None:
         self.config = config
+        #: The episodes a race takes its finalists to: ``race``, else ``selection.race``,
+        #: else none (a learner passes its reading of an unset key).
+        self.race_to = race if race is not None else (config.race or 0)
         self.reserve = reserve  # episodes the end of the run needs after selection
         self.run_seed = run_seed
         self.usage = usage
@@ -214,7 +258,12 @@ class ModelSelection(RunCallback[SelectionRun]):
         self.best: Candidate | None = None
         self.finalized = False
         self.validated: list[dict[str, Any]] = []  # every validation, in order
-        self.seeds = validation_seeds(run_seed, config.episodes)
+        #: Whether candidates race when the run ends (``selection.race``); a run started by
+        #: a version without races continues without them (:meth:`restore`).
+        self.racing = self.race_to > config.episodes
+        self.rounds: list[dict[str, Any]] = []  # the last race's rounds (run.json)
+        # a prefix of the longer draw: the first `episodes` seeds are the same either way
+        self.seeds = validation_seeds(run_seed, max(config.episodes, self.race_to))
         # by validation seed and set genome (other sets: other episodes)
         self._known: dict[tuple[int, bytes], list[_KnownEpisode]] = {}
 
@@ -237,8 +286,15 @@ class ModelSelection(RunCallback[SelectionRun]):
 
     def most_episodes_after_generation(self) -> int:
         """The most validation episodes one more generation may cost: its leader's and,
-        if it is the last, every candidate's."""
-        return (1 + self.config.candidates) * self.config.episodes if self.enabled else 0
+        if it is the last, every candidate's and the race's."""
+        if not self.enabled:
+            return 0
+        episodes = (1 + self.config.candidates) * self.config.episodes
+        if self.racing:
+            validated = sum(1 for c in self.hall.values() if c.validation is not None)
+            episodes += race_cost(validated + 1 + self.config.candidates,
+                                  self.config.episodes, self.race_to)
+        return episodes
 
     # -- the hall of fame ------------------------------------------------------------------
     def offer(self, population: IntArray, fitness: FloatArray, generation: int,
@@ -264,6 +320,8 @@ class ModelSelection(RunCallback[SelectionRun]):
         keep = {c.key() for c in self.ranked()[: self.config.candidates]}
         if self.best is not None:
             keep.add(self.best.key())
+        if self.racing:  # every validated candidate races when the run ends
+            keep.update(k for k, c in self.hall.items() if c.validation is not None)
         self.hall = {k: c for k, c in self.hall.items() if k in keep}
 
     def ranked(self) -> list[Candidate]:
@@ -276,33 +334,48 @@ class ModelSelection(RunCallback[SelectionRun]):
     # -- validation ------------------------------------------------------------------------
     def validate(self, candidate: Candidate, rules: RulesOf, env: BatchEnv,
                  generation: int) -> None:
-        """Run ``candidate`` on the validation episodes and record the result.
+        """Run ``candidate`` on the validation episodes (``selection.episodes``), record the
+        result, and make it the best if it validated highest so far.
 
         Episodes run one after another on the learner's batch-of-one ``env`` through the
         training loop's own inference (the same bits as the deployed controller, and no
         compiled kernels to load for a small job). ``rules`` is the rule base, or what gives
         a candidate's (its own sets, when the run learns them)."""
-        consequents = candidate.consequents.tolist()
+        self._validate_to(candidate, self.config.episodes, rules, env, generation)
+        assert candidate.validation is not None
+        if self.best is None or candidate.validation.value > self.best.validation_value():
+            self.best = candidate
+
+    def _validate_to(self, candidate: Candidate, episodes: int, rules: RulesOf,
+                     env: BatchEnv, generation: int) -> None:
+        """Run ``candidate`` on the validation episodes it has not met among the first
+        ``episodes``, and make its validation the figure over all it has met."""
         if not isinstance(rules, SparseRules):
             rules = rules(candidate)
+        seeds = self.seeds[len(candidate.episode_fitness):episodes]
+        if not seeds.size:
+            return
+        consequents = candidate.consequents.tolist()
         if env.replayable:
             sets = b"" if candidate.sets is None else candidate.sets.tobytes()
             trials = [self._episode(env, rules, (seed, sets), consequents)
-                      for seed in self.seeds.tolist()]
+                      for seed in seeds.tolist()]
         else:
-            trials = [run_trial(env, rules, int(seed), consequents) for seed in self.seeds]
+            trials = [run_trial(env, rules, int(seed), consequents) for seed in seeds]
         lengths = np.array([t.length for t in trials], dtype=np.int64)
         fitness = env.episode_fitness(np.array([t.ret for t in trials], dtype=np.float64),
                                       lengths, np.array([t.success for t in trials]))
-        candidate.validation = clip_estimate(mean_interval(fitness), env.fitness_range)
+        candidate.episode_fitness += [float(v) for v in fitness]
+        candidate.episode_success += [bool(t.success) for t in trials]
+        candidate.episode_return += [float(t.ret) for t in trials]
+        all_fitness = np.array(candidate.episode_fitness, dtype=np.float64)
+        candidate.validation = clip_estimate(mean_interval(all_fitness), env.fitness_range)
         candidate.validated_at = generation
-        candidate.validation_success = float(np.mean([t.success for t in trials]))
-        candidate.validation_return = float(np.mean([t.ret for t in trials]))
+        candidate.validation_success = float(np.mean(candidate.episode_success))
+        candidate.validation_return = float(np.mean(candidate.episode_return))
         self.usage.selection_episodes += len(trials)
         self.usage.selection_steps += int(lengths.sum())
         self.validated.append(candidate.record())
-        if self.best is None or candidate.validation.value > self.best.validation_value():
-            self.best = candidate
 
     def _episode(self, env: BatchEnv, rules: SparseRules, episode_key: tuple[int, bytes],
                  consequents: list[int]) -> Trial:
@@ -342,7 +415,35 @@ class ModelSelection(RunCallback[SelectionRun]):
             if not self.fits(1):
                 break
             self.validate(candidate, rules, env, generation)
+        if self.racing:
+            self.race(rules, env, generation)
         self.finalized = True
+
+    def race(self, rules: RulesOf, env: BatchEnv, generation: int) -> None:
+        """Race the validated candidates (successive halving, by thirds): rank them on their
+        first ``selection.episodes`` validation episodes; the best third (at least two) run
+        on :data:`RACE_FACTOR` times as many and are ranked on those; and so on until
+        ``selection.race`` episodes. The winner of the last round becomes the best. Every
+        candidate of a round is ranked on the same episodes; a round the budget cannot pay
+        for is not run (the best of the last round run wins)."""
+        episodes = self.config.episodes
+        contenders = sorted((c for c in self.hall.values()
+                             if len(c.episode_fitness) >= episodes),
+                            key=lambda c: -c.mean_of(episodes))
+        self.rounds = []
+        while len(contenders) > 1 and episodes < self.race_to:
+            episodes = min(episodes * RACE_FACTOR, self.race_to)
+            survivors = contenders[:max(2, math.ceil(len(contenders) / RACE_FACTOR))]
+            if not self.fits_episodes(sum(max(0, episodes - len(c.episode_fitness))
+                                          for c in survivors)):
+                break
+            for candidate in survivors:
+                self._validate_to(candidate, episodes, rules, env, generation)
+            contenders = sorted(survivors, key=lambda c: -c.mean_of(episodes))
+            self.rounds.append({"episodes": episodes, "candidates": [
+                {"generation": c.generation, "individual": c.individual,
+                 "mean_fitness": c.mean_of(episodes)} for c in contenders]})
+            self.best = contenders[0]
 
     def candidate_for(self, consequents: IntArray,
                       sets: FloatArray | None = None) -> Candidate | None:
@@ -350,24 +451,32 @@ class ModelSelection(RunCallback[SelectionRun]):
 
     def fits(self, validations: int) -> bool:
         """Whether ``validations`` more validations stay within the episode limit."""
+        return self.fits_episodes(validations * self.config.episodes)
+
+    def fits_episodes(self, episodes: int) -> bool:
+        """Whether ``episodes`` more validation episodes stay within the episode limit."""
         limit = self.episode_limit
-        return limit is None or (self.usage.episodes + validations * self.config.episodes
-                                 + self.reserve() <= limit)
+        return limit is None or self.usage.episodes + episodes + self.reserve() <= limit
 
     # -- checkpoints -----------------------------------------------------------------------
     def state_dict(self) -> dict[str, Any]:
         return {"hall": [c.to_dict() for c in self.hall.values()],
                 "best": None if self.best is None else self.best.to_dict(),
-                "finalized": self.finalized, "validated": self.validated}
+                "finalized": self.finalized, "validated": self.validated,
+                "racing": self.racing, "race": self.rounds}
 
     def restore(self, hall: list[Candidate], best: Candidate | None, finalized: bool,
-                validated: list[dict[str, Any]]) -> None:
+                validated: list[dict[str, Any]], racing: bool = False,
+                rounds: list[dict[str, Any]] | None = None) -> None:
         """Restore what :meth:`state_dict` saved, as :func:`~flctool.learners.checkpoint.
-        read_checkpoint` validated it (its ``SelectionState``)."""
+        read_checkpoint` validated it (its ``SelectionState``). A checkpoint of a version
+        without races (``racing`` False) continues without them, bit for bit."""
         self.hall = {c.key(): c for c in hall}
         # the best is the same object as its hall entry, so later validations update both
         self.best = self.hall.get(best.key(), best) if best is not None else None
         self.finalized, self.validated = finalized, validated
+        self.racing = racing and self.race_to > self.config.episodes
+        self.rounds = list(rounds or [])
 
     def record(self) -> dict[str, Any]:
         """What run.json shows of selection: the validation scheme, every candidate validated
@@ -377,4 +486,6 @@ class ModelSelection(RunCallback[SelectionRun]):
                 "seeds": f"{len(self.seeds)} fixed seeds in [2^62, 2^63) drawn from the "
                          "run's seed",
                 "validated": self.validated,
+                "race": {"episodes": self.race_to if self.racing else 0,
+                         "rounds": self.rounds},
                 "best": None if self.best is None else self.best.record()}

@@ -139,6 +139,27 @@ def test_show_behaviour_to_learn() -> None:
     result = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase.yaml")])
     assert result.exit_code == 0
     assert "15 rules still to learn" in result.output
+    # what the measured tasks of about its size needed, the nearest first
+    assert "similar problems measured (docs/learning.md" in result.output
+    assert "  ballchase: 15 rules x 5 commands, hybrid, 300 training episodes: success " \
+        "median 0.980, worst 0.922 (hand-made 1.000)" in result.output
+    handmade = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase-handmade.yaml")])
+    assert "similar problems" not in handmade.output
+
+
+def test_validate_states_the_budget_and_where_each_number_came_from(tmp_path: Path) -> None:
+    text = (BEHAVIOURS / "ballchase.yaml").read_text()
+    assert "population:" not in text
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(text.replace("learning:\n", "learning:\n  population: 20\n", 1))
+    result = runner.invoke(app, ["validate", str(mine)])
+    assert result.exit_code == 0, result.output
+    line = mine.read_text().splitlines().index("  population: 20") + 1
+    assert "budget: at most" in result.output and "600 training" in result.output
+    assert (f"30 generations x 20 individuals x 1 trial (population from the file's line "
+            f"{line}, the rest the paper's protocol)") in result.output
+    assert "selection.race" in result.output and "selection.confirmation 50 (default)" \
+        in result.output
 
 
 def test_infer_csv_round_trip(tmp_path: Path) -> None:

@@ -14,7 +14,7 @@ from ..conftest import BEHAVIOURS
 runner = CliRunner()
 PROBLEM_KEYS = {"file", "line", "column", "field", "message", "fix"}
 FILE_KEYS = {"file", "valid", "behaviour", "deployable", "rules", "rules_to_learn",
-             "problems", "warnings", "notes"}
+             "budget", "problems", "warnings", "notes"}
 
 
 def test_problems_are_data_with_file_line_column_field_message_and_fix(
@@ -30,9 +30,16 @@ def test_problems_are_data_with_file_line_column_field_message_and_fix(
     files = report["files"]
     assert [f["file"] for f in files] == [str(good), str(bad), str(tmp_path / "none.yaml")]
     assert all(set(f) == FILE_KEYS for f in files)
-    assert files[0] | {"problems": None} == {
+    assert files[0] | {"problems": None, "budget": None} == {
         "file": str(good), "valid": True, "behaviour": "ballchase", "deployable": False,
-        "rules": 15, "rules_to_learn": 15, "problems": None, "warnings": [], "notes": []}
+        "rules": 15, "rules_to_learn": 15, "budget": None, "problems": None, "warnings": [],
+        "notes": []}
+    budget = files[0]["budget"]
+    assert budget["training_episodes"] == 300
+    assert budget["settings"]["generations"] == {"value": 30, "from": "default"}
+    assert budget["most_episodes"] == 300 + budget["selection_episodes_at_most"] + 50 + 120
+    assert budget["statement"][0].startswith("budget: at most")
+    assert files[1]["budget"] is None  # invalid: nothing to state
     problems = files[1]["problems"]
     assert all(set(p) == PROBLEM_KEYS for p in problems)
     assert {"file": str(bad), "line": 3, "column": 1, "field": "inputs",
@@ -51,5 +58,6 @@ def test_a_valid_set_exits_0_and_warnings_are_data_too(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     [entry] = json.loads(result.stdout)["files"]
     assert entry["valid"] and entry["deployable"] and entry["rules_to_learn"] == 0
+    assert entry["budget"] is None  # nothing to learn
     [warning] = entry["warnings"]
     assert set(warning) == PROBLEM_KEYS and warning["line"] is not None

@@ -175,11 +175,14 @@ def test_confirmation_and_baselines_stay_within_an_episode_budget(limit: int) ->
 @pytest.mark.slow
 def test_learn_says_the_budget_and_why(tmp_path: Path) -> None:
     result = runner.invoke(app, ["learn", str(BEHAVIOURS / "ballchase.yaml"), "-g", "1",
-                                 "--out", str(tmp_path / "run")])
+                                 "--set", "trials=2", "--out", str(tmp_path / "run")])
     assert result.exit_code in (0, 3), result.output
-    assert ("budget: 1 generation x 10 individuals x 1 trial = 10 training episodes "
-            "(generations as given, the rest the paper's protocol) for 15 rules to learn x 5 "
-            "commands") in " ".join(result.stderr.split())
+    said = " ".join(result.stderr.split())
+    assert "budget: at most " in said and "20 training" in said
+    assert "for 15 rules to learn x 5 commands" in said
+    assert ("training: 1 generation x 10 individuals x 2 trials (generations from "
+            "--generations, trials from --set trials, the rest the paper's protocol)") in said
+    assert "selection.race 60 (default)" in said
 
 
 def test_the_confirmation_interval_allows_for_outcomes_too_rare_to_have_shown() -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 from pathlib import Path
 from typing import Any
@@ -19,8 +20,10 @@ from flctool.learners.base import TRAIN_SEED_HIGH, TRAIN_SEED_LOW
 from flctool.learners.confirmation import confirmation_seeds
 from flctool.learners.metrics import Usage
 from flctool.learners.selection import (
+    RACE_FACTOR,
     VALIDATION_SEED_LOW,
     ModelSelection,
+    race_cost,
     validation_seeds,
 )
 from flctool.learners.trial import run_trial
@@ -64,11 +67,11 @@ def test_validation_seeds_are_fixed_distinct_and_in_their_own_range() -> None:
 def test_selection_seeds_are_disjoint_from_training_and_evaluation(name: str) -> None:
     env = SeedRecordingEnv()
     behaviour = line_behaviour(learner=name, selection=SelectionConfig(candidates=3,
-                                                                       episodes=7))
+                                                                       episodes=7, race=0))
     learner = make_learner(behaviour, env)
     train(learner)
     # validation and confirmation run their episodes one after another, like training, on
-    # seeds of their own
+    # seeds of their own (races: test_a_race_...)
     seen = [seed for _, seeds in env.seen for seed in seeds]
     training = [seed for seed in seen if TRAIN_SEED_LOW <= seed < TRAIN_SEED_HIGH]
     flat = [seed for seed in seen if seed >= TRAIN_SEED_HIGH]
@@ -104,6 +107,99 @@ def test_the_returned_controller_is_the_best_validated_candidate(name: str) -> N
     assert sum(m.episodes for m in history) == learner.usage.training_episodes
     assert 0 <= individual < learner.config.population and generation <= learner.generation
     assert consequents.shape == (3,)
+
+
+def racing_line(learner: str, **learning: Any) -> Behaviour:
+    return line_behaviour(learner=learner, generations=8, **learning, selection=SelectionConfig(
+        candidates=6, episodes=4, race=36, confirmation=0))
+
+
+# fuzzy_q's greedy controller settles on the line at once: one candidate, nothing to race
+# (test_a_lone_candidate_does_not_race)
+@pytest.mark.parametrize("name", ["pitt", "hybrid"])
+def test_a_race_takes_the_best_third_on_to_three_times_the_episodes(name: str) -> None:
+    env = SeedRecordingEnv()
+    learner = make_learner(racing_line(name), env)
+    train(learner)
+    selection = learner.selection
+    assert selection.racing and selection.finalized
+    entrants = [c for c in selection.hall.values() if c.validation is not None]
+    rounds = selection.rounds
+    assert [r["episodes"] for r in rounds] == [12, 36]
+    # each round keeps the best third (at least two) of the one before, ranked on the
+    # episodes all of them met
+    sizes = [len(entrants)] + [len(r["candidates"]) for r in rounds]
+    assert sizes[0] >= 3
+    for before, after in itertools.pairwise(sizes):
+        assert after == max(2, -(-before // RACE_FACTOR))
+    first = sorted(entrants, key=lambda c: -c.mean_of(4))
+    went_on = [c for c in entrants if len(c.episode_fitness) >= 12]
+    assert len(went_on) == sizes[1]
+    assert min(c.mean_of(4) for c in went_on) >= first[sizes[1]].mean_of(4)
+    finalists = [c for c in entrants if len(c.episode_fitness) == 36]
+    best = selection.best
+    assert best is not None and best.validation is not None
+    assert any(best is c for c in finalists)
+    assert best.validation.n == 36 and best.mean_of(36) == max(c.mean_of(36)
+                                                               for c in finalists)
+    assert learner.selected()[4] is best
+    # every episode a race runs is a validation episode, in seed order, and counted
+    seeds = validation_seeds(3, 36).tolist()
+    validating = [seed for _, run in env.seen for seed in run if seed >= VALIDATION_SEED_LOW]
+    assert len(validating) == learner.usage.selection_episodes == sum(
+        len(c.episode_fitness) for c in entrants)
+    assert set(validating) == set(seeds)
+    spent_racing = sum(len(c.episode_fitness) - 4 for c in entrants)
+    assert 0 < spent_racing <= race_cost(sizes[0], 4, 36)
+
+
+def test_a_lone_candidate_does_not_race() -> None:
+    learner = make_learner(racing_line("fuzzy_q"), LineEnv())
+    train(learner)
+    selection = learner.selection
+    assert len(selection.hall) == 1 and selection.rounds == []
+    assert learner.usage.selection_episodes == 4
+
+
+def test_race_cost_is_what_the_rounds_spend_at_most() -> None:
+    assert race_cost(30, 20, 180) == 10 * 40 + 4 * 120
+    assert race_cost(2, 20, 60) == 2 * 40
+    assert race_cost(1, 20, 180) == race_cost(30, 20, 20) == 0
+
+
+@pytest.mark.parametrize("name", ["pitt", "hybrid"])
+def test_a_raced_run_resumes_bit_for_bit(name: str) -> None:
+    whole = make_learner(racing_line(name), LineEnv())
+    train(whole)
+    part = make_learner(racing_line(name), LineEnv())
+    train(part, [StopAfter(3)])
+    state = json.loads(json.dumps(part.state_dict()))  # through a checkpoint file's JSON
+    resumed = make_learner(racing_line(name), LineEnv())
+    resumed.load_state_dict(state)
+    train(resumed)
+    assert resumed.selection.rounds and resumed.selection.rounds == whole.selection.rounds
+    assert resumed.selection_record() == whole.selection_record()
+    assert resumed.selected()[2].tolist() == whole.selected()[2].tolist()
+    assert resumed.usage == whole.usage
+    after = json.loads(json.dumps(resumed.state_dict()))
+    expected = json.loads(json.dumps(whole.state_dict()))
+    after.pop("elapsed"), expected.pop("elapsed")
+    assert after == expected
+
+
+def test_a_run_of_a_version_without_races_resumes_without_one() -> None:
+    part = make_learner(racing_line("pitt"), LineEnv())
+    train(part, [StopAfter(3)])
+    state = json.loads(json.dumps(part.state_dict()))
+    for key in ("racing", "race"):
+        del state["selection"][key]
+    for candidate in state["selection"]["hall"]:
+        candidate.pop("episodes", None)
+    resumed = make_learner(racing_line("pitt"), LineEnv())
+    resumed.load_state_dict(state)
+    train(resumed)
+    assert not resumed.selection.racing and resumed.selection.rounds == []
+    assert resumed.selection_record()["race"] == {"episodes": 0, "rounds": []}
 
 
 def test_the_hall_of_fame_ranks_by_mean_training_fitness_and_keeps_the_best() -> None:
@@ -194,6 +290,7 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
         tmp_path: Path, learner: str, stop: dict[str, object]) -> None:
     behaviour = ballchase(learner=learner, seed=5, generations=12, **stop,
                           **{"selection.candidates": 3, "selection.episodes": 8,
+                             "selection.race": 24,
                              "selection.confirmation": 8})
     whole = create_run(behaviour, tmp_path / "a")
     whole_summary = whole.train()
@@ -214,6 +311,10 @@ def test_resume_is_bit_identical_with_selection_budgets_and_stopping(
     assert info["selection"] == json.loads((part.path / "run.json").read_text())["selection"]
     assert resumed.usage == whole_summary.usage
     assert resumed.usage is not None and resumed.usage.selection_episodes > 0
+    # the candidates raced, unless a target ended the run (then none is validated after)
+    assert info["selection"]["race"]["episodes"] == 24
+    assert bool(info["selection"]["race"]["rounds"]) == (
+        info["selection"]["stop_reason"] != "target")
 
 
 @pytest.mark.parametrize("learner", names("learner"))
@@ -248,21 +349,34 @@ def test_reusing_known_validation_episodes_changes_nothing(
     assert every == record["usage"]["selection_episodes"] > fewer
 
 
-def test_run_json_records_every_validated_candidate_and_the_usage(tmp_path: Path) -> None:
-    run = create_run(ballchase(generations=4), tmp_path / "run")
+@pytest.mark.parametrize("race", [0, 180])
+def test_run_json_records_every_validated_candidate_and_the_usage(tmp_path: Path,
+                                                                  race: int) -> None:
+    run = create_run(ballchase(generations=4, **{"selection.race": race}), tmp_path / "run")
     summary = run.train()
     selection = json.loads((run.path / "run.json").read_text())["selection"]
     assert selection["candidates"] == 10 and selection["episodes"] == 20
+    rounds = selection["race"]["rounds"]
+    assert selection["race"]["episodes"] == race and [r["episodes"] for r in rounds] == (
+        [60, 180] if race else [])
     for candidate in selection["validated"]:
         interval = candidate["validation"]
-        assert interval["n"] == 20 and interval["low"] <= interval["value"] <= interval["high"]
+        assert interval["n"] in (20, 60, 180)
+        assert interval["low"] <= interval["value"] <= interval["high"]
     usage = selection["usage"]
     assert summary.usage is not None
     assert usage == summary.usage.to_dict() == summary.to_dict()["usage"]
     assert usage["training_episodes"] == 4 * 6
-    assert usage["selection_episodes"] == 20 * len(selection["validated"])
+    first = [c for c in selection["validated"] if c["validation"]["n"] == 20]
+    # every round runs its candidates on the episodes they have not met yet
+    raced = sum(len(r["candidates"]) * (r["episodes"] - before)
+                for r, before in zip(rounds, [20, 60], strict=False))
+    assert usage["selection_episodes"] == 20 * len(first) + raced
+    assert len(selection["validated"]) == len(first) + sum(len(r["candidates"])
+                                                           for r in rounds)
     assert summary.best is not None and summary.best.validation is not None
     assert summary.best.validation.to_dict() == selection["best"]["validation"]
+    assert summary.best.validation.n == (180 if race else 20)
 
 
 def test_a_damaged_selection_record_is_refused() -> None:

@@ -1,0 +1,81 @@
+"""The budget a run states before it starts: every number, and where it came from."""
+
+from __future__ import annotations
+
+import pytest
+
+from flctool import load_behaviour
+from flctool.behaviour.learning import SelectionConfig
+from flctool.learners import make_learner, train
+from flctool.learners.budget import plan_budget
+from flctool.learners.selection import race_cost
+from flctool.plugins import names
+from flctool.runs import resolve_behaviour
+from tests.conftest import BEHAVIOURS
+from tests.learners.line_env import LineEnv, line_behaviour
+
+
+def test_the_paper_s_protocol_is_stated_as_the_default() -> None:
+    behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
+    plan = plan_budget(behaviour)
+    selection = behaviour.learning.selection
+    assert (plan.rules, plan.commands, plan.training) == (15, 5, 300)
+    validated = 30 + selection.candidates + 1  # every leader, the last candidates, the elite
+    race = behaviour.learning.race_episodes
+    assert race == 60 and selection.race is None  # unset: the hybrid's reading
+    assert plan.selection == validated * selection.episodes + race_cost(
+        validated, selection.episodes, race)
+    assert (plan.confirmation, plan.baselines) == (50, (5 + 3) * 10 + 40)
+    assert plan.most == 300 + plan.selection + 50 + 120 and plan.limit is None
+    assert all(s.source == "default" for s in plan.settings.values())
+    lines = plan.lines()
+    assert lines[0].startswith(f"budget: at most {plan.most:,} episodes: 300 training")
+    assert "30 generations x 10 individuals x 1 trial (the paper's protocol" in lines[1]
+    assert "raced on to 60 episodes" in lines[2] and "selection.race 60 (default)" in lines[2]
+
+
+def test_each_setting_says_where_it_came_from() -> None:
+    path = BEHAVIOURS / "dribble.yaml"
+    behaviour = resolve_behaviour(load_behaviour(path), {"trials": 2, "stop.episodes": 900})
+    plan = plan_budget(behaviour, baselines=1)
+    line = next(n for n, text in enumerate(path.read_text().splitlines(), 1)
+                if text.strip().startswith("generations:"))
+    settings = plan.settings
+    assert settings["generations"].source == f"the file's line {line}"
+    assert settings["trials"].source == "overrides (trials)"  # the CLI says "--set trials"
+    assert settings["population"].source == "default"
+    assert settings["stop.episodes"].value == 900 and plan.most == 900
+    assert plan.training == behaviour.learning.generations * 10 * 2
+    assert plan.baselines == (5 + 3 + 1) * 10 + 40  # the given table is a baseline too
+    text = "\n".join(plan.lines())
+    assert "trials from overrides (trials)" in text and "limit: stop.episodes 900" in text
+    no_selection = resolve_behaviour(load_behaviour(path), {"selection.candidates": 0})
+    assert plan_budget(no_selection).selection == 0
+    assert "selection: none" in plan_budget(no_selection).lines()[2]
+
+
+def test_fuzzy_q_does_not_race_unless_the_file_says() -> None:
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                                  {"learner": "fuzzy_q"})
+    plan = plan_budget(behaviour)
+    assert behaviour.learning.race_episodes == 0
+    assert plan.settings["selection.race"].value == 0
+    assert plan.settings["selection.race"].source == "default"
+    assert "no race" in plan.lines()[2]
+    raced = resolve_behaviour(behaviour, {"selection.race": 60})
+    assert raced.learning.race_episodes == 60
+    assert make_learner(raced).selection.racing and not make_learner(behaviour).selection.racing
+
+
+@pytest.mark.parametrize("name", names("learner"))
+@pytest.mark.parametrize("race", [0, 36])
+def test_a_run_spends_no_more_than_its_budget_says(name: str, race: int) -> None:
+    behaviour = line_behaviour(learner=name, generations=8, selection=SelectionConfig(
+        candidates=6, episodes=4, race=race))
+    learner = make_learner(behaviour, LineEnv())
+    train(learner)
+    plan = plan_budget(behaviour)
+    usage = learner.usage
+    assert usage.training_episodes == plan.training
+    assert usage.selection_episodes <= plan.selection
+    assert usage.episodes <= plan.most

@@ -1,0 +1,31 @@
+"""The measured tasks ``flctool show`` cites: each row is of the file it names."""
+
+from __future__ import annotations
+
+import pytest
+
+from flctool import load_behaviour
+from flctool.learners.measured import MEASURED, similar_tasks
+from tests.conftest import BEHAVIOURS, ROOT
+
+
+@pytest.mark.parametrize("task", MEASURED, ids=lambda t: t.name)
+def test_a_row_has_its_file_s_size_learner_and_training_budget(task: object) -> None:
+    from flctool.learners.measured import MeasuredTask
+
+    assert isinstance(task, MeasuredTask)
+    path = BEHAVIOURS / f"{task.name}.yaml"
+    if not path.exists():
+        path = ROOT / "benchmarks" / "tasks" / f"{task.name}.yaml"
+    behaviour = load_behaviour(path)
+    learning = behaviour.learning
+    assert task.rules == len(behaviour.missing_rules())
+    assert task.commands == len(behaviour.output.commands)
+    assert task.learner == learning.learner
+    assert task.training == learning.generations * learning.population * learning.trials
+
+
+def test_similar_tasks_are_the_nearest_in_size() -> None:
+    assert [t.name for t in similar_tasks(25, 5)][:1] == ["dribble"]
+    assert {t.name for t in similar_tasks(5, 3, count=2)} == {"face-goal", "face-goal-fine"}
+    assert len(similar_tasks(1000, 9)) == 3
