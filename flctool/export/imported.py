@@ -716,11 +716,14 @@ def _check_rules_cover_every_input(imported: ImportedController) -> None:
         if left_out and all(n in inputs for n in rule.antecedent):
             names = ", ".join(f"'{n}'" for n in left_out)
             written = f" ({imported.omission})" if imported.omission else ""
+            conjunction = imported.conjunction
+            combined = ("product" if conjunction is not None and conjunction.product
+                        else "minimum")
             raise unsupported(
                 imported.file, rule.line, f"the rule leaves out input{'s' * (len(left_out) > 1)} "
-                f"{names}{written}: it fires with the other inputs' minimum alone, which no rule "
-                "of the full grid (eq. 1-2) does, so expanding it over the sets would change "
-                "the output", DONT_CARE_HINT)
+                f"{names}{written}: it fires with the other inputs' {combined} alone, which no "
+                "rule of the full grid (eq. 1-2) does, so expanding it over the sets would "
+                "change the output", DONT_CARE_HINT)
 
 
 def _check_names_unique(imported: ImportedController) -> None:
