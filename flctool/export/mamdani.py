@@ -56,8 +56,8 @@ class MamdaniOutput:
     aggregation: str = "Maximum"
     #: The rules as the file writes them (:func:`flctool.export.imported.as_written`): the
     #: Mamdani output is computed from them, so that OR rules and rules that leave out an
-    #: input (expanded over the sets) and weights (which the converted controller does
-    #: not have) are part of what is measured. Empty: the
+    #: input (expanded over the sets), weights and a product conjunction (which the
+    #: converted controller does not have) are part of what is measured. Empty: the
     #: behaviour's rules, which are then the file's.
     rules: tuple[OriginalRule, ...] = ()
     #: Whether the behaviour's rules differ from ``rules`` (said in the report).
@@ -161,7 +161,7 @@ class Conversion:
         share = f" ({stated / self.span:.2%} of the output range)" if self.span else ""
         expanded = (" (and the rules rewritten as flctool's: OR, NOT and rules that leave "
                     "out an input expanded over the sets, a combination given several "
-                    "commands given their mean and weights dropped; "
+                    "commands given their mean, weights and a product conjunction dropped; "
                     "measured against the rules as written)" if self.expanded else "")
         return (f"Mamdani output sets replaced by singletons at their centroids{expanded}: "
                 f"the largest difference from the Mamdani output (centroid over "
@@ -194,7 +194,8 @@ def measure(behaviour: Behaviour, output: MamdaniOutput) -> Conversion:
     finite = np.isfinite(want)
     deviation = float(np.max(np.abs(got[finite] - want[finite]))) if finite.any() else 0.0
     lo, hi = output.range
-    return Conversion(deviation, len(states), hi - lo, output.resolution, output.rewritten)
+    return Conversion(deviation, len(states), hi - lo, output.resolution,
+                      output.rewritten or output.conjunction != "Minimum")
 
 
 #: The fix offered when a Mamdani output is imported without the conversion.
