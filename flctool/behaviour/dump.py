@@ -25,6 +25,8 @@ def behaviour_to_data(behaviour: Behaviour, *, defaults: bool = True) -> dict[st
                                                 exclude_unset=not defaults)
     if not data.get("description"):
         data.pop("description", None)
+    if data.get("activation") == "min":  # the paper's eq. 2, left implicit as files leave it
+        data.pop("activation")
     return data
 
 

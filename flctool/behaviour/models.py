@@ -11,7 +11,7 @@ validated.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import (
     Field,
@@ -51,6 +51,9 @@ class Behaviour(Section):
     output: Output
     rules: list[Rule] = Field(default_factory=list, description=(
         "rule consequents; empty or partial for a behaviour still to be learned"))
+    activation: Literal["min", "product"] = Field("min", description=(
+        "how a rule combines its memberships into its activation: min, the paper's "
+        "(eq. 2), or product, their product in input order (docs/behaviour-files.md)"))
     # Typed by the base every plugin's model extends; each is validated by the model of the
     # plugin it names (flctool.behaviour.sections) and dumped with all of that model's fields.
     learning: SerializeAsAny[LearningConfig] = Field(HybridConfig(), description=(

@@ -190,7 +190,9 @@ def show(
     missing = len(behaviour.missing_rules())
     console.print(f"N = {len(behaviour.inputs)} inputs, M = {m} rules, K = {k} commands; "
                   + ("deployable (all rules given)" if not missing else
-                     f"{missing} rules still to learn"))
+                     f"{missing} rules still to learn")
+                  + ("; activation: product (a rule fires with the product of its "
+                     "memberships)" if behaviour.activation == "product" else ""))
     if len(behaviour.inputs) == 2 and behaviour.rules:
         console.print(_rule_grid(behaviour))
     elif behaviour.rules:

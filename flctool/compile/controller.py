@@ -119,6 +119,8 @@ class Controller:
         consequents (M,) or None: command index of each rule, when deployable
         kinds: None when every set is a trapezoid, else N tuples (L_i,) of the sets'
             shape codes (flctool.behaviour.shapes.CODES; 0 the trapezoid)
+        product: whether eq. 2 is the product of a rule's memberships, multiplied in input
+            order (the behaviour's ``activation: product``), rather than their min
     """
 
     input_names: tuple[str, ...]
@@ -131,6 +133,7 @@ class Controller:
     singletons: FloatArray
     consequents: IntArray | None
     kinds: tuple[tuple[int, ...], ...] | None = None
+    product: bool = False
 
     @property
     def n_inputs(self) -> int:
@@ -171,7 +174,8 @@ class Controller:
                 for i, q in enumerate(self.quadruples)]
 
     def activations(self, states: FloatArray) -> FloatArray:
-        """Rule activations alpha_m(S), Mamdani minimum (eq. 2): (B, N) -> (B, M).
+        """Rule activations alpha_m(S), Mamdani minimum (eq. 2) or the product of the
+        memberships (:attr:`product`): (B, N) -> (B, M).
 
         Dense by definition; for large M prefer :meth:`active_rules` or :meth:`output`, which
         never make a (B, M) array.
@@ -182,7 +186,7 @@ class Controller:
             if np.isnan(array).any():
                 self._raise_nan(array)
             dense = vectorised.activations(array, self.ranges, self.quadruples, self.kinds,
-                                           self._strides, self.n_rules)
+                                           self._strides, self.n_rules, self.product)
             _spent_in_numpy(time.thread_time() - started)
             return dense
         alpha = np.zeros((array.shape[0], self.n_rules))
@@ -194,7 +198,8 @@ class Controller:
     def active_rules(self, state: FloatArray) -> tuple[IntArray, FloatArray]:
         """The rules that fire for one state (N,), and their activations (eq. 2).
 
-        Returns ``(rules (A,), alpha (A,))`` with ``alpha > 0``, rules in increasing order.
+        Returns ``(rules (A,), alpha (A,))``, rules in increasing order: those whose every
+        membership is > 0 (so ``alpha > 0``, unless a product underflows to 0).
         With overlapping trapezoids A <= 2^N however large M is, and the cost of this call
         follows A, not M: per-step work that uses only these follows the active rules.
         """
@@ -203,7 +208,7 @@ class Controller:
             if np.isnan(x).any():
                 self._raise_nan(x[None, :])
             return vectorised.active_rules(x, self.ranges, self.quadruples, self.kinds,
-                                           self._strides)
+                                           self._strides, self.product)
         layout = self._layout
         rules, alpha, nan_input = _kernel("active_one")(layout.floats, layout.ints, x)
         if nan_input >= 0:
@@ -256,7 +261,7 @@ class Controller:
             self._raise_nan(states)
         out, failed = vectorised.output(states, self.ranges, self.quadruples, self.kinds,
                                         self._strides, self.singletons,
-                                        table.reshape(-1, self.n_rules))
+                                        table.reshape(-1, self.n_rules), self.product)
         if failed >= 0:
             self._raise_undefined(states, failed)
         _spent_in_numpy(time.thread_time() - started)
@@ -351,7 +356,7 @@ class Controller:
         from flctool.compile import kernels
 
         return kernels.layout(self.ranges, self.quadruples, self.rule_grid, self.singletons,
-                              self.kinds)
+                              self.kinds, self.product)
 
     @cached_property
     def _tables(self) -> IntArray:
@@ -441,7 +446,7 @@ class Controller:
         controller = Controller(self.input_names, self.set_names, self.output_name,
                                 self.command_names, self.ranges, self.quadruples,
                                 self.rule_grid, self.singletons, _frozen(table.copy()),
-                                self.kinds)
+                                self.kinds, self.product)
         for shared in ("_layout", "_rules", "_strides"):  # same sets: share what depends on them
             if shared in self.__dict__:
                 controller.__dict__[shared] = self.__dict__[shared]
@@ -484,4 +489,5 @@ def compile_behaviour(behaviour: Behaviour) -> Controller:
         singletons=_frozen(np.array(list(behaviour.output.commands.values()), dtype=np.float64)),
         consequents=consequents,
         kinds=kinds if any(any(k) for k in kinds) else None,
+        product=behaviour.activation == "product",
     )

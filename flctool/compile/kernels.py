@@ -22,9 +22,11 @@ Four ways through, each chosen where it is cheapest:
 
 The arithmetic is the plain reference's, operation for operation, so results are identical,
 not merely close: the trapezoid's divisions as written (no precomputed inverses), min for
-eq. 2, and for eq. 3 the sums sum(alpha_m * c_m) and sum(alpha_m) accumulated from 0.0 in
-increasing rule order. Skipping a rule with alpha_m = 0 adds nothing to either sum (x + 0.0 is
-x), which is why the sparse sums equal the dense ones bit for bit.
+eq. 2 (or, for a behaviour with ``activation: product``, the product of the memberships
+multiplied in input order, ((mu_1 * mu_2) * mu_3) ..., on every walk), and for eq. 3 the
+sums sum(alpha_m * c_m) and sum(alpha_m) accumulated from 0.0 in increasing rule order.
+Skipping a rule with alpha_m = 0 adds nothing to either sum (x + 0.0 is x), which is why
+the sparse sums equal the dense ones bit for bit.
 
 Each kernel is used with one signature (:data:`SIGNATURES`), and :func:`entry` gives its
 compiled entry point, which the controller calls without numba's dispatch. This module
@@ -162,6 +164,20 @@ def _shaped(kind: int, p0: float, p1: float, p2: float, p3: float, x: float) -> 
 
 
 @_jit
+def _and(product: bool, alpha: float, mu: float) -> float:
+    # Eq. 2's combination of a rule's memberships, one input at a time in input order: the
+    # min, or with activation: product their product. Starting from _unit, the first input
+    # gives its membership exactly (min(inf, mu) and 1.0 * mu are mu), so every walk folds
+    # the same operations in the same order.
+    return alpha * mu if product else min(alpha, mu)
+
+
+@_jit
+def _unit(product: bool) -> float:
+    return 1.0 if product else np.inf
+
+
+@_jit
 def _fired_sets(states: FloatArray, b: int, lo: FloatArray, hi: FloatArray,
                 quads: FloatArray, kinds: IntArray, offsets: IntArray, sets: IntArray,
                 mus: FloatArray, counts: IntArray) -> int:
@@ -190,9 +206,10 @@ def _fired_sets(states: FloatArray, b: int, lo: FloatArray, hi: FloatArray,
 
 @_jit
 def _fired_rules(sets: IntArray, mus: FloatArray, counts: IntArray, strides: IntArray,
-                 rules: IntArray, alphas: FloatArray) -> int:
+                 rules: IntArray, alphas: FloatArray, product: bool) -> int:
     """The fired rules in increasing rule order into ``rules``/``alphas`` (capacity >=
-    prod(counts)); returns how many. Eq. 1 (rule index) and eq. 2 (Mamdani min).
+    prod(counts)); returns how many. Eq. 1 (rule index) and eq. 2 (Mamdani min, or the
+    product with ``product``).
 
     The product of the fired sets, built input by input: after input i the buffers hold the
     combinations of inputs 0..i in rule order, and input i + 1 splits each entry into one per
@@ -201,7 +218,7 @@ def _fired_rules(sets: IntArray, mus: FloatArray, counts: IntArray, strides: Int
     """
     size = 1
     rules[0] = 0
-    alphas[0] = np.inf
+    alphas[0] = _unit(product)
     for i in range(counts.shape[0]):
         count = counts[i]
         stride = strides[i]
@@ -210,7 +227,7 @@ def _fired_rules(sets: IntArray, mus: FloatArray, counts: IntArray, strides: Int
             alpha = alphas[entry]
             for slot in range(count - 1, -1, -1):
                 rules[entry * count + slot] = rule + sets[i, slot] * stride
-                alphas[entry * count + slot] = min(alpha, mus[i, slot])
+                alphas[entry * count + slot] = _and(product, alpha, mus[i, slot])
         size *= count
     return size
 
@@ -230,9 +247,11 @@ def _capacity(counts: IntArray) -> int:
     return total
 
 
-# Layout.ints starts with N, S, max L_i, M if the rule grid is kept (else 0), and whether
-# a few states are walked every rule four at a time (interleaves_states), then the offsets.
-_HEADER = 5
+# Layout.ints starts with N, S, max L_i, M if the rule grid is kept (else 0), whether a few
+# states are walked every rule four at a time (interleaves_states) and whether eq. 2 is the
+# product (activation: product; else the min), then the offsets.
+_HEADER = 6
+_PRODUCT = 5  # where that last flag is
 
 _BLOCK = 64  # states whose memberships are computed together (fits in L1 with ~40 sets)
 
@@ -326,19 +345,21 @@ def _within(value: float, low: float, high: float) -> float:
 
 @_jit
 def _dense_block(count: int, mu: FloatArray, grid: IntArray, values: FloatArray,
-                 alpha: FloatArray, numerators: FloatArray, denominators: FloatArray) -> None:
+                 alpha: FloatArray, numerators: FloatArray, denominators: FloatArray,
+                 product: bool) -> None:
     """Eq. 2-3 over every rule for a block of states: ``grid (M, N)`` holds each rule's
     rows of ``mu``, ``values (P, M)`` each rule's singleton c_m. Each state's sums run over
     the rules in increasing order, as the reference's do, into ``numerators[:, :count]``
     and ``denominators[:count]``. Each rule's min, sum(alpha) and sum(alpha * c) are one
-    loop over the states, so they stay in registers."""
+    loop over the states, so they stay in registers. With ``product`` eq. 2 multiplies the
+    memberships in input order instead (separate loops, so that each still vectorises)."""
     numerators[:, :count] = 0.0
     denominators[:count] = 0.0
     n = grid.shape[1]
     population = values.shape[0]
     for m in range(grid.shape[0]):
         first = grid[m, 0]
-        if n <= 2 and population == 1:  # the common case, fused into one loop
+        if n <= 2 and population == 1 and not product:  # the common case, fused into one loop
             second = grid[m, n - 1]  # the first row again when n == 1: min(a, a) is a
             value = values[0, m]
             for b in range(count):
@@ -346,12 +367,24 @@ def _dense_block(count: int, mu: FloatArray, grid: IntArray, values: FloatArray,
                 denominators[b] += a
                 numerators[0, b] += a * value
             continue
+        if n == 2 and population == 1:  # the same, for the product
+            second = grid[m, 1]
+            value = values[0, m]
+            for b in range(count):
+                a = mu[first, b] * mu[second, b]
+                denominators[b] += a
+                numerators[0, b] += a * value
+            continue
         for b in range(count):
             alpha[b] = mu[first, b]
         for i in range(1, n):
             row = grid[m, i]
-            for b in range(count):
-                alpha[b] = min(alpha[b], mu[row, b])
+            if product:
+                for b in range(count):
+                    alpha[b] = alpha[b] * mu[row, b]
+            else:
+                for b in range(count):
+                    alpha[b] = min(alpha[b], mu[row, b])
         for b in range(count):
             denominators[b] += alpha[b]
         for p in range(population):
@@ -452,7 +485,8 @@ def _infer_blocks(states: FloatArray, floats: FloatArray, ints: IntArray, tables
         if nan_state >= 0:
             return nan_state
         if dense:
-            _dense_block(count, mu, grid, values, alpha, numerators, denominators)
+            _dense_block(count, mu, grid, values, alpha, numerators, denominators,
+                         bool(ints[_PRODUCT]))
         else:
             for b in range(count):  # eq. 2-3 over each state's fired rules
                 denominators[b] = 0.0  # no rule fires (see _first_zero)
@@ -528,6 +562,7 @@ def _state_sums(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: Floa
     counts = n * max_sets
     digits = counts + n
     strides = _HEADER + n + 1
+    product = bool(ints[_PRODUCT])
     numerator = 0.0
     denominator = 0.0
     if n == 2:  # the common case, without the odometer's bookkeeping
@@ -535,17 +570,17 @@ def _state_sums(floats: FloatArray, ints: IntArray, scratch: IntArray, mus: Floa
             rule = scratch[a] * ints[strides]
             first = mus[a]
             for b in range(max_sets, max_sets + scratch[counts + 1]):
-                alpha = min(first, mus[b])  # eq. 2
+                alpha = _and(product, first, mus[b])  # eq. 2
                 numerator += alpha * floats[singletons + tables[p, rule + scratch[b]]]
                 denominator += alpha
         return numerator, denominator
     while True:
         rule = 0
-        alpha = np.inf
+        alpha = _unit(product)
         for i in range(n):
             slot = i * max_sets + scratch[digits + i]
             rule += scratch[slot] * ints[strides + i]
-            alpha = min(alpha, mus[slot])  # eq. 2
+            alpha = _and(product, alpha, mus[slot])  # eq. 2
         numerator += alpha * floats[singletons + tables[p, rule]]
         denominator += alpha
         i = n - 1
@@ -582,9 +617,10 @@ def _expand_fired(ints: IntArray, scratch: IntArray, mus: FloatArray, rules: Int
     """
     n, max_sets = ints[0], ints[2]
     strides = _HEADER + n + 1
+    product = bool(ints[_PRODUCT])
     size = 1
     rules[0] = 0
-    alphas[0] = np.inf
+    alphas[0] = _unit(product)
     for i in range(n):
         count = scratch[n * max_sets + i]
         stride = ints[strides + i]
@@ -593,7 +629,8 @@ def _expand_fired(ints: IntArray, scratch: IntArray, mus: FloatArray, rules: Int
             alpha = alphas[entry]
             for slot in range(count - 1, -1, -1):
                 rules[entry * count + slot] = rule + scratch[i * max_sets + slot] * stride
-                alphas[entry * count + slot] = min(alpha, mus[i * max_sets + slot])
+                alphas[entry * count + slot] = _and(product, alpha,
+                                                    mus[i * max_sets + slot])
         size *= count
     return size
 
@@ -807,6 +844,7 @@ def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
     """
     lo, hi, quads, singletons, _, offsets, _, grid, kinds = _unpack(floats, ints)
     n, sets = ints[0], ints[1]
+    product = bool(ints[_PRODUCT])
     count = states.shape[0]
     for b in range(count):  # NaN inputs first: the first state that has one is reported
         for i in range(n):
@@ -837,7 +875,7 @@ def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
             for m in range(rules):
                 alpha = mu[grid[m, 0], 0]
                 for i in range(1, n):
-                    alpha = min(alpha, mu[grid[m, i], 0])  # eq. 2
+                    alpha = _and(product, alpha, mu[grid[m, i], 0])  # eq. 2
                 numerator += alpha * values[m]
                 denominator += alpha
             if denominator == 0.0:  # no rule fires (see infer)
@@ -850,10 +888,10 @@ def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
             a0, a1, a2, a3 = mu[row, 0], mu[row, 1], mu[row, 2], mu[row, 3]
             for i in range(1, n):  # eq. 2
                 row = grid[m, i]
-                a0 = min(a0, mu[row, 0])
-                a1 = min(a1, mu[row, 1])
-                a2 = min(a2, mu[row, 2])
-                a3 = min(a3, mu[row, 3])
+                a0 = _and(product, a0, mu[row, 0])
+                a1 = _and(product, a1, mu[row, 1])
+                a2 = _and(product, a2, mu[row, 2])
+                a3 = _and(product, a3, mu[row, 3])
             value = values[m]
             n0 += a0 * value
             n1 += a1 * value
@@ -924,7 +962,7 @@ def active_one(floats: FloatArray, ints: IntArray,
     rules = np.empty(capacity, np.intp)
     alphas = np.empty(capacity)
     # Fewer than the capacity only if an input has no non-zero set (memberships underflowed).
-    fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
+    fired = _fired_rules(sets, mus, counts, strides, rules, alphas, bool(ints[_PRODUCT]))
     return rules[:fired], alphas[:fired], -1
 
 
@@ -943,7 +981,7 @@ def activations(states: FloatArray, floats: FloatArray, ints: IntArray, out: Flo
         if capacity > rules.shape[0]:
             rules = np.empty(capacity, np.intp)
             alphas = np.empty(capacity)
-        fired = _fired_rules(sets, mus, counts, strides, rules, alphas)
+        fired = _fired_rules(sets, mus, counts, strides, rules, alphas, bool(ints[_PRODUCT]))
         for a in range(fired):
             out[b, rules[a]] = alphas[a]
     return -1
@@ -988,7 +1026,8 @@ class Layout(NamedTuple):
 
     floats: FloatArray  # lo (N,), hi (N,), quads (S, 4) input after input, singletons (K,)
     # N, S, max L_i, M if the grid is kept (else 0), whether a few states are walked every
-    # rule four at a time (interleaves_states), offsets (N + 1,): input i's sets are
+    # rule four at a time (interleaves_states), whether eq. 2 is the product (activation:
+    # product), offsets (N + 1,): input i's sets are
     # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
     # last input fastest; kinds (S,): each set's shape code (0 the trapezoid, whose quad
     # holds its corners; else its parameters, flctool.behaviour.shapes); grid (M, N): each
@@ -998,10 +1037,11 @@ class Layout(NamedTuple):
 
 
 def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: IntArray,
-           singletons: FloatArray, kinds: tuple[tuple[int, ...], ...] | None = None) -> Layout:
+           singletons: FloatArray, kinds: tuple[tuple[int, ...], ...] | None = None,
+           product: bool = False) -> Layout:
     """Lay out ``ranges (N, 2)``, ``quadruples`` (N arrays (L_i, 4)), ``rule_grid (M, N)`` and
     ``singletons (K,)`` for the kernels: writable C arrays, so that each kernel is compiled
-    for one signature only."""
+    for one signature only. ``product``: eq. 2 is the product (activation: product)."""
     sizes = [len(q) for q in quadruples]
     strides = np.ones(len(sizes), dtype=np.intp)
     for i in range(len(sizes) - 2, -1, -1):
@@ -1012,7 +1052,8 @@ def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: In
     quads = np.concatenate(quadruples).astype(np.float64)
     interleaves = dense and interleaves_states(
         rule_grid.shape[0], len(sizes), fired_rules_bound(ranges, quadruples, kinds))
-    header = [len(sizes), len(quads), max(sizes), grid.shape[0], int(interleaves)]
+    header = [len(sizes), len(quads), max(sizes), grid.shape[0], int(interleaves),
+              int(product)]
     floats = np.concatenate([ranges[:, 0], ranges[:, 1], quads.ravel(), singletons])
     codes = (np.zeros(len(quads), dtype=np.intp) if kinds is None
              else np.array([k for input_kinds in kinds for k in input_kinds], dtype=np.intp))
@@ -1028,6 +1069,7 @@ def keep_grid(layout: Layout, rule_grid: IntArray) -> Layout:
         return layout
     n = rule_grid.shape[1]
     offsets = layout.ints[_HEADER : _HEADER + n]
-    ints = np.concatenate([layout.ints[:3], [len(rule_grid), 0], layout.ints[_HEADER:],
+    ints = np.concatenate([layout.ints[:3], [len(rule_grid), 0, layout.ints[_PRODUCT]],
+                           layout.ints[_HEADER:],
                            (rule_grid + offsets).ravel()]).astype(np.intp)
     return Layout(layout.floats, ints, True)

@@ -46,6 +46,9 @@ class CompiledRules(Protocol):
     @property
     def kinds(self) -> tuple[tuple[int, ...], ...] | None: ...
 
+    @property
+    def product(self) -> bool: ...
+
 
 class SparseRules:
     """The rule base of a controller as plain Python data, evaluated one state at a time.
@@ -58,7 +61,7 @@ class SparseRules:
         """The rule base of a compiled controller (see also :meth:`from_behaviour`)."""
         self._build(controller.input_names, controller.ranges.tolist(),
                     [quads.tolist() for quads in controller.quadruples],
-                    controller.singletons.tolist(), controller.kinds)
+                    controller.singletons.tolist(), controller.kinds, controller.product)
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour) -> SparseRules:
@@ -72,16 +75,17 @@ class SparseRules:
                      [evaluated_range(v.range, v.sets.values()) for v in inputs],
                      [[p for _, p in sets] for sets in rows],
                      list(behaviour.output.commands.values()),
-                     kinds if any(any(k) for k in kinds) else None)
+                     kinds if any(any(k) for k in kinds) else None,
+                     behaviour.activation == "product")
         return rules
 
     def _build(self, input_names: Sequence[str], ranges: Sequence[Sequence[float]],
                quadruples: Sequence[Sequence[Sequence[float]]],
                singletons: Sequence[float],
-               kinds: Sequence[Sequence[int]] | None) -> None:
+               kinds: Sequence[Sequence[int]] | None, product: bool) -> None:
         # From plain numbers: each input's [low, high], each of its sets' four corners
         # (pa, pb, pc, pd) in set order (or its shape's parameters, whose code is in kinds),
-        # and the commands' singletons, all as Python floats.
+        # and the commands' singletons, all as Python floats; product: eq. 2 multiplies.
         self.singletons: list[float] = [float(v) for v in singletons]
         self.n_commands = len(self.singletons)
         self.n_rules = math.prod(len(quads) for quads in quadruples)
@@ -93,6 +97,7 @@ class SparseRules:
                       for quads in quadruples]
         self._kinds = [None if kinds is None else tuple(kinds[i])
                        for i in range(len(self._sets))]
+        self._product = product
 
     def fire(self, state: list[float]) -> tuple[list[int], list[float], list[float]]:
         """Active rules of one state (N,) in increasing order, their activations alpha_m
@@ -108,6 +113,7 @@ class SparseRules:
                                  f"{len(self._sets)} inputs")
         rules = [0]
         alphas = [1.0]
+        product = self._product
         for i, value in enumerate(state):
             if value != value:  # NaN: every comparison below would be false
                 raise InferenceError(f"the environment observed NaN for input "
@@ -119,13 +125,16 @@ class SparseRules:
             low, high, sets = self._lows[i], self._highs[i], self._sets[i]
             s = low if value < low else high if value > high else value  # clip to the range
             members = firing_sets(s, sets, self._kinds[i])  # (index, mu > 0) in set order
-            if i == 0:  # the first input: min(1.0, mu) is mu, as 0 < mu <= 1
+            if i == 0:  # the first input: min(1.0, mu) and 1.0 * mu are mu, as 0 < mu <= 1
                 rules = [j for j, _ in members]
                 alphas = [mu for _, mu in members]
             else:
                 width = len(sets)
                 rules = [r * width + j for r in rules for j, _ in members]
-                alphas = [a if a < mu else mu for a in alphas for _, mu in members]
+                if product:  # eq. 2 as the product, multiplied in input order
+                    alphas = [a * mu for a in alphas for _, mu in members]
+                else:
+                    alphas = [a if a < mu else mu for a in alphas for _, mu in members]
         total = add_in_order(alphas)
         if not total > 0.0:  # covered ranges fire a rule; only underflow leaves none
             raise InferenceError(f"no rule fires for the state {state}: the sets overlap too "

@@ -11,7 +11,8 @@ each input's memberships by :func:`~flctool.membership.memberships` (trapezoids
 vectorised, other shapes value by value), then, vectorised
 over the states, the rules that combine each state's fired sets, enumerated in increasing
 rule order (each input's fired sets in set order, the last input fastest): for each, eq. 2's
-min, then eq. 3's sums accumulated from 0.0 in that order and one division, kept within the
+min (or with ``product`` the memberships' product, multiplied in input order as the kernels
+do), then eq. 3's sums accumulated from 0.0 in that order and one division, kept within the
 commands. Where a state fires fewer sets of an input than another state of the batch, its
 missing slots have activation 0, which adds nothing to either sum (x + 0.0 is x; the sums
 never hold -0.0), so every state's sums are those of its own fired rules.
@@ -63,30 +64,32 @@ def fired_sets(states: FloatArray, ranges: FloatArray, quadruples: Sequence[Floa
     return fired
 
 
-def fired_rules(fired: list[Slots], strides: Sequence[int],
+def fired_rules(fired: list[Slots], strides: Sequence[int], product: bool = False,
                 ) -> Iterator[tuple[IntArray, FloatArray]]:
     """``(rule (B,), alpha (B,))`` of every combination of the fired slots, in increasing
-    rule order for each state (eq. 1), alpha their min (eq. 2); 0 where a slot is empty."""
+    rule order for each state (eq. 1), alpha their min (eq. 2), or with ``product`` their
+    product in input order; 0 where a slot is empty."""
     for combination in itertools.product(*fired):
         rule, alpha = combination[0]
         rule = rule * strides[0]
         for i in range(1, len(combination)):
             sets, mu = combination[i]
             rule = rule + sets * strides[i]
-            alpha = np.minimum(alpha, mu)
+            alpha = alpha * mu if product else np.minimum(alpha, mu)
         yield rule, alpha
 
 
 def output(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
            kinds: Kinds, strides: Sequence[int], singletons: FloatArray, tables: IntArray,
-           ) -> tuple[FloatArray, int]:
+           product: bool = False) -> tuple[FloatArray, int]:
     """Eq. 3 of ``states (B, N)`` (no NaN) with consequents ``tables (P, M)``: ``(out (P, B),
     failed)``, ``failed`` -1 or the first state where no rule fires (its output is then NaN;
     the caller raises, as for the kernels)."""
     count = states.shape[0]
     numerators = np.zeros((tables.shape[0], count))
     denominators = np.zeros(count)
-    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples, kinds), strides):
+    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples, kinds), strides,
+                                   product):
         numerators += alpha * singletons[tables[:, rule]]
         denominators += alpha
     empty = np.flatnonzero(denominators == 0.0)
@@ -97,22 +100,25 @@ def output(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArr
 
 
 def activations(states: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
-                kinds: Kinds, strides: Sequence[int], n_rules: int) -> FloatArray:
+                kinds: Kinds, strides: Sequence[int], n_rules: int,
+                product: bool = False) -> FloatArray:
     """Dense eq. 2 of ``states (B, N)`` (no NaN): ``(B, M)``."""
     alphas = np.zeros((states.shape[0], n_rules))
     rows = np.arange(states.shape[0])
-    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples, kinds), strides):
+    for rule, alpha in fired_rules(fired_sets(states, ranges, quadruples, kinds), strides,
+                                   product):
         fired = alpha > 0.0
         alphas[rows[fired], rule[fired]] = alpha[fired]
     return alphas
 
 
 def active_rules(state: FloatArray, ranges: FloatArray, quadruples: Sequence[FloatArray],
-                 kinds: Kinds, strides: Sequence[int]) -> tuple[IntArray, FloatArray]:
+                 kinds: Kinds, strides: Sequence[int],
+                 product: bool = False) -> tuple[IntArray, FloatArray]:
     """The fired rules of one ``state (N,)`` (no NaN) in increasing order, and their
     activations (eq. 2)."""
     pairs = list(fired_rules(fired_sets(state[None, :], ranges, quadruples, kinds),
-                             strides))
+                             strides, product))
     if not pairs:
         return np.empty(0, np.intp), np.empty(0)
     return (np.concatenate([rule for rule, _ in pairs]).astype(np.intp),

@@ -5,7 +5,8 @@ the header by its file name. Without a file the export is one self-contained tra
 unit (header, then source) on stdout. The tables are ``static const`` data; the one public
 function is ``<prefix>output(const double state[N])`` (``float`` with ``single``). No heap, no
 libm: clipping is two comparisons, and the arithmetic is exactly flctool's (membership as in
-flctool/membership.py, minimum activation, sums over the rules in rule order).
+flctool/membership.py, minimum activation (or the product, in input order, with
+``activation: product``), sums over the rules in rule order).
 """
 
 from __future__ import annotations
@@ -107,7 +108,9 @@ class CExporter(Exporter):
         about = header_lines(behaviour, self.options.provenance)
         lines = ["/*", *(f" * {line}" for line in about), " *",
                  f" * A fuzzy logic controller: {len(behaviour.inputs)} inputs, "
-                 f"{behaviour.rule_count} rules, {len(behaviour.output.commands)} commands.",
+                 f"{behaviour.rule_count} rules, {len(behaviour.output.commands)} commands"
+                 + (", each rule's memberships multiplied (activation: product)."
+                    if behaviour.activation == "product" else "."),
                  " * C99, no heap, " + (f"libm's {' and '.join(shaped[2])} (link "
                                      "with -lm: the sets include "
                                      f"a {shaped[1]})." if shaped else "no libm.")
@@ -210,7 +213,7 @@ class CExporter(Exporter):
             f"static const {ctype} {prefix}consequents[{macro}N_RULES] = {{",
             *_wrapped([str(c) for c in consequents]), "};", "",
             *(_shape_functions(prefix, real) if shaped else []),
-            *_functions(prefix, macro, real, shaped),
+            *_functions(prefix, macro, real, shaped, behaviour.activation == "product"),
         ]
         return "\n".join(lines) + "\n"
 
@@ -325,8 +328,13 @@ static {real} {prefix}shaped(int kind, {real} x, const {real} p[4])
 """.splitlines()
 
 
-def _functions(prefix: str, macro: str, real: str, shaped: bool = False) -> list[str]:
+def _functions(prefix: str, macro: str, real: str, shaped: bool = False,
+               product: bool = False) -> list[str]:
     zero, one = ("0.0f", "1.0f") if real == "float" else ("0.0", "1.0")
+    # eq. 2, input after input from alpha = 1: the minimum, or (activation: product) the
+    # product multiplied in input order, as flctool's inference folds it
+    combine = ("alpha *= mu[j]; /* eq. 2: product, in input order */" if product
+               else "if (i == 0 || mu[j] < alpha) alpha = mu[j]; /* eq. 2: minimum */")
     membership = (f"{prefix}shapes[j] ? {prefix}shaped({prefix}shapes[j], s, {prefix}sets[j])"
                   f"\n                          : {prefix}membership(s, {prefix}sets[j])"
                   if shaped else f"{prefix}membership(s, {prefix}sets[j])")
@@ -384,7 +392,7 @@ static {real} {prefix}membership({real} s, const {real} q[4])
             j = active[{prefix}first_set[i] + pick[i]];
             m = m * ({prefix}first_set[i + 1] - {prefix}first_set[i])
                 + (j - {prefix}first_set[i]);
-            if (i == 0 || mu[j] < alpha) alpha = mu[j]; /* eq. 2: minimum */
+            {combine}
         }}
         weighted += alpha * {prefix}singletons[{prefix}consequents[m]]; /* eq. 3 */
         total += alpha;

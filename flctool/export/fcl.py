@@ -1,10 +1,12 @@
 """FCL, the Fuzzy Control Language of IEC 61131-7.
 
-Sets are point lists ``TERM name := (x, mu) ...``; commands are singleton terms of the output,
-defuzzified by ``METHOD : COGS`` (centre of gravity for singletons, eq. 3); the rule block
-combines memberships by ``AND : MIN`` (eq. 2). Its accumulation is ``ACCU : NSUM``: COGS
-divides by the accumulated total, so the sum's normalisation cancels and every rule counts as
-in eq. 3, while ``MAX`` (the usual default) would merge the rules that share a command.
+Sets are point lists ``TERM name := (x, mu) ...``; commands are singleton terms of the
+output, defuzzified by ``METHOD : COGS`` (centre of gravity for singletons, eq. 3); the rule
+block combines memberships by ``AND : MIN`` (eq. 2), or ``AND : PROD`` with ``activation:
+product`` (both dialects have it: IEC 61131-7 and fuzzylite read it as the product). Its
+accumulation is ``ACCU : NSUM``: COGS divides by the accumulated total, so the sum's
+normalisation cancels and every rule counts as in eq. 3, while ``MAX`` (the usual default)
+would merge the rules that share a command.
 
 IEC reads a point list as constant before its first point and after its last, so a shoulder
 at the end of the range is written from its plateau on, and an edge inside the range that is
@@ -132,7 +134,8 @@ class FclExporter(Exporter):
             lines.append(f"{INDENT}ACCU : NSUM;")
         lines += [f"{INDENT}DEFAULT := 0.0;",
                   f"{INDENT}RANGE := ({fcl_number(min(values))} .. {fcl_number(max(values))});",
-                  "END_DEFUZZIFY", "", "RULEBLOCK rules", f"{INDENT}AND : MIN;",
+                  "END_DEFUZZIFY", "", "RULEBLOCK rules",
+                  f"{INDENT}AND : {AND_METHOD[behaviour.activation]};",
                   f"{INDENT}ACT : MIN;"]
         if not fuzzylite:
             lines.append(f"{INDENT}ACCU : NSUM;")
@@ -146,6 +149,10 @@ class FclExporter(Exporter):
                          f"{is_} {rule.then};")
         lines += ["END_RULEBLOCK", "", "END_FUNCTION_BLOCK"]
         return "\n".join(lines) + "\n"
+
+
+#: Eq. 2 as FCL names it, by the behaviour's activation.
+AND_METHOD = {"min": "MIN", "product": "PROD"}
 
 
 def _term(quad: FuzzySet, span: tuple[float, float], *, fuzzylite: bool) -> str:
@@ -672,7 +679,7 @@ class _FclParser:
                 self.expect(":")
                 method = self.take()
                 self.result.conjunction = (None if method.word == "MIN" else Method(
-                    f"AND : {method.text}", method.line, "use AND : MIN",
+                    f"AND : {method.text}", method.line, "use AND : MIN or AND : PROD",
                     product=method.word == "PROD"))
                 self.expect(";")
             elif key.word == "OR":  # how OR rules fire (converted Mamdani outputs only)

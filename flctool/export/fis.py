@@ -5,8 +5,9 @@ Sets of the other shapes are MATLAB's ``gaussmf``, ``gauss2mf``, ``gbellmf``, ``
 Sets are ``trapmf`` (or ``trimf`` when ``pb == pc``) with no vertical edge, as MATLAB and
 Octave require: a shoulder's plateau and foot lie outside the range, an edge inside it has its
 foot one ulp away (:func:`~flctool.export.base.sloped_quad`); commands are ``constant`` MFs,
-``AndMethod='min'`` is eq. 2 and ``DefuzzMethod='wtaver'`` is eq. 3. A rule line lists the set
-index of every input, then the command index, the weight (1) and the connection (1 = AND).
+``AndMethod='min'`` is eq. 2 (``'prod'`` with ``activation: product``) and
+``DefuzzMethod='wtaver'`` is eq. 3. A rule line lists the set index of every input, then
+the command index, the weight (1) and the connection (1 = AND).
 MATLAB does not clip inputs to their range: clip states before evaluating to match flctool.
 """
 
@@ -38,6 +39,9 @@ from flctool.export.imported import (
 )
 from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, centroid, import_notes
 
+#: Eq. 2 as FIS names it, by the behaviour's activation.
+AND_METHOD = {"min": "min", "product": "prod"}
+
 
 def _vector(values: list[float]) -> str:
     return "[" + " ".join(number(v) for v in values) + "]"
@@ -52,7 +56,8 @@ class FisExporter(Exporter):
         output = behaviour.output
         lines = ["[System]", f"Name='{behaviour.name}'", "Type='sugeno'", "Version=2.0",
                  f"NumInputs={len(behaviour.inputs)}", "NumOutputs=1",
-                 f"NumRules={len(behaviour.rules)}", "AndMethod='min'", "OrMethod='max'",
+                 f"NumRules={len(behaviour.rules)}",
+                 f"AndMethod='{AND_METHOD[behaviour.activation]}'", "OrMethod='max'",
                  "ImpMethod='prod'", "AggMethod='sum'", "DefuzzMethod='wtaver'"]
         for index, (name, variable) in enumerate(behaviour.inputs.items(), start=1):
             lines += ["", f"[Input{index}]", f"Name='{name}'",
@@ -497,7 +502,8 @@ class _FisReader:
         method, line = self.system.get("AndMethod", ("min", 1))
         if method != "min":
             self.result.conjunction = Method(f"AndMethod='{method}'", line,
-                                             "use AndMethod='min'", product=method == "prod")
+                                             "use AndMethod='min' or 'prod'",
+                                             product=method == "prod")
         method, line = self.system.get("AggMethod", ("sum", 1))
         if method != "sum" and not self.mamdani:  # Mamdani: part of what is measured
             self.result.accumulation = Method(f"AggMethod='{method}'", line,

@@ -2,12 +2,13 @@
 
 The engine computes eq. 1-3 as flctool does: Trapezoid / Triangle input terms (eq. 1's sets;
 the other shapes as fuzzylite's Gaussian, GaussianProduct, Bell, Sigmoid, SigmoidDifference,
-SigmoidProduct, SShape, ZShape and PiShape terms, :mod:`flctool.export.shapes`),
-conjunction Minimum (eq. 2), and the WeightedAverage of the constant terms over every fired
-rule (eq. 3). Inputs have ``lock-range: true`` so that fuzzylite clips them to their range as
-flctool does. The output has ``aggregation: none``: with an aggregation, pyfuzzylite 8's
-WeightedAverage merges the rules that share a term and no longer computes eq. 3.
-Numbers are written with repr (full precision), never fuzzylite's default 3 decimals.
+SigmoidProduct, SShape, ZShape and PiShape terms, :mod:`flctool.export.shapes`), conjunction
+Minimum (eq. 2; AlgebraicProduct with ``activation: product``), and the WeightedAverage of
+the constant terms over every fired rule (eq. 3). Inputs have ``lock-range: true`` so that
+fuzzylite clips them to their range as flctool does. The output has ``aggregation: none``:
+with an aggregation, pyfuzzylite 8's WeightedAverage merges the rules that share a term and
+no longer computes eq. 3. Numbers are written with repr (full precision), never fuzzylite's
+default 3 decimals.
 """
 
 from __future__ import annotations
@@ -82,12 +83,17 @@ class FllExporter(Exporter):
         lines += [f"{INDENT}term: {command} Constant {number(value)}"
                   for command, value in output.commands.items()]
         lines += ["RuleBlock: rules", f"{INDENT}enabled: true",
-                  f"{INDENT}conjunction: Minimum", f"{INDENT}disjunction: none",
+                  f"{INDENT}conjunction: {CONJUNCTION[behaviour.activation]}",
+                  f"{INDENT}disjunction: none",
                   f"{INDENT}implication: none", f"{INDENT}activation: General"]
         for rule in behaviour.rules:
             condition = " and ".join(f"{n} is {rule.if_[n]}" for n in behaviour.input_names)
             lines.append(f"{INDENT}rule: if {condition} then {output.name} is {rule.then}")
         return "\n".join(lines) + "\n"
+
+
+#: Eq. 2 as fuzzylite names it, by the behaviour's activation.
+CONJUNCTION = {"min": "Minimum", "product": "AlgebraicProduct"}
 
 
 def fuzzylite_term(value: FuzzySet) -> str:
@@ -174,7 +180,8 @@ class _FllReader:
         self.section = ""
         self.blocks = 0
         # fuzzylite's default conjunction is none, which cannot combine two memberships
-        self.result.conjunction = Method("conjunction none", 1, "use conjunction: Minimum")
+        self.result.conjunction = Method("conjunction none", 1,
+                                         "use conjunction: Minimum or AlgebraicProduct")
         self.result.disjunction = Method("disjunction none", 1, "use disjunction: Maximum")
         self.current: ImportedInput | None = None
         self.outputs: list[_Output] = []
@@ -406,7 +413,7 @@ class _FllReader:
             return
         if key == "conjunction":
             self.result.conjunction = (None if value == "Minimum" else Method(
-                f"conjunction {value}", line, "use conjunction: Minimum",
+                f"conjunction {value}", line, "use conjunction: Minimum or AlgebraicProduct",
                 product=value == "AlgebraicProduct"))
         elif key == "activation":
             if value != "General":

@@ -65,7 +65,7 @@ def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     singletons = controller.singletons.astype(F32)
     assert controller.consequents is not None  # a deployable behaviour has every rule
     with np.errstate(divide="ignore", invalid="ignore"):
-        out = centre_of_area(((_activation(memberships, sets),
+        out = centre_of_area(((_activation(memberships, sets, controller.product),
                                singletons[controller.consequents[m]])
                               for m, sets in enumerate(controller.rule_grid.tolist())),
                              np.zeros(len(states), dtype=F32))  # rule order, eq. 1
@@ -73,11 +73,13 @@ def float_outputs(behaviour: Behaviour, states: np.ndarray) -> np.ndarray:
     return clipped.astype(np.float64)
 
 
-def _activation(memberships: list[np.ndarray], sets: list[int]) -> np.ndarray:
-    """One rule's activation over the states: the minimum of its sets' memberships (eq. 2)."""
+def _activation(memberships: list[np.ndarray], sets: list[int], product: bool) -> np.ndarray:
+    """One rule's activation over the states: the minimum of its sets' memberships (eq. 2),
+    or with ``product`` their product in input order, in float as the C source computes it."""
     alpha = memberships[0][:, sets[0]]
     for i in range(1, len(sets)):
-        alpha = np.minimum(alpha, memberships[i][:, sets[i]])
+        mu = memberships[i][:, sets[i]]
+        alpha = alpha * mu if product else np.minimum(alpha, mu)
     return alpha
 
 

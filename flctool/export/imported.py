@@ -29,12 +29,12 @@ _T = TypeVar("_T")
 #: What each format's importer reads, for refusals that have no more specific fix.
 SUBSET = {
     "fll": "a Takagi-Sugeno engine: Trapezoid/Triangle/Rectangle/Ramp/Gaussian/Bell/Sigmoid/"
-           "... inputs, Constant outputs, WeightedAverage, conjunction Minimum, plain 'and' "
-           "rules",
+           "... inputs, Constant outputs, WeightedAverage, conjunction Minimum or "
+           "AlgebraicProduct, plain 'and' rules",
     "fcl": "singleton output terms with METHOD : COGS, trapezoid point lists or fuzzylite "
-           "terms (Trapezoid, Triangle, Gaussian, ...), AND : MIN, plain AND rules",
+           "terms (Trapezoid, Triangle, Gaussian, ...), AND : MIN or PROD, plain AND rules",
     "fis": "Type='sugeno' with constant outputs, trapmf/trimf/gaussmf/gbellmf/sigmf/... "
-           "inputs, AndMethod='min', DefuzzMethod='wtaver', AND rules of weight 1",
+           "inputs, AndMethod='min' or 'prod', DefuzzMethod='wtaver', AND rules of weight 1",
 }
 
 
@@ -238,7 +238,8 @@ class Method:
     text: str  # the setting as the format spells it, e.g. "AND : PROD"
     line: int
     hint: str = ""
-    #: A conjunction by the product, which a Mamdani conversion measures against.
+    #: A conjunction by the product: the behaviour's ``activation: product`` (eq. 2 as the
+    #: product of the memberships), which fuzzylite and MATLAB compute as flctool does.
     product: bool = False
 
 
@@ -247,7 +248,8 @@ class ImportedController:
     """A controller as read, with the line of every part.
 
     ``conjunction`` is set when the file combines a rule's memberships by something other than
-    the minimum (eq. 2); ``accumulation`` when it accumulates the rules by something that
+    the minimum (eq. 2): the product is imported as ``activation: product``, anything else
+    refused; ``accumulation`` when it accumulates the rules by something that
     merges the rules sharing an output term (a maximum) instead of summing them (eq. 3).
     :func:`build_behaviour` refuses either where it would change the output.
     """
@@ -520,6 +522,13 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     for index, rule in enumerate(rules):
         marks[("rules", index)] = (rule.line, 1)
     data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command} for rule in rules]
+    if (imported.conjunction is not None and imported.conjunction.product
+            and not imported.expand_rules):
+        # eq. 2 as the file computes it. A Mamdani conversion keeps the minimum instead, its
+        # difference from the product measured with the rest: on the product-conjunction
+        # Mamdani examples (MATLAB's tank and tank2, Octave's tipper) the minimum's singleton
+        # controller stays closer to the Mamdani output (0.698 against 1.08 for tank2).
+        data["activation"] = "product"
     # A rule check that names another rule names it by line, as the file does (an expanded
     # rule by the line of the rule it came from).
     return behaviour_from_data(data, SourceMap(file, marks),
@@ -712,11 +721,14 @@ def _check_rules_cover_every_input(imported: ImportedController) -> None:
         if left_out and all(n in inputs for n in rule.antecedent):
             names = ", ".join(f"'{n}'" for n in left_out)
             written = f" ({imported.omission})" if imported.omission else ""
+            conjunction = imported.conjunction
+            combined = ("product" if conjunction is not None and conjunction.product
+                        else "minimum")
             raise unsupported(
                 imported.file, rule.line, f"the rule leaves out input{'s' * (len(left_out) > 1)} "
-                f"{names}{written}: it fires with the other inputs' minimum alone, which no rule "
-                "of the full grid (eq. 1-2) does, so expanding it over the sets would change "
-                "the output", DONT_CARE_HINT)
+                f"{names}{written}: it fires with the other inputs' {combined} alone, which no "
+                "rule of the full grid (eq. 1-2) does, so expanding it over the sets would "
+                "change the output", DONT_CARE_HINT)
 
 
 def _check_names_unique(imported: ImportedController) -> None:
@@ -751,11 +763,12 @@ def _check_weights(imported: ImportedController) -> None:
 
 def _check_methods(imported: ImportedController) -> None:
     conjunction = imported.conjunction
-    if imported.expand_rules and conjunction is not None and conjunction.product:
-        pass  # a Mamdani conversion: the measurement computes the product (mamdani.py)
+    if conjunction is not None and conjunction.product:
+        pass  # activation: product, or measured by a Mamdani conversion (build_behaviour)
     elif conjunction is not None and any(len(r.antecedent) > 1 for r in imported.rules):
         raise imported.error(conjunction.line, f"{conjunction.text}: flctool's rules combine "
-                             "their memberships by the minimum (eq. 2)", conjunction.hint)
+                             "their memberships by the minimum (eq. 2) or the product",
+                             conjunction.hint)
     if imported.accumulation is not None:
         check_rules_share_no_term(imported, imported.accumulation.line,
                                   imported.accumulation.text)

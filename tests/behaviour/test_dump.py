@@ -63,3 +63,14 @@ def test_a_long_rule_table_is_written_in_blocks_with_the_same_bytes(
                       allow_unicode=True, width=100)
     monkeypatch.setattr(dump, "_RULES_AT_ONCE", 4)  # 15 rules: four blocks
     assert dump.data_to_yaml(data, "a header") == "# a header\n" + whole
+
+
+def test_activation_is_written_only_when_it_is_the_product(minimal_text: str) -> None:
+    # min is the paper's eq. 2, left implicit as files leave it; product round-trips
+    plain = parse_behaviour(minimal_text)
+    assert plain.activation == "min"
+    assert "activation" not in behaviour_to_yaml(plain)
+    product = parse_behaviour(minimal_text + "activation: product\n")
+    text = behaviour_to_yaml(product)
+    assert "activation: product\n" in text
+    assert parse_behaviour(text) == product

@@ -308,3 +308,11 @@ def test_the_loader_names_other_rules_by_the_namer_it_is_given(description: obje
         (6, "duplicate rule: the same antecedent as rules[0]")]
     assert [(p.line, p.message) for p in by_line.value.problems if p.line] == [
         (6, "duplicate rule: the same antecedent as line 5")]
+
+
+def test_an_unknown_activation_is_located_with_the_choices(minimal_text: str) -> None:
+    with pytest.raises(SpecError) as info:
+        parse_behaviour(minimal_text + "activation: prod\n", "b.yaml")
+    text = str(info.value.problems[0])
+    line = len(minimal_text.splitlines()) + 1
+    assert text.startswith(f"b.yaml:{line}:1: activation: input should be 'min' or 'product'")

@@ -120,6 +120,17 @@ def test_show_prints_sets_counts_and_rule_grid() -> None:
     assert "M = 15 rules, K = 5 commands" in result.output
     assert "far_right" in result.output and "forward_right" in result.output
     assert "rules: rows ball_size, columns pan" in result.output
+    assert "activation" not in result.output  # the paper's min goes without saying
+
+
+def test_show_says_when_rules_fire_by_the_product(tmp_path: Path) -> None:
+    product = tmp_path / "product.yaml"
+    product.write_text((BEHAVIOURS / "ballchase-handmade.yaml").read_text()
+                       + "activation: product\n")
+    result = runner.invoke(app, ["show", str(product)], env={"COLUMNS": "200"})
+    assert result.exit_code == 0, result.output
+    assert "activation: product (a rule fires with the product of its memberships)" in \
+        " ".join(result.output.split())
 
 
 def test_show_lists_the_rules_of_other_behaviours(tmp_path: Path) -> None:

@@ -10,13 +10,24 @@ from flctool.compile import Controller
 from flctool.membership import trapezoid_scalar
 
 
+def combine(controller: Controller, memberships: list[float]) -> float:
+    """Eq. 2: the rule's memberships combined by their min, or with ``activation: product``
+    multiplied one after the other in input order."""
+    if not controller.product:
+        return min(memberships)
+    alpha = memberships[0]
+    for mu in memberships[1:]:
+        alpha = alpha * mu
+    return alpha
+
+
 def reference_output(controller: Controller, state: np.ndarray, consequents: np.ndarray) -> float:
     clipped = [min(max(float(s), lo), hi) for s, (lo, hi) in zip(state, controller.ranges,
                                                                   strict=True)]
     numerator = denominator = 0.0
     for m, sets in enumerate(itertools.product(*(range(len(q)) for q in controller.quadruples))):
-        alpha = min(trapezoid_scalar(clipped[i], *controller.quadruples[i][j])
-                    for i, j in enumerate(sets))  # eq. 2
+        alpha = combine(controller, [trapezoid_scalar(clipped[i], *controller.quadruples[i][j])
+                                     for i, j in enumerate(sets)])  # eq. 2
         numerator += alpha * controller.singletons[consequents[m]]
         denominator += alpha
     value = numerator / denominator  # eq. 3
@@ -26,9 +37,11 @@ def reference_output(controller: Controller, state: np.ndarray, consequents: np.
 
 
 def random_behaviour_data(rng: np.random.Generator, n_inputs: int | None = None,
-                          n_commands: int | None = None, rules: bool = True) -> dict:
+                          n_commands: int | None = None, rules: bool = True,
+                          activation: str = "min") -> dict:
     """A random valid behaviour: covering partitions with triangles, shoulders and vertical
-    edges, random singletons, and (optionally) a complete random rule table."""
+    edges, random singletons, and (optionally) a complete random rule table; eq. 2 is
+    ``activation`` (min, the paper's, or product)."""
     n_inputs = n_inputs or int(rng.integers(1, 4))
     inputs = {}
     for i in range(n_inputs):
@@ -61,7 +74,7 @@ def random_behaviour_data(rng: np.random.Generator, n_inputs: int | None = None,
     n_commands = n_commands or int(rng.integers(1, 6))
     commands = {f"c{k}": float(rng.uniform(-5, 5)) for k in range(n_commands)}
     data = {"flctool": 1, "name": "random", "inputs": inputs,
-            "output": {"name": "y", "commands": commands}}
+            "output": {"name": "y", "commands": commands}, "activation": activation}
     if rules:
         names = list(inputs)
         data["rules"] = [

@@ -23,7 +23,11 @@ from flctool.compile import Controller, kernels
 from flctool.errors import InferenceError
 from flctool.membership import trapezoid_scalar
 
-from .reference import random_behaviour_data, reference_output
+from .reference import combine, random_behaviour_data, reference_output
+
+#: Eq. 2 as the paper's min and as the product (activation: product): every path must give
+#: the reference's bits for both.
+ACTIVATIONS = ["min", "product"]
 
 
 def reference_activations(controller: Controller, state: np.ndarray) -> np.ndarray:
@@ -31,7 +35,8 @@ def reference_activations(controller: Controller, state: np.ndarray) -> np.ndarr
     clipped = [min(max(float(s), lo), hi) for s, (lo, hi) in zip(state, controller.ranges,
                                                                   strict=True)]
     return np.array([
-        min(trapezoid_scalar(clipped[i], *controller.quadruples[i][j]) for i, j in enumerate(sets))
+        combine(controller, [trapezoid_scalar(clipped[i], *controller.quadruples[i][j])
+                             for i, j in enumerate(sets)])
         for sets in itertools.product(*(range(len(q)) for q in controller.quadruples))])
 
 
@@ -79,10 +84,13 @@ def many_overlapping_sets() -> Controller:
 
 
 @pytest.mark.slow
-def test_fast_paths_equal_the_reference_exactly_on_random_controllers() -> None:
+@pytest.mark.parametrize("activation", ACTIVATIONS)
+def test_fast_paths_equal_the_reference_exactly_on_random_controllers(activation: str) -> None:
     rng = np.random.default_rng(2024)
     for _ in range(40):
-        controller = compile_behaviour(behaviour_from_data(random_behaviour_data(rng)))
+        controller = compile_behaviour(behaviour_from_data(
+            random_behaviour_data(rng, activation=activation)))
+        assert controller.product == (activation == "product")
         assert controller.consequents is not None
         states = awkward_states(controller, rng, 40)
         expected = np.array([reference_output(controller, s, controller.consequents)
@@ -236,7 +244,7 @@ def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -
     """kernels.infer on the every-rule walk (a layout that keeps the rule grid whatever M is)
     and on the fired-rules walk, for ``tables (P, M)``: two (P, B) arrays."""
     layout = kernels.layout(controller.ranges, controller.quadruples, controller.rule_grid,
-                            controller.singletons)
+                            controller.singletons, controller.kinds, controller.product)
     with_grid = kernels.keep_grid(layout, controller.rule_grid)
     results = []
     for chosen, dense in ((with_grid, True), (layout, False)):
@@ -253,15 +261,16 @@ def both_walks(controller: Controller, states: np.ndarray, tables: np.ndarray) -
                                kernels.SMALL_BATCH, kernels.SMALL_BATCH + 1,
                                kernels.OWN_SMALL_BATCH_FEW_INPUTS,
                                kernels.OWN_SMALL_BATCH_FEW_INPUTS + 1, 63, 64, 65, 130]),
-       population=st.integers(1, 3))
+       population=st.integers(1, 3), activation=st.sampled_from(ACTIVATIONS))
 @pytest.mark.slow
 def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
-                                         population: int) -> None:
+                                         population: int, activation: str) -> None:
     """Small batches (state by state), blocks on both walks, strided states, populations
-    and one-state calls: all give the plain eq. 1-3 bit for bit."""
+    and one-state calls: all give the plain eq. 1-3 bit for bit, eq. 2 the min or the
+    product."""
     rng = np.random.default_rng(seed)
     controller = compile_behaviour(behaviour_from_data(
-        random_behaviour_data(rng, n_inputs, rules=False)))
+        random_behaviour_data(rng, n_inputs, rules=False, activation=activation)))
     tables = rng.integers(0, controller.n_commands, size=(population, controller.n_rules))
     states = awkward_states(controller, rng, batch)
     expected = np.array([[reference_output(controller, s, row) for s in states]
@@ -276,8 +285,10 @@ def test_every_path_equals_the_reference(seed: int, n_inputs: int, batch: int,
     np.testing.assert_array_equal([deployed.output_one(s) for s in states], expected[0])
 
 
+@pytest.mark.parametrize("activation", ACTIVATIONS)
 @pytest.mark.parametrize("n_inputs", [1, 2, 3, 4])
-def test_own_consequents_entry_on_both_sides_of_its_switch(n_inputs: int) -> None:
+def test_own_consequents_entry_on_both_sides_of_its_switch(n_inputs: int,
+                                                           activation: str) -> None:
     """Controller.output without a population goes to kernels.infer_own: state by state up
     to its switch, in blocks past it (on the walk of every rule and on the fired rules'),
     bit for bit the plain eq. 1-3, output_one and the population entry (kernels.infer)."""
@@ -286,7 +297,7 @@ def test_own_consequents_entry_on_both_sides_of_its_switch(n_inputs: int) -> Non
               else kernels.OWN_SMALL_BATCH)
     for _ in range(6):
         controller = compile_behaviour(behaviour_from_data(
-            random_behaviour_data(rng, n_inputs, rules=False)))
+            random_behaviour_data(rng, n_inputs, rules=False, activation=activation)))
         controller = controller.with_consequents(
             rng.integers(0, controller.n_commands, size=controller.n_rules))
         assert controller.consequents is not None
@@ -380,9 +391,10 @@ def test_the_walk_choice_is_measured_for_every_size_it_decides() -> None:
     assert kernels.walks_every_rule(7 ** 3, 3, 21)
 
 
-def strong_partition_controller(n_inputs: int, n_sets: int, seed: int) -> Controller:
+def strong_partition_controller(n_inputs: int, n_sets: int, seed: int,
+                                activation: str = "min") -> Controller:
     """N inputs on [0, 1] of L trapezoids whose slopes overlap their neighbours' (at most
-    two sets of an input fire), with random consequents."""
+    two sets of an input fire), with random consequents; eq. 2 is ``activation``."""
     step = 1.0 / (n_sets - 1)
     sets = {}
     for j in range(n_sets):
@@ -394,7 +406,8 @@ def strong_partition_controller(n_inputs: int, n_sets: int, seed: int) -> Contro
         sets[f"s{j}"] = quad
     data = {"flctool": 1, "name": "strong",
             "inputs": {f"x{i}": {"range": [0, 1], "sets": sets} for i in range(n_inputs)},
-            "output": {"name": "u", "commands": {"a": -1, "b": 0.5, "c": 2}}}
+            "output": {"name": "u", "commands": {"a": -1, "b": 0.5, "c": 2}},
+            "activation": activation}
     learning = compile_behaviour(behaviour_from_data(data))
     rng = np.random.default_rng(seed)
     return learning.with_consequents(rng.integers(0, 3, size=learning.n_rules))
@@ -415,13 +428,16 @@ def test_fired_rules_bound_counts_the_sets_that_overlap() -> None:
 
 
 @pytest.mark.slow
-def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time() -> None:
+@pytest.mark.parametrize("activation", ACTIVATIONS)
+def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time(
+        activation: str) -> None:
     # 6 x 2 and 8 x 2 sets (every rule fires) take the interleaved walk of every rule for up
     # to OWN_SMALL_BATCH_FEW_INPUTS states; 3 x 6 (8 of 216 rules fire) the fired rules'.
     assert not strong_partition_controller(3, 6, seed=2)._layout.ints[4]
     rng = np.random.default_rng(12)
     for n_inputs in (6, 8):
-        controller = strong_partition_controller(n_inputs, 2, seed=n_inputs)
+        controller = strong_partition_controller(n_inputs, 2, seed=n_inputs,
+                                                 activation=activation)
         assert controller._layout.ints[4] and controller.consequents is not None
         for batch in (1, 2, 3, 4, 5, 7, kernels.OWN_SMALL_BATCH_FEW_INPUTS):
             states = awkward_states(controller, rng, batch)

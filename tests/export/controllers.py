@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from flctool import with_rules
-from flctool.behaviour import Behaviour, behaviour_from_data
+from flctool.behaviour import Behaviour, behaviour_from_data, behaviour_to_data
 from flctool.behaviour.shapes import set_row
 
 
@@ -47,8 +47,8 @@ def _partition(rng: np.random.Generator, lo: float, hi: float, count: int
 
 
 def random_behaviour(seed: int, max_inputs: int = 4, max_sets: int = 4,
-                     min_inputs: int = 1) -> Behaviour:
-    """A deployable behaviour drawn from ``seed``."""
+                     min_inputs: int = 1, activation: str = "min") -> Behaviour:
+    """A deployable behaviour drawn from ``seed``, combining memberships by ``activation``."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(min_inputs, max_inputs + 1))
     inputs: dict[str, Any] = {}
@@ -62,7 +62,8 @@ def random_behaviour(seed: int, max_inputs: int = 4, max_sets: int = 4,
     k = int(rng.integers(1, 7))
     commands = {f"c{j}": float(rng.normal(0, 10)) for j in range(k)}
     behaviour = behaviour_from_data({"flctool": 1, "name": f"random_{seed}", "inputs": inputs,
-                                     "output": {"name": "u", "commands": commands}})
+                                     "output": {"name": "u", "commands": commands},
+                                     "activation": activation})
     return with_rules(behaviour, rng.integers(0, k, behaviour.rule_count))
 
 
@@ -82,3 +83,8 @@ def random_states(behaviour: Behaviour, count: int, seed: int, margin: float = 0
         column[pick] = rng.choice(corners, int(pick.sum()))
         columns.append(column)
     return np.column_stack(columns)
+
+
+def with_product(behaviour: Behaviour) -> Behaviour:
+    """``behaviour`` with ``activation: product`` (eq. 2 as the product), validated anew."""
+    return behaviour_from_data({**behaviour_to_data(behaviour), "activation": "product"})

@@ -22,6 +22,7 @@ def assert_same_controller(got: Behaviour, want: Behaviour, states: np.ndarray) 
     assert a.set_names == b.set_names
     assert a.output_name == b.output_name
     assert a.command_names == b.command_names
+    assert a.product == b.product
     assert np.array_equal(a.ranges, b.ranges)
     for qa, qb in zip(a.quadruples, b.quadruples, strict=True):
         assert np.array_equal(qa, qb)

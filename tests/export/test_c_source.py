@@ -17,7 +17,7 @@ from flctool.export import ExportOptions
 from flctool.export.c_source import CExporter
 from flctool.export.float_error import check_float_error
 
-from .controllers import random_behaviour, random_states
+from .controllers import random_behaviour, random_states, with_product
 from .roundtrip import SHIPPED
 
 CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
@@ -77,10 +77,13 @@ def run(program: Path, which: int, states: np.ndarray) -> np.ndarray:
 @needs_cc
 def test_c_matches_python_on_10000_states(tmp_path: Path) -> None:
     shipped = [load_behaviour(p) for p in SHIPPED]
-    randoms = [random_behaviour(seed, max_sets=5) for seed in range(12)]
+    # with activation: product too (its C multiplies the memberships in input order)
+    shipped += [with_product(shipped[k]) for k in (0, 1)]
+    randoms = [random_behaviour(seed, max_sets=5, activation="product" if seed >= 10 else "min")
+               for seed in range(14)]
     controllers = [(b, ExportOptions(prefix=f"c{i}_")) for i, b in enumerate(shipped + randoms)]
     controllers += [(b, ExportOptions(prefix=f"f{i}_", single=True))
-                    for i, b in enumerate(shipped + [randoms[k] for k in (1, 2, 3, 6)])]
+                    for i, b in enumerate(shipped + [randoms[k] for k in (1, 2, 3, 6, 10)])]
     program = build(tmp_path, controllers)
     for which, (behaviour, options) in enumerate(controllers):
         states = random_states(behaviour, 10_000 if which < len(shipped) else 2_000, seed=which)

@@ -14,8 +14,8 @@ from flctool.export import ExportOptions
 from flctool.export.base import sloped_quad
 from flctool.export.fcl import FclExporter, FclImporter, fcl_number, set_points
 
-from .controllers import random_behaviour, random_states
-from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, reference_controller
+from .controllers import random_behaviour, random_states, with_product
+from .engines import ALL_SHIPPED, PRODUCT_SOURCES, assert_fuzzylite_agrees, reference_controller
 from .roundtrip import SHIPPED, assert_same_controller
 
 
@@ -156,11 +156,21 @@ def test_max_accumulation_of_shared_terms_is_refused() -> None:
         FclImporter().from_string(text, "tiny.fcl")
 
 
-def test_import_refuses_a_conjunction_other_than_min() -> None:
+def test_import_refuses_a_conjunction_other_than_min_or_product() -> None:
     text = FclExporter().to_string(load_behaviour(SHIPPED[0])).replace("AND : MIN;",
-                                                                       "AND : PROD;")
-    with pytest.raises(ExportError, match=r"x.fcl:\d+: AND : PROD: flctool's rules combine"):
+                                                                       "AND : BDIF;")
+    with pytest.raises(ExportError, match=r"x.fcl:\d+: AND : BDIF: flctool's rules combine "
+                       r"their memberships by the minimum \(eq. 2\) or the product"):
         FclImporter().from_string(text, "x.fcl")
+
+
+def test_and_prod_imports_as_product_activation() -> None:
+    behaviour = load_behaviour(SHIPPED[0])
+    text = FclExporter().to_string(behaviour).replace("AND : MIN;", "AND : PROD;")
+    imported = FclImporter().from_string(text, "x.fcl")
+    assert imported.activation == "product"
+    assert_same_controller(imported, with_product(behaviour),
+                           random_states(behaviour, 2_000, seed=4))
 
 
 def test_an_input_without_fuzzify_is_refused() -> None:
@@ -244,13 +254,16 @@ def test_options_is_a_keyword_and_an_empty_block_is_read() -> None:
                                                 "END_OPTIONS\nEND_FUNCTION_BLOCK"), "tiny.fcl")
 
 
-@pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
+@pytest.mark.parametrize(("source", "activation"),
+                         [*((s, "min") for s in [*ALL_SHIPPED, 3, 11, 12, 21]),
+                          *((s, "product") for s in PRODUCT_SOURCES)],
                          ids=lambda s: getattr(s, "name", str(s)))
 @pytest.mark.slow
-def test_fuzzylite6_reads_the_fuzzylite_dialect(source: object, tmp_path: Path) -> None:
+def test_fuzzylite6_reads_the_fuzzylite_dialect(source: object, activation: str,
+                                                tmp_path: Path) -> None:
     """fuzzylite 6 reads --dialect fuzzylite and agrees within 1e-12 apart from its 1e-6
-    tolerance, 20 % past the range's ends too."""
-    behaviour = reference_controller(source)
+    tolerance, 20 % past the range's ends too (AND : PROD as fuzzylite's AlgebraicProduct)."""
+    behaviour = reference_controller(source, activation)
     states = random_states(behaviour, 10_000, seed=5)
     text = FclExporter(ExportOptions(dialect="fuzzylite")).to_string(behaviour)
     quads = [[sloped_quad(q, v.range, interior=False) for q in v.sets.values()]
@@ -258,10 +271,11 @@ def test_fuzzylite6_reads_the_fuzzylite_dialect(source: object, tmp_path: Path) 
     assert_fuzzylite_agrees(behaviour, text, "fcl", states, quads, tmp_path)
 
 
+@pytest.mark.parametrize("activation", ["min", "product"])
 @pytest.mark.parametrize("dialect", ["iec", "fuzzylite"])
 @pytest.mark.parametrize("seed", range(8))
-def test_both_dialects_import_back_exactly(dialect: str, seed: int) -> None:
-    behaviour = random_behaviour(seed)
+def test_both_dialects_import_back_exactly(dialect: str, seed: int, activation: str) -> None:
+    behaviour = random_behaviour(seed, activation=activation)
     text = FclExporter(ExportOptions(dialect=dialect)).to_string(behaviour)
     assert_same_controller(FclImporter().from_string(text), behaviour,
                            random_states(behaviour, 2_000, seed=seed))

@@ -16,7 +16,13 @@ from flctool.export.fis import FisExporter, FisImporter
 from flctool.export.imported import DONT_CARE_HINT
 
 from .controllers import random_behaviour, random_states
-from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, octave_outputs, reference_controller
+from .engines import (
+    ALL_SHIPPED,
+    PRODUCT_SOURCES,
+    assert_fuzzylite_agrees,
+    octave_outputs,
+    reference_controller,
+)
 from .roundtrip import SHIPPED
 
 
@@ -194,13 +200,17 @@ def _fis_quads(behaviour: Behaviour) -> list[list[tuple[float, ...]]]:
             for v in behaviour.inputs.values()]
 
 
-@pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
+@pytest.mark.parametrize(("source", "activation"),
+                         [*((s, "min") for s in [*ALL_SHIPPED, 3, 11, 12, 21]),
+                          *((s, "product") for s in PRODUCT_SOURCES)],
                          ids=lambda s: getattr(s, "name", str(s)))
 @pytest.mark.slow
-def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
+def test_fuzzylite6_computes_the_same_outputs(source: object, activation: str,
+                                              tmp_path: Path) -> None:
     """fuzzylite 6 reads the export and agrees within 1e-12 apart from its 1e-6 tolerance,
-    20 % past the range's ends too: shoulders' feet lie a range width outside it."""
-    behaviour = reference_controller(source)
+    20 % past the range's ends too: shoulders' feet lie a range width outside it. With
+    activation: product, AndMethod='prod'."""
+    behaviour = reference_controller(source, activation)
     states = random_states(behaviour, 10_000, seed=5)
     assert_fuzzylite_agrees(behaviour, FisExporter().to_string(behaviour), "fis", states,
                             _fis_quads(behaviour), tmp_path)
@@ -217,12 +227,14 @@ def test_no_mf_has_a_vertical_edge() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("source", [*SHIPPED, 12], ids=str)
-def test_octave_reads_and_agrees(source: object, tmp_path: Path) -> None:
+@pytest.mark.parametrize(("source", "activation"),
+                         [*((s, "min") for s in [*SHIPPED, 12]),
+                          *((s, "product") for s in [SHIPPED[0], 12])], ids=str)
+def test_octave_reads_and_agrees(source: object, activation: str, tmp_path: Path) -> None:
     """Optional: Octave's fuzzy-logic-toolkit (readfis / evalfis) reads the export and agrees
-    within 1e-12 on states clipped to the ranges (evalfis refuses others)."""
-    behaviour = (random_behaviour(source, max_inputs=3) if isinstance(source, int)
-                 else load_behaviour(str(source)))
+    within 1e-12 on states clipped to the ranges (evalfis refuses others); AndMethod='prod'
+    as Octave's product."""
+    behaviour = reference_controller(source, activation)
     controller = compile_behaviour(behaviour)
     states = np.clip(random_states(behaviour, 300, seed=5), controller.ranges[:, 0],
                      controller.ranges[:, 1])

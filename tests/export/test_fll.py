@@ -14,7 +14,7 @@ from flctool.errors import ExportError, SpecError
 from flctool.export.fll import FllExporter, FllImporter
 
 from .controllers import random_behaviour, random_states
-from .engines import ALL_SHIPPED, assert_fuzzylite_agrees, reference_controller
+from .engines import ALL_SHIPPED, PRODUCT_SOURCES, assert_fuzzylite_agrees, reference_controller
 from .roundtrip import SHIPPED
 
 fl = pytest.importorskip("fuzzylite", reason="pyfuzzylite (the test extra) checks FLL exports")
@@ -252,13 +252,17 @@ def test_an_infinite_point_inside_a_term_is_refused() -> None:
         FllImporter().from_string(text, "tiny.fll")
 
 
-@pytest.mark.parametrize("source", [*ALL_SHIPPED, 3, 11, 12, 21],
+@pytest.mark.parametrize(("source", "activation"),
+                         [*((s, "min") for s in [*ALL_SHIPPED, 3, 11, 12, 21]),
+                          *((s, "product") for s in PRODUCT_SOURCES)],
                          ids=lambda s: getattr(s, "name", str(s)))
 @pytest.mark.slow
-def test_fuzzylite6_computes_the_same_outputs(source: object, tmp_path: Path) -> None:
+def test_fuzzylite6_computes_the_same_outputs(source: object, activation: str,
+                                              tmp_path: Path) -> None:
     """The fuzzylite 6 command line reads the export and agrees within 1e-12, apart from its
-    1e-6 tolerance; the states include set corners and states 20 % out of range."""
-    behaviour = reference_controller(source)
+    1e-6 tolerance; the states include set corners and states 20 % out of range. With
+    activation: product, conjunction AlgebraicProduct."""
+    behaviour = reference_controller(source, activation)
     states = random_states(behaviour, 10_000, seed=5)
     quads = [list(v.sets.values()) for v in behaviour.inputs.values()]
     assert_fuzzylite_agrees(behaviour, FllExporter().to_string(behaviour), "fll", states,

@@ -13,7 +13,7 @@ from flctool.errors import NotDeployableError
 from flctool.export import EXPORTERS, IMPORTERS, Exporter, Importer
 from flctool.registry import UnknownNameError
 
-from .controllers import random_behaviour, random_states
+from .controllers import random_behaviour, random_states, with_product
 from .roundtrip import SHIPPED, assert_same_controller
 
 TEXT_FORMATS = ("yaml", "json", "fll", "fcl", "fis")
@@ -48,10 +48,13 @@ def test_something_ships_complete() -> None:
     assert any(p.name == "ballchase-handmade.yaml" for p in SHIPPED)
 
 
+@pytest.mark.parametrize("activation", ["min", "product"])
 @pytest.mark.parametrize("format", TEXT_FORMATS)
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
-def test_shipped_behaviours_round_trip(path: Path, format: str) -> None:
+def test_shipped_behaviours_round_trip(path: Path, format: str, activation: str) -> None:
     behaviour = load_behaviour(path)
+    if activation == "product":
+        behaviour = with_product(behaviour)
     text = EXPORTERS.get(format)().to_string(behaviour)
     again = read_back(format, text)
     assert_same_controller(again, behaviour, random_states(behaviour, 2000, seed=1))
@@ -61,11 +64,12 @@ def test_shipped_behaviours_round_trip(path: Path, format: str) -> None:
             text.splitlines()[1:]
 
 
+@pytest.mark.parametrize("activation", ["min", "product"])
 @pytest.mark.parametrize("format", TEXT_FORMATS)
 @pytest.mark.slow
-def test_random_controllers_round_trip(format: str) -> None:
+def test_random_controllers_round_trip(format: str, activation: str) -> None:
     for seed in range(40):
-        behaviour = random_behaviour(seed)
+        behaviour = random_behaviour(seed, activation=activation)
         text = EXPORTERS.get(format)().to_string(behaviour)
         assert_same_controller(read_back(format, text), behaviour,
                                random_states(behaviour, 500, seed=seed))

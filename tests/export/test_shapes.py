@@ -19,11 +19,15 @@ from flctool.export.fis import FisExporter, FisImporter
 from flctool.export.fll import FllExporter, FllImporter
 
 from ..compile.test_shapes import every_shape_behaviour, fuzzylite_shapes_behaviour
+from .controllers import with_product
 from .engines import assert_fuzzylite_agrees, octave_outputs
 from .test_c_source import CC, FLAGS, needs_cc
 
-#: Every shape: scikit-fuzzy's (which Octave reads too) and fuzzylite's own.
-BEHAVIOURS = {"skfuzzy": every_shape_behaviour, "fuzzylite": fuzzylite_shapes_behaviour}
+#: Every shape: scikit-fuzzy's (which Octave reads too) and fuzzylite's own, with eq. 2 as
+#: the min and as the product (activation: product).
+BEHAVIOURS = {"skfuzzy": every_shape_behaviour, "fuzzylite": fuzzylite_shapes_behaviour,
+              "skfuzzy-product": lambda: with_product(every_shape_behaviour()),
+              "fuzzylite-product": lambda: with_product(fuzzylite_shapes_behaviour())}
 
 
 def inside_states(count: int, seed: int, shapes: str = "skfuzzy") -> np.ndarray:
@@ -65,16 +69,18 @@ def test_every_shape_reads_back(format: str, shapes: str) -> None:
     behaviour = BEHAVIOURS[shapes]()
     imported = IMPORTERS[format]().from_string(EXPORTS[format](behaviour), f"x.{format}")
     assert imported.inputs == behaviour.inputs
+    assert imported.activation == behaviour.activation
     assert [r.then for r in imported.rules] == [r.then for r in behaviour.rules]
 
 
 @pytest.mark.slow
-def test_octave_computes_every_shape_as_flctool(tmp_path: Path) -> None:
+@pytest.mark.parametrize("shapes", ["skfuzzy", "skfuzzy-product"])
+def test_octave_computes_every_shape_as_flctool(shapes: str, tmp_path: Path) -> None:
     """500 states, not the 10,000 of fuzzylite and C: Octave's evalfis interprets each state
     (about 23 ms of CPU a state for these 36 rules, so 10,000 would cost four minutes). Drawn
     uniformly over the ranges (and the ranges' ends), they hold each set of every shape
     above 0.5 at 46 states or more."""
-    behaviour = every_shape_behaviour()
+    behaviour = BEHAVIOURS[shapes]()
     states = inside_states(500, seed=2)
     got = octave_outputs(FisExporter().to_string(behaviour), states, tmp_path)
     want = compile_behaviour(behaviour).output(states)

@@ -155,17 +155,23 @@ def test_sums_add_left_to_right_on_every_python() -> None:
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.integers(0, 10_000), st.integers(3, 5))
+@given(st.integers(0, 10_000), st.integers(3, 5), st.sampled_from(["min", "product"]))
 def test_learning_acts_as_the_deployed_controller_with_three_and_more_inputs(
-        seed: int, inputs: int) -> None:
+        seed: int, inputs: int, activation: str) -> None:
     # The learning loop's sparse path (eq. 1-3 over the fired rules) and the deployed
-    # controller (compiled kernels, one state and batched) give the same bits.
+    # controller (compiled kernels, one state and batched) give the same bits, eq. 2 the min
+    # or the product.
+    from flctool.compile.sparse import SparseRules as PlainRules
     from tests.export.controllers import random_behaviour, random_states
 
-    behaviour = random_behaviour(seed, max_inputs=inputs, max_sets=3, min_inputs=inputs)
+    behaviour = random_behaviour(seed, max_inputs=inputs, max_sets=3, min_inputs=inputs,
+                                 activation=activation)
     assert len(behaviour.inputs) == inputs
     controller = compile_behaviour(behaviour)
     sparse = SparseRules(controller)
+    # the rule base read from the behaviour (as set learning reads it) is the same
+    first = random_states(behaviour, 1, seed)[0].tolist()
+    assert PlainRules.from_behaviour(behaviour).fire(first) == sparse.fire(first)
     assert controller.consequents is not None
     states = random_states(behaviour, 50, seed)
     batched = controller.output(states)
