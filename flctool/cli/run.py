@@ -161,7 +161,6 @@ def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: 
              f"{', '.join(s.topic for s in node.sources)} -> {config.command.topic}")
         if recorder is not None:
             _start_recording(recorder, record, config.startup_timeout)
-        published = node.commands_sent + len(node.stop_times)
         try:
             node.run(episodes, duration)
         except KeyboardInterrupt:
@@ -169,8 +168,9 @@ def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: 
             raise
         finally:
             if recorder is not None:
+                # every command the node published, since the recorder was there first
                 _finish_recording(recorder, record, config.command.topic,
-                                  node.commands_sent + len(node.stop_times) - published)
+                                  node.commands_sent + len(node.stop_times))
         if node.status is not None:
             outcomes = ", ".join(f"{k} {v}" for k, v in node.outcomes.items())
             typer.echo(f"{node.episodes} episodes ended: {outcomes}")

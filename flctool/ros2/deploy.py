@@ -108,6 +108,10 @@ class ControllerNode:
         self.stop_times: list[float] = []
         self._ended = threading.Event()
         self._limit: int | None = None
+        # A tick may be running on the executor's thread when run() ends: publishing under
+        # this lock, and no tick once _leaving is set, makes the final stop the last command.
+        self._publishing = threading.Lock()
+        self._leaving = False
         try:
             self.inboxes: list[Inbox] = []
             for index, source in enumerate(self.sources):
@@ -150,14 +154,21 @@ class ControllerNode:
             values = [i.value for i in self.inboxes]
             ages = [now - i.time for i in self.inboxes]
         publishers = [i.publishers() for i in self.inboxes]
-        action = self.deployment.tick(values, ages, publishers)
-        if action is None:
-            self.publish_stop()
-        else:
-            self.publisher.publish(self.writer.command(action))
-            self.commands_sent += 1
+        with self._publishing:
+            if self._leaving:
+                return
+            action = self.deployment.tick(values, ages, publishers)
+            if action is None:
+                self._publish_stop()
+            else:
+                self.publisher.publish(self.writer.command(action))
+                self.commands_sent += 1
 
     def publish_stop(self) -> None:
+        with self._publishing:
+            self._publish_stop()
+
+    def _publish_stop(self) -> None:
         self.publisher.publish(self.writer.stop())
         self.stop_times.append(time.monotonic())
 
@@ -171,7 +182,9 @@ class ControllerNode:
                 self._ended.wait(min(0.1, max(deadline - time.monotonic(), 0.0)))
         finally:
             self.timer.cancel()
-            self.publish_stop()
+            with self._publishing:  # after a tick in flight, and before none
+                self._leaving = True
+                self._publish_stop()
             self.log("stop published; leaving")
 
     def close(self) -> None:
