@@ -70,6 +70,7 @@ if TYPE_CHECKING:
         NotDeployableError as NotDeployableError, EnvError as EnvError, LinkError as LinkError,
         ProtocolError as ProtocolError, LearnError as LearnError, RunDirError as RunDirError,
         InferenceError as InferenceError, ExportError as ExportError,
+        ImportRefusals as ImportRefusals,
         MissingDependencyError as MissingDependencyError, UnknownNameError as UnknownNameError,
         PluginError as PluginError, PluginWarning as PluginWarning,
     )

@@ -12,6 +12,7 @@ The library raises these; only the CLI turns them into exit codes and coloured t
       LearnError           a learner could not start, resume or finish
       RunDirError          a run directory is missing, damaged or does not match
       ExportError          a controller cannot be written or read in a format
+        ImportRefusals     several constructs keep one file out, listed together
       NotDeployableError   rules are missing where a complete controller is needed
       UnknownNameError     no learner, adapter or format of that name
       MissingDependencyError  an optional package is not installed
@@ -22,6 +23,7 @@ The library raises these; only the CLI turns them into exit codes and coloured t
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -132,6 +134,23 @@ class RunDirError(FlcError):
 
 class ExportError(FlcError):
     """A controller cannot be written in (or read from) the requested format."""
+
+
+class ImportRefusals(ExportError):
+    """Several constructs keep one file out: each is an :class:`ExportError` of its own
+    (file, line, construct and fix), listed together so that one attempt shows them all."""
+
+    def __init__(self, file: str, errors: list[ExportError]) -> None:
+        self.errors = errors
+        lines = sorted(errors, key=lambda e: line_of(str(e)))
+        super().__init__(f"{file}: {len(errors)} constructs flctool cannot import"
+                         + "".join(f"\n  {e}" for e in lines))
+
+
+def line_of(message: str) -> int:
+    """The line a located message names (``file:line:...``); 0 where it names none."""
+    found = re.match(r".*?:(\d+):", message)
+    return int(found.group(1)) if found else 0
 
 
 class NotDeployableError(FlcError):

@@ -19,7 +19,7 @@ from typing import Any, TypeVar
 from flctool.behaviour import FORMAT_VERSION, Behaviour, behaviour_from_data, behaviour_to_yaml
 from flctool.behaviour.shapes import ShapedSet, shape_problem, shaped
 from flctool.behaviour.yaml_source import SourceMap
-from flctool.errors import ExportError, PathPart
+from flctool.errors import ExportError, ImportRefusals, PathPart, line_of
 from flctool.export import shapes
 
 Quad = tuple[float, float, float, float]
@@ -38,22 +38,6 @@ SUBSET = {
 }
 
 
-class ImportRefusals(ExportError):
-    """Several constructs keep one file out: each is an :class:`ExportError` of its own
-    (file, line, construct and fix), listed together so that one attempt shows them all."""
-
-    def __init__(self, file: str, errors: list[ExportError]) -> None:
-        self.errors = errors
-        lines = sorted(errors, key=lambda e: _line_of(str(e)))
-        super().__init__(f"{file}: {len(errors)} constructs flctool cannot import"
-                         + "".join(f"\n  {e}" for e in lines))
-
-
-def _line_of(message: str) -> int:
-    found = re.match(r".*?:(\d+):", message)
-    return int(found.group(1)) if found else 0
-
-
 def refusals(file: str, errors: list[ExportError]) -> ExportError:
     """One error for every construct in ``errors`` (the error itself when there is one); a
     construct refused at several lines (one per output term, say) is listed once, at its
@@ -66,7 +50,7 @@ def refusals(file: str, errors: list[ExportError]) -> ExportError:
     for group in groups.values():
         first = group[0]
         if len(group) > 1:
-            lines = ", ".join(str(_line_of(str(e))) for e in group[1:])
+            lines = ", ".join(str(line_of(str(e))) for e in group[1:])
             first = ExportError(f"{first.args[0]}; the same at line{'s' * (len(group) > 2)} "
                                 f"{lines}", hint=first.hint)
         merged.append(first)
