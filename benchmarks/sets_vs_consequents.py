@@ -47,7 +47,8 @@ TASKS = {"ballchase": ("behaviours/ballchase.yaml", "success"),
          "mountaincar": ("behaviours/mountaincar.yaml", "return"),
          "acrobot": ("behaviours/acrobot.yaml", "return"),
          "pendulum": ("behaviours/pendulum.yaml", "return"),
-         "ballchase-misscaled": ("benchmarks/tasks/ballchase-misscaled.yaml", "success")}
+         "ballchase-misscaled": ("benchmarks/tasks/ballchase-misscaled.yaml", "success"),
+         "mountaincar-misscaled": ("benchmarks/tasks/mountaincar-misscaled.yaml", "return")}
 #: the tasks run when --tasks is not given
 DEFAULT_TASKS = "ballchase,avoid-obstacle,cartpole,mountaincar,acrobot,pendulum"
 
