@@ -18,6 +18,8 @@ benchmark that is stopped keeps every run it finished.
     nice -n 10 python benchmarks/sets_vs_consequents.py --seeds 10 --json sets_vs_consequents.json
     python benchmarks/sets_vs_consequents.py --tasks ballchase,pendulum --seeds 3
     python benchmarks/sets_vs_consequents.py --tasks ballchase-misscaled --seeds 10 --bound 2
+    python benchmarks/sets_vs_consequents.py --tasks mountaincar-misscaled --seeds 10 --bound 2 \
+        --variants sets --json misscaled-bound2.json
 """
 
 from __future__ import annotations
