@@ -12,28 +12,32 @@ evaluated on ``--episodes`` held-out episodes (seeds below 2^31, as ``flctool ev
 Reported per task and variant: the median and the worst seed of the held-out score (mean
 return for Gymnasium tasks, success rate for the pitch and ballchase tasks), the episodes
 used, CPU seconds, and the two-sided Mann-Whitney U p-value of sets against consequents only.
+The JSON file is rewritten after every run (with the machine and the start time), so a long
+benchmark that is stopped keeps every run it finished.
 
     nice -n 10 python benchmarks/sets_vs_consequents.py --seeds 10 --json sets_vs_consequents.json
     python benchmarks/sets_vs_consequents.py --tasks ballchase,pendulum --seeds 3
     python benchmarks/sets_vs_consequents.py --tasks ballchase-misscaled --seeds 10 --bound 2
+    python benchmarks/sets_vs_consequents.py --tasks mountaincar-misscaled --seeds 10 --bound 2 \
+        --variants sets --json misscaled-bound2.json
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
-from common import train_and_evaluate
+from common import machine, train_and_evaluate, write_json
 from scipy.stats import mannwhitneyu
 
 from flctool import load_behaviour
 from flctool.behaviour.models import Behaviour
+from flctool.behaviour.overrides import resolve_behaviour
 from flctool.behaviour.set_learning import strong_partition_problems
-from flctool.runs import resolve_behaviour
 
 ROOT = Path(__file__).resolve().parents[1]
 #: task -> (behaviour file under the repository, score: "return" (mean return) or "success"
@@ -45,7 +49,8 @@ TASKS = {"ballchase": ("behaviours/ballchase.yaml", "success"),
          "mountaincar": ("behaviours/mountaincar.yaml", "return"),
          "acrobot": ("behaviours/acrobot.yaml", "return"),
          "pendulum": ("behaviours/pendulum.yaml", "return"),
-         "ballchase-misscaled": ("benchmarks/tasks/ballchase-misscaled.yaml", "success")}
+         "ballchase-misscaled": ("benchmarks/tasks/ballchase-misscaled.yaml", "success"),
+         "mountaincar-misscaled": ("benchmarks/tasks/mountaincar-misscaled.yaml", "return")}
 #: the tasks run when --tasks is not given
 DEFAULT_TASKS = "ballchase,avoid-obstacle,cartpole,mountaincar,acrobot,pendulum"
 
@@ -111,27 +116,27 @@ def main() -> None:
     args = parser.parse_args()
     results: list[dict[str, Any]] = []
     summary: dict[str, Any] = {}
+    record = {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "machine": machine(),
+              "episodes": args.episodes, "seeds": args.seeds, "first_seed": args.first_seed,
+              "bound": args.bound, "summary": summary, "runs": results}
     with tempfile.TemporaryDirectory() as tmp:
         for task in args.tasks.split(","):
-            rows = []
+            rows: list[dict[str, Any]] = []
             for seed in range(args.first_seed, args.first_seed + args.seeds):
                 for with_sets in [v == "sets" for v in args.variants.split(",")]:
                     row = run_one(task, seed, with_sets, args.episodes, Path(tmp), args.bound)
                     rows.append(row)
+                    results.append(row)
+                    summary[task] = summarise(rows)
+                    write_json(args.json, record)
                     print(f"{task:15} seed {seed:2d} {'sets' if with_sets else 'cons':4} "
                           f"score {row['score']:9.3f} episodes {row['episodes']:6d} "
                           f"cpu {row['train_cpu_seconds']:6.1f} s", flush=True)
-            results += rows
-            summary[task] = s = summarise(rows)
+            s = summary[task]
             print(f"{task}: " + " | ".join(
                 f"{v} median {s[v]['median']:.3f} worst {s[v]['worst']:.3f}"
                 for v in ("consequents", "sets") if v in s)
                 + f" | Mann-Whitney p {s['mann_whitney_p']:.3g}", flush=True)
-            args.json.write_text(json.dumps({"episodes": args.episodes, "seeds": args.seeds,
-                                             "first_seed": args.first_seed,
-                                             "bound": args.bound,
-                                             "summary": summary, "runs": results},
-                                            indent=2) + "\n")
     print(f"wrote {args.json}")
 
 

@@ -242,6 +242,7 @@ def plot_memberships(behaviour: Behaviour, path: Path,
     names = behaviour.input_names
     figure, axes_list = plt.subplots(len(names), 1, figsize=(7, 2.2 * len(names)),
                                      squeeze=False)
+    moved = 0
     for axes, name in zip(axes_list[:, 0], names, strict=True):
         variable = behaviour.inputs[name]
         low, high = variable.range
@@ -251,6 +252,7 @@ def plot_memberships(behaviour: Behaviour, path: Path,
             line, = axes.plot(xs, ys, label=set_name)
             was = old.sets.get(set_name) if old is not None else None
             if was is not None and was != quad:
+                moved += 1
                 axes.plot(*_set_curve(was, low, high), linestyle="--", linewidth=0.9,
                           color=line.get_color(), alpha=0.6)
         axes.set_xlim(low, high)
@@ -260,8 +262,10 @@ def plot_memberships(behaviour: Behaviour, path: Path,
         axes.legend(fontsize="x-small", ncol=min(5, len(variable.sets)), loc="upper center",
                     bbox_to_anchor=(0.5, 1.3), frameon=False)
         axes.grid(alpha=0.3)
-    moved = " (dashed: before learning)" if before is not None else ""
-    figure.suptitle(f"{behaviour.name}: fuzzy sets of each input{moved}", y=1.0)
+    # a run that learned the sets may still return the file's (its first individual has them)
+    note = ("" if before is None else " (dashed: before learning)" if moved
+            else " (learned: no set moved from the file's)")
+    figure.suptitle(f"{behaviour.name}: fuzzy sets of each input{note}", y=1.0)
     figure.tight_layout()
     return _save(figure, path)
 

@@ -236,3 +236,11 @@ def test_a_run_that_learned_the_sets_draws_them_over_the_files(tmp_path: Path) -
     moved = sum(learned.inputs[n].sets[s] != q for n, v in behaviour.inputs.items()
                 for s, q in v.sets.items())
     assert moved > 0 and svg.count("stroke-dasharray") >= moved
+
+
+def test_learned_sets_that_did_not_move_are_said_so(tmp_path: Path) -> None:
+    behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
+    plot_memberships(behaviour, tmp_path / "same.png", before=behaviour)
+    svg = (tmp_path / "same.svg").read_text()
+    assert "no set moved" in svg and "dashed" not in svg
+    assert "stroke-dasharray" not in svg

@@ -161,7 +161,10 @@ def show(
     from flctool.behaviour.shapes import is_trapezoid
 
     with user_errors():
-        behaviour = load_behaviour(controller_file(file))
+        shown = controller_file(file)
+        behaviour = load_behaviour(shown)
+        if compare is not None:
+            _refuse_comparing_with_itself(file, shown, compare)
         reference = None if compare is None else load_behaviour(controller_file(compare))
         if reference is not None:
             console.print(_set_movements(reference, behaviour, compare or Path()))
@@ -209,6 +212,21 @@ def _similar(rules: int, commands: int) -> str:
         "similar problems measured (docs/learning.md, seeds 100-109, each file's defaults; "
         "selection, confirmation and baselines on top of the training episodes):",
         *(f"  {task.line()}" for task in similar_tasks(rules, commands))])
+
+
+def _refuse_comparing_with_itself(file: Path, shown: Path, compare: Path) -> None:
+    """A clear error when ``--compare`` names the controller shown (``runs/R --compare
+    runs/R`` is best.yaml against itself): every movement would be 0, which reads as "learning
+    moved no set" when nothing was compared."""
+    if controller_file(compare).resolve() != shown.resolve():
+        return
+    from flctool.runs import BEHAVIOUR_FILE
+
+    where = (f": for a run, {file / BEHAVIOUR_FILE} (the run's copy of it)" if file.is_dir()
+             else "")
+    raise FlcError(f"{compare} is the controller shown ({shown}), so there is nothing to "
+                   "compare its sets with", hint=f"compare with the file the sets were learned "
+                   f"from{where}")
 
 
 def _set_movements(reference: Behaviour, behaviour: Behaviour, compare: Path) -> Table:

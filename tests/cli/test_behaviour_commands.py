@@ -286,6 +286,21 @@ def test_show_compare_lists_each_sets_movement(tmp_path: Path) -> None:
     assert "pan: coverage 0.5" in result.output
 
 
+def test_show_compare_refuses_the_controller_shown(tmp_path: Path) -> None:
+    from flctool.runs import BEHAVIOUR_FILE
+
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "best.yaml").write_text((BEHAVIOURS / "ballchase-handmade.yaml").read_text())
+    for compare in (run, run / "best.yaml"):
+        result = runner.invoke(app, ["show", str(run), "--compare", str(compare)],
+                               terminal_width=200)
+        assert result.exit_code == 1
+        assert "nothing to compare its sets with" in result.output
+        assert str(run / BEHAVIOUR_FILE) in result.output
+        assert "Traceback" not in result.output
+
+
 def test_show_compare_refuses_another_behaviour() -> None:
     result = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase.yaml"), "--compare",
                                  str(BEHAVIOURS / "cartpole.yaml")])

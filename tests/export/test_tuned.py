@@ -45,8 +45,11 @@ def tuned(file: str, mode: str, seed: int) -> Behaviour:
                                             learned.rule_count))
 
 
+# pendulum: the shipped behaviour whose crisp output is the action itself (eq. 3 on a Box),
+# with the narrow sets near upright that learning moves most
 TUNED = [("ballchase.yaml", "partition", 1), ("ballchase.yaml", "lateral", 2),
-         ("avoid-obstacle.yaml", "lateral", 3), ("mountaincar.yaml", "partition", 4)]
+         ("avoid-obstacle.yaml", "lateral", 3), ("mountaincar.yaml", "partition", 4),
+         ("pendulum.yaml", "partition", 5), ("pendulum.yaml", "lateral", 6)]
 IDS = [f"{f.split('.')[0]}-{m}" for f, m, _ in TUNED]
 
 
