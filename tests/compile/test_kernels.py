@@ -434,3 +434,38 @@ def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time()
         states[3, 2] = np.nan
         with pytest.raises(InferenceError, match="input 'x2' is NaN in state 3"):
             controller.output(states)
+
+
+@pytest.mark.parametrize(("n_inputs", "n_sets"), [(4, 3), (5, 3), (7, 2)])
+def test_a_few_states_of_larger_bases_walk_every_rule_as_two_halves(n_inputs: int,
+                                                                    n_sets: int) -> None:
+    # From SPLIT_RULE_INPUTS rule-inputs the interleaved walk takes each rule's alpha as the
+    # min of its two halves' (kernels._halves_sums): one state alone, four at a time, and a
+    # last group of two or three, all the reference's bits.
+    controller = strong_partition_controller(n_inputs, n_sets, seed=n_inputs)
+    assert controller._layout.ints[4] and controller.consequents is not None
+    assert controller.n_rules * n_inputs >= kernels.SPLIT_RULE_INPUTS
+    rng = np.random.default_rng(n_inputs * 10 + n_sets)
+    for batch in (1, 2, 3, 4, 5, 6, 7, kernels.OWN_SMALL_BATCH_FEW_INPUTS):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)
+    states = np.full((6, n_inputs), 0.4)
+    states[5, 1] = np.nan
+    with pytest.raises(InferenceError, match="input 'x1' is NaN in state 5"):
+        controller.output(states)
+
+
+@pytest.mark.parametrize("n_inputs", [1, 2])
+def test_tiny_bases_of_one_or_two_inputs_walk_every_rule_from_a_few_states(
+        n_inputs: int) -> None:
+    # 1 x 4 and 2 x 4 sets: state by state below TINY_FROM states, every rule four at a time
+    # from there to TINY_BATCH; the same bits on both sides.
+    controller = strong_partition_controller(n_inputs, 4, seed=n_inputs)
+    assert controller.consequents is not None
+    rng = np.random.default_rng(n_inputs)
+    for batch in (1, kernels.TINY_FROM - 1, kernels.TINY_FROM, 8, kernels.TINY_BATCH,
+                  kernels.TINY_BATCH + 1):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)
