@@ -647,9 +647,10 @@ OWN_SMALL_BATCH = 8
 # (the naive loop over every rule, four states at a time) where that costs less than finding
 # each state's fired rules or setting up the blocks:
 # - with one or two inputs (fired rules found in 15-45 ns a state), bases of at most
-#   TINY_RULES_FEW_INPUTS rules, from TINY_FROM to TINY_BATCH states (state by state was
-#   the cheaper at 1-2 states, level at 4 and 1.3-1.7x the cost at 8-16: 1 x 2 to 2 x 5
-#   sets, December 2026);
+#   TINY_RULES_FEW_INPUTS rules from TINY_FROM to TINY_BATCH states, and of at most
+#   FEW_RULES_FEW_INPUTS rules from TINY_FROM to OWN_SMALL_BATCH_FEW_INPUTS (state by state
+#   was the cheaper at 1-2 states, level at 4 and 1.1-1.7x the cost at 8-16 on 1 x 2 to
+#   2 x 7 sets; at 2 x 9 level at 8-16; December 2026);
 # - with more inputs, up to OWN_SMALL_BATCH_FEW_INPUTS states, where the layout found it
 #   cheaper (interleaves_states): the interleaved walk costs about INTERLEAVED_NS_PER_STATE +
 #   INTERLEAVED_NS_PER_RULE_INPUT x M x N a state, the state-by-state walk of the fired rules
@@ -663,6 +664,7 @@ OWN_SMALL_BATCH = 8
 TINY_BATCH = 2 * _BLOCK
 TINY_FROM = 4
 TINY_RULES_FEW_INPUTS = 16
+FEW_RULES_FEW_INPUTS = 49
 INTERLEAVED_NS_PER_STATE = 100.0
 INTERLEAVED_NS_PER_RULE_INPUT = 0.4
 FIRED_NS_PER_INPUT = 60.0
@@ -967,7 +969,11 @@ def _tiny(ints: IntArray, count: int) -> bool:
     if rules == 0:
         return False
     if n <= 2:
-        return rules <= TINY_RULES_FEW_INPUTS and TINY_FROM <= count <= TINY_BATCH
+        if count < TINY_FROM:
+            return False
+        if rules <= TINY_RULES_FEW_INPUTS:
+            return count <= TINY_BATCH
+        return rules <= FEW_RULES_FEW_INPUTS and count <= OWN_SMALL_BATCH_FEW_INPUTS
     return bool(ints[4]) and count <= OWN_SMALL_BATCH_FEW_INPUTS
 
 

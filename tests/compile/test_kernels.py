@@ -456,16 +456,18 @@ def test_a_few_states_of_larger_bases_walk_every_rule_as_two_halves(n_inputs: in
         controller.output(states)
 
 
-@pytest.mark.parametrize("n_inputs", [1, 2])
-def test_tiny_bases_of_one_or_two_inputs_walk_every_rule_from_a_few_states(
-        n_inputs: int) -> None:
-    # 1 x 4 and 2 x 4 sets: state by state below TINY_FROM states, every rule four at a time
-    # from there to TINY_BATCH; the same bits on both sides.
-    controller = strong_partition_controller(n_inputs, 4, seed=n_inputs)
+@pytest.mark.parametrize(("n_inputs", "n_sets"), [(1, 4), (2, 4), (2, 6)])
+def test_small_bases_of_one_or_two_inputs_walk_every_rule_from_a_few_states(
+        n_inputs: int, n_sets: int) -> None:
+    # State by state below TINY_FROM states, then every rule four at a time: up to
+    # TINY_BATCH states for 1 x 4 and 2 x 4 sets, up to OWN_SMALL_BATCH_FEW_INPUTS for 2 x 6
+    # (M = 36), blocks past them; the same bits on every side.
+    controller = strong_partition_controller(n_inputs, n_sets, seed=n_inputs)
     assert controller.consequents is not None
     rng = np.random.default_rng(n_inputs)
-    for batch in (1, kernels.TINY_FROM - 1, kernels.TINY_FROM, 8, kernels.TINY_BATCH,
-                  kernels.TINY_BATCH + 1):
+    for batch in (1, kernels.TINY_FROM - 1, kernels.TINY_FROM, 8,
+                  kernels.OWN_SMALL_BATCH_FEW_INPUTS, kernels.OWN_SMALL_BATCH_FEW_INPUTS + 1,
+                  kernels.TINY_BATCH, kernels.TINY_BATCH + 1):
         states = awkward_states(controller, rng, batch)
         expected = [reference_output(controller, s, controller.consequents) for s in states]
         np.testing.assert_array_equal(controller.output(states), expected)
