@@ -336,8 +336,8 @@ def flctool_run(task: Task, seed: int) -> dict[str, Any]:
 
 def table(records: list[dict[str, Any]]) -> str:
     lines = ["| task (threshold) | method | solved | train steps | train episodes | "
-             "stop episodes | CPU s | held-out score | policy size |",
-             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+             "stop steps | stop episodes | CPU s | held-out score | policy size |",
+             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for record in records:
         groups.setdefault((record["task"], record["method"]), []).append(record)
@@ -354,7 +354,8 @@ def table(records: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {task} ({thresholds[task]:g}) | {method} | {len(solved)}/{len(runs)} | "
             f"{median('train_steps'):,.0f} | {median('train_episodes'):,.0f} | "
-            f"{median('stop_episodes'):,.0f} | {median('cpu'):.1f} | "
+            f"{median('stop_steps'):,.0f} | {median('stop_episodes'):,.0f} | "
+            f"{median('cpu'):.1f} | "
             f"{median('held_out', runs):.3g} | {median('policy_size'):,.0f} {unit} |")
     return "\n".join(lines)
 
