@@ -651,17 +651,21 @@ OWN_SMALL_BATCH = 8
 #   FEW_RULES_FEW_INPUTS rules from TINY_FROM to OWN_SMALL_BATCH_FEW_INPUTS (state by state
 #   was the cheaper at 1-2 states, level at 4 and 1.1-1.7x the cost at 8-16 on 1 x 2 to
 #   2 x 7 sets; at 2 x 9 level at 8-16; December 2026);
-# - with more inputs, up to OWN_SMALL_BATCH_FEW_INPUTS states, where the layout found it
-#   cheaper (interleaves_states): the interleaved walk costs about INTERLEAVED_NS_PER_STATE +
-#   INTERLEAVED_NS_PER_RULE_INPUT x M x N a state, the state-by-state walk of the fired rules
-#   about FIRED_NS_PER_INPUT x N + FIRED_NS_PER_RULE x F, F the most rules that can fire at
-#   once (fired_rules_bound: 2^N for overlapping neighbours, M when every set of every input
-#   fires, as with 2 sets an input). Measured at 4, 8 and 16 states on every N = 3-8 and L <= 9
-#   whose blocks walk every rule (a loaded 2-core Xeon, December 2026): with every rule
-#   firing (6-8 inputs x 2 sets) the fired walk was 0.4-0.8x the naive kernel and the
-#   interleaved 1.5-2.5x; with few of many rules firing (3 x 6, 4 x 4) the fired walk is the
-#   cheaper.
+# - with more inputs, up to INTERLEAVED_STATES states (INTERLEAVED_HALVES_STATES walked as two
+#   halves: _halves_sums), where the layout found it cheaper (interleaves_states; against the
+#   blocks, measured on 3 x 2 to 8 x 2 and 4 x 3 sets at 17-48 states, December 2026: 1.1-1.4x
+#   cheaper at 17-24 states, level at 32 and dearer at 48, except as halves, still cheaper at 32
+#   and, with every rule firing, at 48): the interleaved walk costs about INTERLEAVED_NS_PER_STATE +
+#   INTERLEAVED_NS_PER_RULE_INPUT x M x N a state, the state-by-state walk of the fired rules about
+#   FIRED_NS_PER_INPUT x N + FIRED_NS_PER_RULE x F, F the most rules that can fire at once
+#   (fired_rules_bound: 2^N for overlapping neighbours, M when every set of every input fires, as
+#   with 2 sets an input). Measured at 4, 8 and 16 states on every N = 3-8 and L <= 9 whose blocks
+#   walk every rule (a loaded 2-core Xeon, December 2026): with every rule firing (6-8 inputs x 2
+#   sets) the fired walk was 0.4-0.8x the naive kernel and the interleaved 1.5-2.5x; with few of
+#   many rules firing (3 x 6, 4 x 4) the fired walk is the cheaper.
 TINY_BATCH = 2 * _BLOCK
+INTERLEAVED_STATES = 24
+INTERLEAVED_HALVES_STATES = 32
 TINY_FROM = 4
 TINY_RULES_FEW_INPUTS = 16
 FEW_RULES_FEW_INPUTS = 49
@@ -974,7 +978,11 @@ def _tiny(ints: IntArray, count: int) -> bool:
         if rules <= TINY_RULES_FEW_INPUTS:
             return count <= TINY_BATCH
         return rules <= FEW_RULES_FEW_INPUTS and count <= OWN_SMALL_BATCH_FEW_INPUTS
-    return bool(ints[4]) and count <= OWN_SMALL_BATCH_FEW_INPUTS
+    if not ints[4]:
+        return False
+    if rules * n >= SPLIT_RULE_INPUTS:
+        return count <= INTERLEAVED_HALVES_STATES
+    return count <= INTERLEAVED_STATES
 
 
 @_jit

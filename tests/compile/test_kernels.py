@@ -446,7 +446,8 @@ def test_a_few_states_of_larger_bases_walk_every_rule_as_two_halves(n_inputs: in
     assert controller._layout.ints[4] and controller.consequents is not None
     assert controller.n_rules * n_inputs >= kernels.SPLIT_RULE_INPUTS
     rng = np.random.default_rng(n_inputs * 10 + n_sets)
-    for batch in (1, 2, 3, 4, 5, 6, 7, kernels.OWN_SMALL_BATCH_FEW_INPUTS):
+    for batch in (1, 2, 3, 4, 5, 6, 7, kernels.INTERLEAVED_HALVES_STATES,
+                  kernels.INTERLEAVED_HALVES_STATES + 1):
         states = awkward_states(controller, rng, batch)
         expected = [reference_output(controller, s, controller.consequents) for s in states]
         np.testing.assert_array_equal(controller.output(states), expected)
@@ -454,6 +455,19 @@ def test_a_few_states_of_larger_bases_walk_every_rule_as_two_halves(n_inputs: in
     states[5, 1] = np.nan
     with pytest.raises(InferenceError, match="input 'x1' is NaN in state 5"):
         controller.output(states)
+
+
+def test_a_few_states_of_small_bases_of_three_inputs_or_more_walk_every_rule() -> None:
+    # 3 x 2 sets (24 rule-inputs): every rule four states at a time up to INTERLEAVED_STATES,
+    # blocks past it; the same bits on both sides.
+    controller = strong_partition_controller(3, 2, seed=3)
+    assert controller._layout.ints[4] and controller.consequents is not None
+    assert controller.n_rules * 3 < kernels.SPLIT_RULE_INPUTS
+    rng = np.random.default_rng(32)
+    for batch in (1, 5, kernels.INTERLEAVED_STATES, kernels.INTERLEAVED_STATES + 1):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)
 
 
 @pytest.mark.parametrize(("n_inputs", "n_sets"), [(1, 4), (2, 4), (2, 6)])
