@@ -218,7 +218,8 @@ def _capacity(counts: IntArray) -> int:
 
 
 # Layout.ints starts with N, S, max L_i, M if the rule grid is kept (else 0), and whether
-# a few states are walked every rule four at a time (interleaves_states), then the offsets.
+# a few states are walked every rule four at a time (interleaves_states: 0 no, 1 yes,
+# EVERY_RULE_FIRES yes and every rule can fire at once), then the offsets.
 _HEADER = 5
 
 _BLOCK = 64  # states whose memberships are computed together (fits in L1 with ~40 sets)
@@ -664,6 +665,10 @@ OWN_SMALL_BATCH = 8
 #   sets) the fired walk was 0.4-0.8x the naive kernel and the interleaved 1.5-2.5x; with few of
 #   many rules firing (3 x 6, 4 x 4) the fired walk is the cheaper.
 TINY_BATCH = 2 * _BLOCK
+# ... but one or two states of a base where a few of its rules fire walk those (3 x 3, 4 x 3
+# sets: 1.1-1.2x cheaper at one state, level at two), where every rule fires, every rule.
+FEW_STATES_FIRED = 2
+EVERY_RULE_FIRES = 2
 INTERLEAVED_STATES = 24
 INTERLEAVED_HALVES_STATES = 32
 TINY_FROM = 4
@@ -980,6 +985,8 @@ def _tiny(ints: IntArray, count: int) -> bool:
         return rules <= FEW_RULES_FEW_INPUTS and count <= OWN_SMALL_BATCH_FEW_INPUTS
     if not ints[4]:
         return False
+    if count <= FEW_STATES_FIRED and ints[4] != EVERY_RULE_FIRES:
+        return False  # a state or two of a base where few of its rules fire: those only
     if rules * n >= SPLIT_RULE_INPUTS:
         return count <= INTERLEAVED_HALVES_STATES
     return count <= INTERLEAVED_STATES
@@ -1103,11 +1110,11 @@ class Layout(NamedTuple):
 
     floats: FloatArray  # lo (N,), hi (N,), quads (S, 4) input after input, singletons (K,)
     # N, S, max L_i, M if the grid is kept (else 0), whether a few states are walked every
-    # rule four at a time (interleaves_states), offsets (N + 1,): input i's sets are
-    # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
-    # last input fastest; kinds (S,): each set's shape code (0 the trapezoid, whose quad
-    # holds its corners; else its parameters, flctool.behaviour.shapes); grid (M, N): each
-    # rule's rows of quads, if walks_every_rule
+    # rule four at a time (0, 1 or EVERY_RULE_FIRES: see _HEADER), offsets (N + 1,): input
+    # i's sets are quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set
+    # index * stride), last input fastest; kinds (S,): each set's shape code (0 the
+    # trapezoid, whose quad holds its corners; else its parameters,
+    # flctool.behaviour.shapes); grid (M, N): each rule's rows of quads, if walks_every_rule
     ints: IntArray
     dense: bool  # whether batched inference walks every rule (walks_every_rule)
 
@@ -1125,9 +1132,11 @@ def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: In
     dense = walks_every_rule(rule_grid.shape[0], len(sizes), sum(sizes))
     grid = rule_grid + offsets[:-1] if dense else np.empty((0, len(sizes)), dtype=np.intp)
     quads = np.concatenate(quadruples).astype(np.float64)
-    interleaves = dense and interleaves_states(
-        rule_grid.shape[0], len(sizes), fired_rules_bound(ranges, quadruples, kinds))
-    header = [len(sizes), len(quads), max(sizes), grid.shape[0], int(interleaves)]
+    bound = fired_rules_bound(ranges, quadruples, kinds)
+    interleaves = 0
+    if dense and interleaves_states(rule_grid.shape[0], len(sizes), bound):
+        interleaves = EVERY_RULE_FIRES if bound >= rule_grid.shape[0] else 1
+    header = [len(sizes), len(quads), max(sizes), grid.shape[0], interleaves]
     floats = np.concatenate([ranges[:, 0], ranges[:, 1], quads.ravel(), singletons])
     codes = (np.zeros(len(quads), dtype=np.intp) if kinds is None
              else np.array([k for input_kinds in kinds for k in input_kinds], dtype=np.intp))

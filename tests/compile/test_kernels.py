@@ -422,7 +422,8 @@ def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time()
     rng = np.random.default_rng(12)
     for n_inputs in (6, 8):
         controller = strong_partition_controller(n_inputs, 2, seed=n_inputs)
-        assert controller._layout.ints[4] and controller.consequents is not None
+        assert controller._layout.ints[4] == kernels.EVERY_RULE_FIRES
+        assert controller.consequents is not None
         for batch in (1, 2, 3, 4, 5, 7, kernels.OWN_SMALL_BATCH_FEW_INPUTS):
             states = awkward_states(controller, rng, batch)
             expected = [reference_output(controller, s, controller.consequents)
@@ -441,9 +442,11 @@ def test_a_few_states_of_larger_bases_walk_every_rule_as_two_halves(n_inputs: in
                                                                     n_sets: int) -> None:
     # From SPLIT_RULE_INPUTS rule-inputs the interleaved walk takes each rule's alpha as the
     # min of its two halves' (kernels._halves_sums): one state alone, four at a time, and a
-    # last group of two or three, all the reference's bits.
+    # last group of two or three, all the reference's bits. With 3 sets an input few of the
+    # rules fire, and one or two states walk those instead (FEW_STATES_FIRED).
     controller = strong_partition_controller(n_inputs, n_sets, seed=n_inputs)
-    assert controller._layout.ints[4] and controller.consequents is not None
+    assert controller._layout.ints[4] == (kernels.EVERY_RULE_FIRES if n_sets == 2 else 1)
+    assert controller.consequents is not None
     assert controller.n_rules * n_inputs >= kernels.SPLIT_RULE_INPUTS
     rng = np.random.default_rng(n_inputs * 10 + n_sets)
     for batch in (1, 2, 3, 4, 5, 6, 7, kernels.INTERLEAVED_HALVES_STATES,
