@@ -11,8 +11,9 @@ Four ways through, each chosen where it is cheapest:
   fastest, which is increasing rule order;
 - **a few states of a small rule base** (:func:`_interleaved_states`, with the own
   consequents; see ``TINY_BATCH``): every rule of each state -- the naive loop, four states
-  at a time -- cheaper there than finding the fired rules (when most rules fire, as with
-  many inputs of 2 sets) or setting up the blocks;
+  at a time, and from ``SPLIT_RULE_INPUTS`` as two halves, one min a rule -- cheaper there
+  than finding the fired rules (when most rules fire, as with many inputs of 2 sets) or
+  setting up the blocks;
 - **blocks of states, every rule**: for small rule bases (:func:`walks_every_rule`), the
   memberships and then eq. 2-3 of every rule for ``_BLOCK`` states at once, in loops over
   the states that vectorise;
