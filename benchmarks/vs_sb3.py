@@ -24,8 +24,9 @@ spent by the method, they are the measurement.
   budget (capped by ``--max-steps``) or ``--max-cpu`` seconds are spent. Screening and
   confirmations count as stop episodes (a confirmation that fails is spent deciding).
 - flctool: the behaviour file's learner and settings, with ``stop.target`` at the threshold
-  for the Gymnasium tasks (its validation episodes are its stop episodes), then ``best.yaml``
-  on 100 held-out episodes: one confirmation, no second chance.
+  for the Gymnasium tasks (its validation episodes are its stop episodes, with its
+  confirmation and the end-of-run comparison with the baselines), then ``best.yaml`` on 100
+  held-out episodes: one confirmation, no second chance.
 
 CPU seconds are ``time.process_time`` of this process around training and stopping (SB3's
 exclude importing torch, 7-15 s; flctool's exclude its imports, about 0.4 s). The robot
@@ -323,8 +324,14 @@ def flctool_run(task: Task, seed: int) -> dict[str, Any]:
     return {"task": task.name, "method": f"flctool {behaviour.learning.learner}",
             "seed": seed, "solved": value >= task.threshold, "held_out": value,
             "train_steps": usage.training_steps, "train_episodes": usage.training_episodes,
-            "stop_steps": usage.selection_steps + usage.confirmation_steps,
-            "stop_episodes": usage.selection_episodes + usage.confirmation_episodes,
+            # spent deciding when to stop and what it learned: validation, confirmation and
+            # the end-of-run comparison with the baselines (every episode the run used)
+            "stop_steps": (usage.selection_steps + usage.confirmation_steps
+                           + usage.baseline_steps),
+            "stop_episodes": (usage.selection_episodes + usage.confirmation_episodes
+                              + usage.baseline_episodes),
+            "baseline_steps": usage.baseline_steps,
+            "baseline_episodes": usage.baseline_episodes,
             "cpu": trained.train_cpu_seconds, "stopped_by": (summary.selection or {}).get(
                 "stop_reason") or "generations",
             "policy_size": math.prod(len(v.sets) for v in behaviour.inputs.values()),
@@ -336,8 +343,8 @@ def flctool_run(task: Task, seed: int) -> dict[str, Any]:
 
 def table(records: list[dict[str, Any]]) -> str:
     lines = ["| task (threshold) | method | solved | train steps | train episodes | "
-             "stop episodes | CPU s | held-out score | policy size |",
-             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
+             "stop steps | stop episodes | CPU s | held-out score | policy size |",
+             "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for record in records:
         groups.setdefault((record["task"], record["method"]), []).append(record)
@@ -354,7 +361,8 @@ def table(records: list[dict[str, Any]]) -> str:
         lines.append(
             f"| {task} ({thresholds[task]:g}) | {method} | {len(solved)}/{len(runs)} | "
             f"{median('train_steps'):,.0f} | {median('train_episodes'):,.0f} | "
-            f"{median('stop_episodes'):,.0f} | {median('cpu'):.1f} | "
+            f"{median('stop_steps'):,.0f} | {median('stop_episodes'):,.0f} | "
+            f"{median('cpu'):.1f} | "
             f"{median('held_out', runs):.3g} | {median('policy_size'):,.0f} {unit} |")
     return "\n".join(lines)
 

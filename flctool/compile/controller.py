@@ -50,6 +50,12 @@ INFERENCE_VARIABLE = "FLCTOOL_INFERENCE"
 #: equals the price, then buying, spends at most about twice the cheaper of the two, whatever
 #: the work turns out to be; and a small job never pays for the kernels at all.
 KERNELS_PAY_AFTER = 0.3
+#: ... but where the kernels are not in numba's cache (a machine's first run, or a new
+#: flctool or numba), buying them means compiling them: 13-16 s of CPU measured on a loaded
+#: 2-core machine (`flctool infer` on 10^6 rows, whose numpy inference costs about 0.5 s),
+#: several seconds on a quiet one. Then numpy goes on until it has spent this much: the same
+#: rule with the price that is to be paid.
+KERNELS_COMPILE_PAY_AFTER = 5.0
 #: Called around loading the kernels (the command line shows a notice there, as compiling
 #: takes seconds on a machine's first run).
 kernel_loading: Callable[[], AbstractContextManager[None]] = nullcontext
@@ -74,15 +80,32 @@ def set_inference(mode: str) -> None:
         raise ValueError(f"unknown inference mode '{mode}'; use one of: "
                          f"{', '.join(INFERENCE_MODES)}")
     _Inference.mode = mode
-    _kernels_on = mode == "kernels" or (
-        mode == "auto" and _Inference.numpy_seconds >= KERNELS_PAY_AFTER)
+    _kernels_on = mode == "kernels" or (mode == "auto" and _kernels_pay())
+
+
+def _kernels_pay() -> bool:
+    # The ski-rental rule (KERNELS_PAY_AFTER), with the price of compiling where they are not
+    # cached (KERNELS_COMPILE_PAY_AFTER).
+    spent = _Inference.numpy_seconds
+    return spent >= KERNELS_PAY_AFTER and (spent >= KERNELS_COMPILE_PAY_AFTER
+                                           or _kernels_cached())
 
 
 def _spent_in_numpy(seconds: float) -> None:
     global _kernels_on
     _Inference.numpy_seconds += seconds
     if _Inference.mode == "auto" and _Inference.numpy_seconds >= KERNELS_PAY_AFTER:
-        _kernels_on = True
+        _kernels_on = _kernels_pay()
+
+
+@cache
+def _kernels_cached() -> bool:
+    # Whether the batched kernel that large jobs spend on (infer_own: evaluate, infer) would
+    # load from numba's cache rather than compile; asked once a process (it imports numba).
+    with kernel_loading():
+        from flctool.compile import kernels
+
+        return kernels.cached("infer_own")
 
 
 def _inference_from_environment() -> None:

@@ -11,8 +11,9 @@ Four ways through, each chosen where it is cheapest:
   fastest, which is increasing rule order;
 - **a few states of a small rule base** (:func:`_interleaved_states`, with the own
   consequents; see ``TINY_BATCH``): every rule of each state -- the naive loop, four states
-  at a time -- cheaper there than finding the fired rules (when most rules fire, as with
-  many inputs of 2 sets) or setting up the blocks;
+  at a time, and from ``SPLIT_RULE_INPUTS`` as two halves, one min a rule -- cheaper there
+  than finding the fired rules (when most rules fire, as with many inputs of 2 sets) or
+  setting up the blocks;
 - **blocks of states, every rule**: for small rule bases (:func:`walks_every_rule`), the
   memberships and then eq. 2-3 of every rule for ``_BLOCK`` states at once, in loops over
   the states that vectorise;
@@ -248,8 +249,9 @@ def _capacity(counts: IntArray) -> int:
 
 
 # Layout.ints starts with N, S, max L_i, M if the rule grid is kept (else 0), whether a few
-# states are walked every rule four at a time (interleaves_states) and whether eq. 2 is the
-# product (activation: product; else the min), then the offsets.
+# states are walked every rule four at a time (interleaves_states: 0 no, 1 yes,
+# EVERY_RULE_FIRES yes and every rule can fire at once) and whether eq. 2 is the product
+# (activation: product; else the min), then the offsets.
 _HEADER = 6
 _PRODUCT = 5  # where that last flag is
 
@@ -697,19 +699,32 @@ OWN_SMALL_BATCH = 8
 # (the naive loop over every rule, four states at a time) where that costs less than finding
 # each state's fired rules or setting up the blocks:
 # - with one or two inputs (fired rules found in 15-45 ns a state), bases of at most
-#   TINY_RULES_FEW_INPUTS rules, from OWN_SMALL_BATCH + 1 to TINY_BATCH states;
-# - with more inputs, up to OWN_SMALL_BATCH_FEW_INPUTS states, where the layout found it
-#   cheaper (interleaves_states): the interleaved walk costs about INTERLEAVED_NS_PER_STATE +
-#   INTERLEAVED_NS_PER_RULE_INPUT x M x N a state, the state-by-state walk of the fired rules
-#   about FIRED_NS_PER_INPUT x N + FIRED_NS_PER_RULE x F, F the most rules that can fire at
-#   once (fired_rules_bound: 2^N for overlapping neighbours, M when every set of every input
-#   fires, as with 2 sets an input). Measured at 4, 8 and 16 states on every N = 3-8 and L <= 9
-#   whose blocks walk every rule (a loaded 2-core Xeon, December 2026): with every rule
-#   firing (6-8 inputs x 2 sets) the fired walk was 0.4-0.8x the naive kernel and the
-#   interleaved 1.5-2.5x; with few of many rules firing (3 x 6, 4 x 4) the fired walk is the
-#   cheaper.
+#   TINY_RULES_FEW_INPUTS rules from TINY_FROM to TINY_BATCH states, and of at most
+#   FEW_RULES_FEW_INPUTS rules from TINY_FROM to OWN_SMALL_BATCH_FEW_INPUTS (state by state
+#   was the cheaper at 1-2 states, level at 4 and 1.1-1.7x the cost at 8-16 on 1 x 2 to
+#   2 x 7 sets; at 2 x 9 level at 8-16; December 2026);
+# - with more inputs, up to INTERLEAVED_STATES states (INTERLEAVED_HALVES_STATES walked as two
+#   halves: _halves_sums), where the layout found it cheaper (interleaves_states; against the
+#   blocks, measured on 3 x 2 to 8 x 2 and 4 x 3 sets at 17-48 states, December 2026: 1.1-1.4x
+#   cheaper at 17-24 states, level at 32 and dearer at 48, except as halves, still cheaper at 32
+#   and, with every rule firing, at 48): the interleaved walk costs about INTERLEAVED_NS_PER_STATE +
+#   INTERLEAVED_NS_PER_RULE_INPUT x M x N a state, the state-by-state walk of the fired rules about
+#   FIRED_NS_PER_INPUT x N + FIRED_NS_PER_RULE x F, F the most rules that can fire at once
+#   (fired_rules_bound: 2^N for overlapping neighbours, M when every set of every input fires, as
+#   with 2 sets an input). Measured at 4, 8 and 16 states on every N = 3-8 and L <= 9 whose blocks
+#   walk every rule (a loaded 2-core Xeon, December 2026): with every rule firing (6-8 inputs x 2
+#   sets) the fired walk was 0.4-0.8x the naive kernel and the interleaved 1.5-2.5x; with few of
+#   many rules firing (3 x 6, 4 x 4) the fired walk is the cheaper.
 TINY_BATCH = 2 * _BLOCK
+# ... but one or two states of a base where a few of its rules fire walk those (3 x 3, 4 x 3
+# sets: 1.1-1.2x cheaper at one state, level at two), where every rule fires, every rule.
+FEW_STATES_FIRED = 2
+EVERY_RULE_FIRES = 2
+INTERLEAVED_STATES = 24
+INTERLEAVED_HALVES_STATES = 32
+TINY_FROM = 4
 TINY_RULES_FEW_INPUTS = 16
+FEW_RULES_FEW_INPUTS = 49
 INTERLEAVED_NS_PER_STATE = 100.0
 INTERLEAVED_NS_PER_RULE_INPUT = 0.4
 FIRED_NS_PER_INPUT = 60.0
@@ -832,10 +847,92 @@ def _own_states(floats: FloatArray, ints: IntArray, states: FloatArray, out: Flo
 
 
 @_jit
+def _partial_mins(mu: FloatArray, lanes: int, first: int, stop: int, offsets: IntArray,
+                  table: FloatArray) -> int:
+    """min(mu) over inputs ``first..stop-1`` (eq. 2's min over part of a rule) for every
+    combination of their sets, in rule order (the last input fastest), into ``table[:, k]``
+    for the states in lanes ``k < lanes`` of ``mu (S, 4)``; returns how many combinations.
+
+    Built input by input from inf (min(inf, x) is x), each entry split into one per set of
+    the next input, from the back so that it happens in place: one min an entry.
+    """
+    size = 1
+    for k in range(lanes):
+        table[0, k] = np.inf
+    for i in range(first, stop):
+        start = offsets[i]
+        count = offsets[i + 1] - start
+        for entry in range(size - 1, -1, -1):
+            for slot in range(count - 1, -1, -1):
+                for k in range(lanes):
+                    table[entry * count + slot, k] = min(table[entry, k], mu[start + slot, k])
+        size *= count
+    return size
+
+
+# A few states of a base with at least this many rule-inputs (M x N) are walked as two
+# halves: each rule's alpha is min(alpha of its first N // 2 inputs, alpha of the others),
+# both tabulated once a state (_partial_mins), so a rule costs one min rather than N - 1.
+# Below it, making the two tables costs more than it saves (measured on 2 x 4 to 8 x 2 sets:
+# the halves 1.3-3.3x faster from 4 x 3 and 6 x 2 sets, slower for 3 x 3 and 5 x 2).
+SPLIT_RULE_INPUTS = 256
+
+
+@_jit
+def _halves_sums(mu: FloatArray, lanes: int, n: int, offsets: IntArray, values: FloatArray,
+                 head: FloatArray, tail: FloatArray, sums: FloatArray) -> None:
+    """Eq. 2-3 over every rule, in rule order, for the states in lanes ``k < lanes`` (1 or
+    4) of ``mu (S, 4)``: numerators into ``sums[0, k]``, denominators into ``sums[1, k]``.
+
+    Rule m = r * T + t (T combinations of the last inputs, eq. 1's order) has alpha_m =
+    min(head[r], tail[t]). min returns one of its operands, and memberships are never NaN
+    here (NaN inputs are refused first), so this is the reference's alpha_m, however the
+    mins nest: the same bits. The sums run in rule order, as the reference's.
+    """
+    half = n // 2
+    heads = _partial_mins(mu, lanes, 0, half, offsets, head)
+    tails = _partial_mins(mu, lanes, half, n, offsets, tail)
+    if lanes == 1:
+        numerator = denominator = 0.0
+        m = 0
+        for r in range(heads):
+            first = head[r, 0]
+            for t in range(tails):
+                alpha = min(first, tail[t, 0])  # eq. 2
+                numerator += alpha * values[m]
+                denominator += alpha
+                m += 1
+        sums[0, 0], sums[1, 0] = numerator, denominator
+        return
+    n0 = n1 = n2 = n3 = d0 = d1 = d2 = d3 = 0.0
+    m = 0
+    for r in range(heads):
+        h0, h1, h2, h3 = head[r, 0], head[r, 1], head[r, 2], head[r, 3]
+        for t in range(tails):
+            a0 = min(h0, tail[t, 0])  # eq. 2
+            a1 = min(h1, tail[t, 1])
+            a2 = min(h2, tail[t, 2])
+            a3 = min(h3, tail[t, 3])
+            value = values[m]
+            n0 += a0 * value
+            n1 += a1 * value
+            n2 += a2 * value
+            n3 += a3 * value
+            d0 += a0
+            d1 += a1
+            d2 += a2
+            d3 += a3
+            m += 1
+    sums[0, 0], sums[0, 1], sums[0, 2], sums[0, 3] = n0, n1, n2, n3
+    sums[1, 0], sums[1, 1], sums[1, 2], sums[1, 3] = d0, d1, d2, d3
+
+
+@_jit
 def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
                         out: FloatArray, tables: IntArray) -> int:
     """infer_own for a few states of a small base (see TINY_BATCH): every rule of each state
-    in rule order, the naive loop, but four states at a time.
+    in rule order, the naive loop, but four states at a time; from
+    :data:`SPLIT_RULE_INPUTS` rule-inputs, as two halves (:func:`_halves_sums`).
 
     Each state's eq. 2 mins and eq. 3 sums are its own chain, in rule order as the
     reference's (zeros add nothing: module doc), so the bits are the same; four independent
@@ -851,10 +948,19 @@ def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
             if states[b, i] != states[b, i]:
                 return b
     rules = grid.shape[0]
+    # the halves' min(head, tail) is the min over the rule in any order; a product split in
+    # two would round differently from the reference's input-order product
+    halves = not product and rules * n >= SPLIT_RULE_INPUTS
     values = np.empty(rules)  # each rule's c_m
     for m in range(rules):
         values[m] = singletons[tables[0, m]]
     mu = np.empty((sets, 4))  # the memberships of the four states, side by side
+    heads = 1  # the combinations of the first N // 2 inputs' sets, and of the others
+    for i in range(n // 2):
+        heads *= offsets[i + 1] - offsets[i]
+    head = np.empty((heads if halves else 0, 4))
+    tail = np.empty((rules // heads if halves else 0, 4))
+    sums = np.empty((2, 4))
     low, high = _singleton_bounds(floats, ints)
     first = 0
     while first < count:
@@ -870,6 +976,14 @@ def _interleaved_states(floats: FloatArray, ints: IntArray, states: FloatArray,
                     else:
                         mu[j, k] = _membership_free(s, quads[j, 0], quads[j, 1],
                                                     quads[j, 2], quads[j, 3])
+        if halves:
+            _halves_sums(mu, lanes, n, offsets, values, head, tail, sums)
+            for k in range(min(lanes, count - first)):
+                if sums[1, k] == 0.0:  # no rule fires (see infer)
+                    return first + k
+                out[first + k] = _within(sums[0, k] / sums[1, k], low, high)
+            first += lanes
+            continue
         if lanes == 1:
             numerator = denominator = 0.0
             for m in range(rules):
@@ -918,8 +1032,18 @@ def _tiny(ints: IntArray, count: int) -> bool:
     if rules == 0:
         return False
     if n <= 2:
-        return rules <= TINY_RULES_FEW_INPUTS and OWN_SMALL_BATCH < count <= TINY_BATCH
-    return bool(ints[4]) and count <= OWN_SMALL_BATCH_FEW_INPUTS
+        if count < TINY_FROM:
+            return False
+        if rules <= TINY_RULES_FEW_INPUTS:
+            return count <= TINY_BATCH
+        return rules <= FEW_RULES_FEW_INPUTS and count <= OWN_SMALL_BATCH_FEW_INPUTS
+    if not ints[4]:
+        return False
+    if count <= FEW_STATES_FIRED and ints[4] != EVERY_RULE_FIRES:
+        return False  # a state or two of a base where few of its rules fire: those only
+    if rules * n >= SPLIT_RULE_INPUTS and not ints[_PRODUCT]:
+        return count <= INTERLEAVED_HALVES_STATES
+    return count <= INTERLEAVED_STATES
 
 
 @_jit
@@ -1008,6 +1132,20 @@ SIGNATURES: dict[str, tuple[Any, ...]] = {
 }
 
 
+def cached(name: str) -> bool:
+    """Whether numba's cache holds kernel ``name``'s machine code for its signature, this
+    source and this machine: loading it then costs a fraction of a second, where compiling
+    it costs seconds. Reads the cache's index only (numba's own key, through its cache
+    object); if numba's internals are not as expected, says True, i.e. load as before."""
+    dispatcher = globals()[name]
+    try:
+        cache = dispatcher._cache
+        key = cache._index_key(SIGNATURES[name], dispatcher.targetctx.codegen())
+        return key in cache._cache_file._load_index()
+    except Exception:  # a private API: any surprise means "as before"
+        return True
+
+
 def entry(name: str) -> Callable[..., Any]:
     """Kernel ``name``'s compiled entry point for its one signature (:data:`SIGNATURES`).
 
@@ -1026,8 +1164,8 @@ class Layout(NamedTuple):
 
     floats: FloatArray  # lo (N,), hi (N,), quads (S, 4) input after input, singletons (K,)
     # N, S, max L_i, M if the grid is kept (else 0), whether a few states are walked every
-    # rule four at a time (interleaves_states), whether eq. 2 is the product (activation:
-    # product), offsets (N + 1,): input i's sets are
+    # rule four at a time (0, 1 or EVERY_RULE_FIRES: see _HEADER), whether eq. 2 is the
+    # product (activation: product), offsets (N + 1,): input i's sets are
     # quads[offsets[i]:offsets[i + 1]], strides (N,): rule index = sum(set index * stride),
     # last input fastest; kinds (S,): each set's shape code (0 the trapezoid, whose quad
     # holds its corners; else its parameters, flctool.behaviour.shapes); grid (M, N): each
@@ -1050,10 +1188,11 @@ def layout(ranges: FloatArray, quadruples: tuple[FloatArray, ...], rule_grid: In
     dense = walks_every_rule(rule_grid.shape[0], len(sizes), sum(sizes))
     grid = rule_grid + offsets[:-1] if dense else np.empty((0, len(sizes)), dtype=np.intp)
     quads = np.concatenate(quadruples).astype(np.float64)
-    interleaves = dense and interleaves_states(
-        rule_grid.shape[0], len(sizes), fired_rules_bound(ranges, quadruples, kinds))
-    header = [len(sizes), len(quads), max(sizes), grid.shape[0], int(interleaves),
-              int(product)]
+    bound = fired_rules_bound(ranges, quadruples, kinds)
+    interleaves = 0
+    if dense and interleaves_states(rule_grid.shape[0], len(sizes), bound):
+        interleaves = EVERY_RULE_FIRES if bound >= rule_grid.shape[0] else 1
+    header = [len(sizes), len(quads), max(sizes), grid.shape[0], interleaves, int(product)]
     floats = np.concatenate([ranges[:, 0], ranges[:, 1], quads.ravel(), singletons])
     codes = (np.zeros(len(quads), dtype=np.intp) if kinds is None
              else np.array([k for input_kinds in kinds for k in input_kinds], dtype=np.intp))

@@ -438,7 +438,8 @@ def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time(
     for n_inputs in (6, 8):
         controller = strong_partition_controller(n_inputs, 2, seed=n_inputs,
                                                  activation=activation)
-        assert controller._layout.ints[4] and controller.consequents is not None
+        assert controller._layout.ints[4] == kernels.EVERY_RULE_FIRES
+        assert controller.consequents is not None
         for batch in (1, 2, 3, 4, 5, 7, kernels.OWN_SMALL_BATCH_FEW_INPUTS):
             states = awkward_states(controller, rng, batch)
             expected = [reference_output(controller, s, controller.consequents)
@@ -450,3 +451,56 @@ def test_a_few_states_of_bases_where_every_rule_fires_walk_them_four_at_a_time(
         states[3, 2] = np.nan
         with pytest.raises(InferenceError, match="input 'x2' is NaN in state 3"):
             controller.output(states)
+
+
+@pytest.mark.parametrize(("n_inputs", "n_sets"), [(4, 3), (5, 3), (7, 2)])
+def test_a_few_states_of_larger_bases_walk_every_rule_as_two_halves(n_inputs: int,
+                                                                    n_sets: int) -> None:
+    # From SPLIT_RULE_INPUTS rule-inputs the interleaved walk takes each rule's alpha as the
+    # min of its two halves' (kernels._halves_sums): one state alone, four at a time, and a
+    # last group of two or three, all the reference's bits. With 3 sets an input few of the
+    # rules fire, and one or two states walk those instead (FEW_STATES_FIRED).
+    controller = strong_partition_controller(n_inputs, n_sets, seed=n_inputs)
+    assert controller._layout.ints[4] == (kernels.EVERY_RULE_FIRES if n_sets == 2 else 1)
+    assert controller.consequents is not None
+    assert controller.n_rules * n_inputs >= kernels.SPLIT_RULE_INPUTS
+    rng = np.random.default_rng(n_inputs * 10 + n_sets)
+    for batch in (1, 2, 3, 4, 5, 6, 7, kernels.INTERLEAVED_HALVES_STATES,
+                  kernels.INTERLEAVED_HALVES_STATES + 1):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)
+    states = np.full((6, n_inputs), 0.4)
+    states[5, 1] = np.nan
+    with pytest.raises(InferenceError, match="input 'x1' is NaN in state 5"):
+        controller.output(states)
+
+
+def test_a_few_states_of_small_bases_of_three_inputs_or_more_walk_every_rule() -> None:
+    # 3 x 2 sets (24 rule-inputs): every rule four states at a time up to INTERLEAVED_STATES,
+    # blocks past it; the same bits on both sides.
+    controller = strong_partition_controller(3, 2, seed=3)
+    assert controller._layout.ints[4] and controller.consequents is not None
+    assert controller.n_rules * 3 < kernels.SPLIT_RULE_INPUTS
+    rng = np.random.default_rng(32)
+    for batch in (1, 5, kernels.INTERLEAVED_STATES, kernels.INTERLEAVED_STATES + 1):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)
+
+
+@pytest.mark.parametrize(("n_inputs", "n_sets"), [(1, 4), (2, 4), (2, 6)])
+def test_small_bases_of_one_or_two_inputs_walk_every_rule_from_a_few_states(
+        n_inputs: int, n_sets: int) -> None:
+    # State by state below TINY_FROM states, then every rule four at a time: up to
+    # TINY_BATCH states for 1 x 4 and 2 x 4 sets, up to OWN_SMALL_BATCH_FEW_INPUTS for 2 x 6
+    # (M = 36), blocks past them; the same bits on every side.
+    controller = strong_partition_controller(n_inputs, n_sets, seed=n_inputs)
+    assert controller.consequents is not None
+    rng = np.random.default_rng(n_inputs)
+    for batch in (1, kernels.TINY_FROM - 1, kernels.TINY_FROM, 8,
+                  kernels.OWN_SMALL_BATCH_FEW_INPUTS, kernels.OWN_SMALL_BATCH_FEW_INPUTS + 1,
+                  kernels.TINY_BATCH, kernels.TINY_BATCH + 1):
+        states = awkward_states(controller, rng, batch)
+        expected = [reference_output(controller, s, controller.consequents) for s in states]
+        np.testing.assert_array_equal(controller.output(states), expected)

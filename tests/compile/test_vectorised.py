@@ -22,6 +22,7 @@ def test_auto_starts_in_numpy_and_moves_to_the_kernels_once_they_pay(
                                               size=(300, 2))
     monkeypatch.setattr(controller_module._Inference, "numpy_seconds", 0.0)
     monkeypatch.setattr(controller_module, "KERNELS_PAY_AFTER", float("inf"))
+    monkeypatch.setattr(controller_module, "_kernels_cached", lambda: True)
     controller_module.set_inference("auto")
     assert not controller_module._kernels_on
     in_numpy = controller.output(states)
@@ -32,6 +33,31 @@ def test_auto_starts_in_numpy_and_moves_to_the_kernels_once_they_pay(
     assert controller_module._kernels_on
     np.testing.assert_array_equal(controller.output(states), in_numpy)
     assert controller.output_one(states[0]) == one_in_python
+
+
+def test_kernels_not_in_the_cache_are_bought_at_the_price_of_compiling_them(
+        handmade_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    controller = compile_behaviour(load_behaviour(handmade_path))
+    states = np.random.default_rng(4).uniform(controller.ranges[:, 0], controller.ranges[:, 1],
+                                              size=(50, 2))
+    monkeypatch.setattr(controller_module._Inference, "numpy_seconds", 0.0)
+    monkeypatch.setattr(controller_module, "KERNELS_PAY_AFTER", 0.0)
+    monkeypatch.setattr(controller_module, "KERNELS_COMPILE_PAY_AFTER", float("inf"))
+    monkeypatch.setattr(controller_module, "_kernels_cached", lambda: False)
+    controller_module.set_inference("auto")
+    in_numpy = controller.output(states)
+    assert not controller_module._kernels_on  # past the loading price, short of compiling's
+    monkeypatch.setattr(controller_module, "KERNELS_COMPILE_PAY_AFTER", 0.0)
+    controller.output(states[:1])
+    assert controller_module._kernels_on
+    np.testing.assert_array_equal(controller.output(states), in_numpy)
+
+
+def test_the_cache_check_finds_a_kernel_once_it_is_compiled() -> None:
+    from flctool.compile import kernels
+
+    kernels.entry("infer_own")  # compiled, or loaded from the cache
+    assert kernels.cached("infer_own")
 
 
 def test_an_unknown_mode_is_refused() -> None:
