@@ -168,9 +168,12 @@ def _run_ros2(behaviour: Behaviour, source: Path, robot: Path | None, episodes: 
             raise
         finally:
             if recorder is not None:
-                # every command the node published, since the recorder was there first
-                _finish_recording(recorder, record, config.command.topic,
-                                  node.commands_sent + len(node.stop_times))
+                # every command the node published and every status it received, since
+                # the recorder was there first
+                expected = {config.command.topic: node.commands_sent + len(node.stop_times)}
+                if node.status is not None and config.episode.status is not None:
+                    expected[config.episode.status.topic] = node.status_messages
+                _finish_recording(recorder, record, expected)
         if node.status is not None:
             outcomes = ", ".join(f"{k} {v}" for k, v in node.outcomes.items())
             typer.echo(f"{node.episodes} episodes ended: {outcomes}")
@@ -195,18 +198,21 @@ def _start_recording(recorder: Any, bag: Path | None, timeout: float) -> None:
 QUIET, SETTLE = 2.0, 10.0
 
 
-def _finish_recording(recorder: Any, bag: Path | None, command_topic: str, sent: int) -> None:
-    """Finish the bag once the commands published while recording (the last stop included)
-    have reached it. A command sent before the recorder matched never will, so the bag is
-    also finished once no command has arrived for ``QUIET`` s."""
-    last: list[float] = [recorder.counts[command_topic], time.monotonic()]  # count, when grown
+def _finish_recording(recorder: Any, bag: Path | None, expected: dict[str, int]) -> None:
+    """Finish the bag once the messages the node published or received while recording
+    (``expected``, by topic: its commands, the last stop included, and the episode statuses
+    it counted) have reached it. One sent before the recorder matched never will, so the bag
+    is also finished once none of those topics has had a message for ``QUIET`` s."""
+    expected = {topic: n for topic, n in expected.items() if topic in recorder.counts}
+    last: list[float] = [sum(recorder.counts[t] for t in expected), time.monotonic()]
 
     def settled() -> bool:
-        count: int = recorder.counts[command_topic]
+        count: int = sum(recorder.counts[t] for t in expected)
         now = time.monotonic()
         if count != last[0]:
             last[:] = [count, now]
-        return count >= sent or now - last[1] >= QUIET
+        return (all(recorder.counts[t] >= n for t, n in expected.items())
+                or now - last[1] >= QUIET)
 
     recorder.graph.wait(settled, SETTLE)
     recorder.close()

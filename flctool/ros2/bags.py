@@ -172,7 +172,12 @@ class ReplayRow:
 def replay(path: Path, config: Ros2Config, input_names: tuple[str, ...],
            commands: dict[str, float], act: Any) -> list[ReplayRow]:
     """The controller ``act(values) -> a`` at each recorded command, from the latest inputs
-    before it; beside the output the command carried."""
+    before it; beside the output the command carried.
+
+    A deployed node reads its inputs at its tick and publishes a moment later, so an input
+    published in between (within one control period before the command) may not have
+    reached it: where the command is the output on the inputs just before that message and
+    not on the latest, those are the inputs it was computed from, and the row has them."""
     sources = [config.inputs[name] for name in input_names]
     readers = {name: input_reader(source) for name, source in zip(input_names, sources,
                                                                     strict=True)}
@@ -182,12 +187,16 @@ def replay(path: Path, config: Ros2Config, input_names: tuple[str, ...],
     command = config.command
     topics = [*by_topic, command.topic]
     latest: dict[str, float] = {}
+    before: dict[str, float] = {}  # the inputs before the latest input message
+    arrived = 0  # when the latest input message was published (ns)
+    period = round(config.period * 1e9)
     rows: list[ReplayRow] = []
     start: int | None = None
     stop_text = command.stop
     for topic, stamp, message in read_messages(path, topics):
         start = stamp if start is None else start
         if topic in by_topic:
+            before, arrived = dict(latest), stamp
             for name in by_topic[topic]:
                 latest[name] = readers[name](message)
         if topic != command.topic or len(latest) < len(input_names):
@@ -201,10 +210,19 @@ def replay(path: Path, config: Ros2Config, input_names: tuple[str, ...],
             if _is_stop(message, command.field, command.fixed):
                 continue  # a stop command carries no output
             recorded = (float(_field(message, command.field)) - command.offset) / command.scale
-        values = [latest[name] for name in input_names]
-        replayed = act(values)
-        if command.type == "std_msgs/String":
-            replayed = commands[nearest_command(commands, replayed)]
+        def output(inputs: dict[str, float]) -> tuple[list[float], float]:
+            values = [inputs[name] for name in input_names]
+            replayed = act(values)
+            if command.type == "std_msgs/String":
+                replayed = commands[nearest_command(commands, replayed)]
+            return values, replayed
+
+        values, replayed = output(latest)
+        if (replayed != recorded and stamp - arrived < period
+                and len(before) == len(input_names)):
+            earlier = output(before)  # the message may have come after the node's tick
+            if earlier[1] == recorded:
+                values, replayed = earlier
         rows.append(ReplayRow(stamp, (stamp - start) / 1e9, values, recorded, replayed))
     return rows
 

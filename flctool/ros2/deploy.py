@@ -104,6 +104,7 @@ class ControllerNode:
         self.outcomes = dict.fromkeys(STATUSES[1:], 0)
         self.episodes = 0
         self.commands_sent = 0
+        self.status_messages = 0  # every message of the episode status topic received
         #: time.monotonic() of every stop command published, for tests and logs.
         self.stop_times: list[float] = []
         self._ended = threading.Event()
@@ -140,6 +141,7 @@ class ControllerNode:
         return arrived
 
     def _on_status(self, message: Any) -> None:
+        self.status_messages += 1
         text = str(message.data)
         if text in self.outcomes:
             self.outcomes[text] += 1
