@@ -186,6 +186,15 @@ def replay(path: Path, config: Ros2Config, input_names: tuple[str, ...],
         by_topic.setdefault(source.topic, []).append(name)
     command = config.command
     topics = [*by_topic, command.topic]
+
+    def output(inputs: dict[str, float]) -> tuple[list[float], float]:
+        """The inputs in the controller's order, and its output on them."""
+        values = [inputs[name] for name in input_names]
+        replayed = act(values)
+        if command.type == "std_msgs/String":
+            replayed = commands[nearest_command(commands, replayed)]
+        return values, replayed
+
     latest: dict[str, float] = {}
     before: dict[str, float] = {}  # the inputs before the latest input message
     arrived = 0  # when the latest input message was published (ns)
@@ -210,13 +219,6 @@ def replay(path: Path, config: Ros2Config, input_names: tuple[str, ...],
             if _is_stop(message, command.field, command.fixed):
                 continue  # a stop command carries no output
             recorded = (float(_field(message, command.field)) - command.offset) / command.scale
-        def output(inputs: dict[str, float]) -> tuple[list[float], float]:
-            values = [inputs[name] for name in input_names]
-            replayed = act(values)
-            if command.type == "std_msgs/String":
-                replayed = commands[nearest_command(commands, replayed)]
-            return values, replayed
-
         values, replayed = output(latest)
         if (replayed != recorded and stamp - arrived < period
                 and len(before) == len(input_names)):
