@@ -24,7 +24,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.behaviour import Behaviour, behaviour_to_data, load_behaviour
-from flctool.behaviour.overrides import Override, Overrides, as_overrides, resolve_behaviour
+from flctool.behaviour.overrides import (
+    Override,
+    Overrides,
+    as_overrides,
+    resolve_behaviour,
+    written_keys,
+)
 from flctool.compile import compile_behaviour
 from flctool.errors import Problem, RunDirError, SpecError
 from flctool.learners import Callback, Learner, make_learner
@@ -161,8 +167,12 @@ def check_same_run(run: Run, requested: Behaviour) -> None:
     generation budget; the error lists the fields that differ."""
     recorded = behaviour_to_data(run.behaviour)
     wanted = behaviour_to_data(requested)
+    # the budget is the run's: its generations, and its extend unless the file writes one
+    budget = ("generations",) if "extend" in written_keys(requested) else ("generations",
+                                                                           "extend")
     for data in (recorded, wanted):
-        data.get("learning", {}).pop("generations", None)
+        for key in budget:
+            data.get("learning", {}).pop(key, None)
     changed = _differences(recorded, wanted)
     if changed:
         raise RunDirError(f"--resume continues the run recorded in {run.path}, but the file "

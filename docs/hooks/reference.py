@@ -288,6 +288,14 @@ EQUATIONS: dict[str, str] = {
     "population": ("experiments: individuals per generation (paper: 10); fuzzy_q: episodes "
                    "per generation"),
     "generations": "experiments: generations (paper: 30 in simulation, 20 on the robot)",
+    "protocol": ("experiments: `paper` is the paper's fixed budget (population 10, 30 "
+                 "generations, one trial); `auto` adds `extend` when the file gives no budget"),
+    "extend": ("an addition: the budget sized by the problem as it learns; the paper runs a "
+               "fixed number of generations"),
+    "extend.patience": ("an addition: generations without a better selected controller after "
+                        "which an extended run ends"),
+    "extend.most": ("an addition: the most generations an extended run has; unset: 30 for "
+                    "every 30 units of M log2 K, at least twice `generations`"),
     "crossover": "GA exploration: crossover probability p_c (experiments: 0.2)",
     "mutation": "GA exploration: mutation probability p_m per gene (experiments: 0.1)",
     "pitt_crossover": ("GA exploration: the standard crossover of the Pitt GA (the hybrid takes, "

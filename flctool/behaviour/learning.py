@@ -67,6 +67,19 @@ class SelectionConfig(Section):
         "and stop.target is checked on (0: none)"))
 
 
+class ExtendConfig(Section):
+    """Going on past ``generations`` while the run still improves (docs/learning.md, "How
+    long a run learns"): the run's budget sized by the problem as it is learned."""
+
+    patience: int = Field(10, ge=1, description=(
+        "past generations, the run goes on until its selected controller (the best validated "
+        "one) has not improved for this many generations"))
+    most: int | None = Field(None, ge=1, description=(
+        "the most generations a run has in all; unset: from the problem, 30 for every 30 "
+        "units of M log2 K (M rules to learn, K commands), and at least twice generations "
+        "(docs/learning.md)"))
+
+
 class TargetConfig(Section):
     """A target in the units a user reads: one of a success rate, a mean return, or a mean
     fitness (the learners' own figure)."""
@@ -148,18 +161,43 @@ class LearningConfig(Section):
     seed: int = Field(0, ge=0, description="seeds every random choice of the run")
     population: int = Field(10, ge=2, description=(
         "individuals per generation (fuzzy_q: a generation is population x trials episodes)"))
-    generations: int = Field(30, ge=1)
+    generations: int = Field(30, ge=1, description=(
+        "generations a run has; with extend, the least it has"))
     trials: int = Field(1, ge=1, description="trials per individual per generation")
     selection: SelectionConfig = SelectionConfig()
     stop: StopConfig = StopConfig()
     sets: SetLearningConfig | None = Field(None, description=(
         "learn the fuzzy sets of some inputs with the consequents (docs/learning.md); "
         "without it only the consequents are learned"))
+    protocol: Literal["auto", "paper"] = Field("auto", description=(
+        "paper: the paper's fixed budget, generations as given (30) and no extend; auto: "
+        "a file that gives neither generations nor extend learns with extend's defaults"))
+    extend: ExtendConfig | None = Field(None, description=(
+        "go on past generations while the selected controller improves; set by default "
+        "when the file gives no generations (protocol: auto)"))
 
     #: What an unset ``selection.race`` means for this learner. Measured (docs/learning.md):
     #: a race to 60 episodes lifts the GAs' worst seeds; fuzzy_q's greedy controllers of
     #: the latest generations are alike, and racing them changed nothing but the cost.
     default_race: ClassVar[int] = 60
+
+    @model_validator(mode="before")
+    @classmethod
+    def _budget_from_the_problem(cls, data: Any) -> Any:
+        # A file that says nothing of its budget gets one sized as it learns (extend); one
+        # that gives generations, or protocol: paper, gets exactly what it says. Decided on
+        # the data as written, so a run directory's resolved file (which writes every key)
+        # reads back the same.
+        if not isinstance(data, dict):
+            return data
+        if data.get("protocol") == "paper":
+            if data.get("extend") is not None:
+                raise ValueError("protocol: paper is the paper's fixed budget, without "
+                                 "extend; leave one of them out")
+            return data
+        if "generations" not in data and "extend" not in data:
+            return {**data, "extend": {}}
+        return data
 
     @property
     def race_episodes(self) -> int:

@@ -77,8 +77,36 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
     learner = next((o.value for o in given if o.path == ("learning", "learner")), None)
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
         data["learning"] = keep_keys_read_by(data["learning"], learner)
+    if _gives_the_budget(given) and _extended_by_default(behaviour):
+        # `extend` came only because the file gave no budget; one given now is exact
+        data["learning"].pop("extend", None)
     places = apply_overrides(data, given)
     return behaviour_from_data(data, source_of(behaviour).with_overrides(places))
+
+
+def _gives_the_budget(overrides: list[Override]) -> bool:
+    """Whether the overrides give ``generations`` or ``protocol``, and not ``extend``."""
+    paths = [o.path[:2] for o in overrides]
+    return (("learning", "generations") in paths or ("learning", "protocol") in paths) \
+        and ("learning", "extend") not in paths
+
+
+def _extended_by_default(behaviour: Behaviour) -> bool:
+    """Whether the behaviour's ``extend`` is the one a file without a budget gets (not
+    written in its file, nor given)."""
+    from flctool.behaviour.learning import ExtendConfig
+
+    return behaviour.learning.extend == ExtendConfig() and "extend" not in written_keys(
+        behaviour)
+
+
+def written_keys(behaviour: Behaviour) -> set[str]:
+    """The keys of ``learning`` that the behaviour's file writes or an override gave."""
+    source = source_of(behaviour)
+    given = {str(path[1]) for path in source.overrides
+             if len(path) > 1 and path[0] == "learning"}
+    return given | {key for key in ("generations", "extend", "protocol")
+                    if source.mark(("learning", key)) is not None}
 
 
 def apply_overrides(data: dict[str, Any], overrides: Overrides,

@@ -106,6 +106,8 @@ def _budget(behaviour: Behaviour) -> dict[str, Any]:
             "selection_episodes_at_most": plan.selection,
             "confirmation_episodes": plan.confirmation,
             "baseline_episodes": plan.baselines, "statement": plan.lines(),
+            "extend": None if plan.extension is None else {
+                "most_generations": plan.extension[0], "patience": plan.extension[1]},
             "settings": {key: {"value": s.value, "from": s.source}
                          for key, s in plan.settings.items()}}
 

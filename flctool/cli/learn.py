@@ -172,19 +172,26 @@ def resume_command(path: Path) -> str:
 
 
 def _train(training: Training, show_progress: bool) -> RunSummary:
-    from flctool.learners import FunctionCallback, GenerationMetrics
+    from flctool.learners import Callback, GenerationMetrics
 
     config = training.run.behaviour.learning
-    with Progress(f"{config.learner} generation", config.generations, training.done,
-                  terminal=show_progress) as progress:
 
-        def advance(metrics: GenerationMetrics) -> None:
+    class Shown(Callback):
+        """Each generation on the progress bar, whose total is the generations the run
+        has as things stand (an extended run's grows while it improves)."""
+
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
             validated = ("-" if metrics.validated != metrics.validated
                          else f"{metrics.validated:.3f}")
-            progress.update(metrics.generation + 1, **{"validated best": validated,
-                                                       "training mean": f"{metrics.mean:.3f}"})
+            total = None if self.learner is None else self.learner.planned_generations()
+            progress.update(metrics.generation + 1, total,
+                            **{"validated best": validated,
+                               "training mean": f"{metrics.mean:.3f}"})
+            return True
 
-        return training.train([FunctionCallback(advance)])
+    with Progress(f"{config.learner} generation", config.generations, training.done,
+                  terminal=show_progress) as progress:
+        return training.train([Shown()])
 
 
 def _report(summary: RunSummary) -> None:

@@ -38,7 +38,8 @@ class Progress:
     """Progress of ``total`` steps of ``what`` (e.g. "generation", "episode").
 
     ``update(done, **fields)`` sets how many are done and the fields shown after the count
-    (e.g. best=0.912). Disabled, it prints nothing; with ``terminal=False`` it prints plain
+    (e.g. best=0.912); ``total=`` changes the total (a run that extends itself).
+    Disabled, it prints nothing; with ``terminal=False`` it prints plain
     lines even on a terminal (no bar).
     """
 
@@ -76,13 +77,15 @@ class Progress:
             self._bar.__enter__()
         return self
 
-    def update(self, done: int, **fields: str) -> None:
+    def update(self, done: int, total: int | None = None, **fields: str) -> None:
         self.done = done
+        self.total = self.total if total is None else total
         self.fields.update(fields)
         if not self.enabled:
             return
         if self._bar is not None:
-            self._bar.update(self._task, completed=done, text=escape(self._text()))
+            self._bar.update(self._task, completed=done, total=self.total,
+                             text=escape(self._text()))
             return
         now = time.monotonic()
         if now - self._last_line >= self._log_every:

@@ -33,6 +33,7 @@ from flctool.learners.baselines import BaselineCheck
 from flctool.learners.budget import Budget
 from flctool.learners.checkpoint import STREAMS, Expected, read_checkpoint
 from flctool.learners.confirmation import Confirmation
+from flctool.learners.extension import Extension, most_generations
 from flctool.learners.metrics import FloatArray as FloatArray
 from flctool.learners.metrics import GenerationResult as GenerationResult
 from flctool.learners.metrics import IntArray as IntArray
@@ -112,6 +113,12 @@ class Learner(ABC):
         self.selection = ModelSelection(config.selection, config.seed, self.usage, limit,
                                         self.rank_by, reserve=self.episodes_at_end,
                                         race=config.race_episodes)
+        #: How many generations the run has: ``generations``, extended while it improves.
+        extend = config.extend
+        most = (extend.most if extend is not None and extend.most is not None else
+                most_generations(len(behaviour.missing_rules()), self.controller.n_commands,
+                                 config.generations))
+        self.extension = Extension(extend, config.generations, most)
         self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
                              reserve=self.episodes_at_end)
         check_target(behaviour, env)
@@ -128,9 +135,11 @@ class Learner(ABC):
     @property
     def run_callbacks(self) -> list[RunCallback[Learner]]:
         """The parts of the run that act between generations, in order: model selection,
-        the budget (which looks at what selection chose, and may have it confirmed), the
+        the extension (how many generations the run has, from what selection chose), the
+        budget (which looks at what selection chose, and may have it confirmed), the
         confirmation of the controller the run returns, and its comparison with baselines."""
-        return [self.selection, self.budget, self.confirmation, self.baseline_check]
+        return [self.selection, self.extension, self.budget, self.confirmation,
+                self.baseline_check]
 
     @property
     def stop_reason(self) -> str | None:
@@ -242,7 +251,12 @@ class Learner(ABC):
     @property
     def finished(self) -> bool:
         """Whether the run has ended: all its generations done, or a budget or target met."""
-        return self.stop_reason is not None or self.generation + 1 >= self.config.generations
+        return self.stop_reason is not None or self.generation + 1 >= self.planned_generations()
+
+    def planned_generations(self) -> int:
+        """The generations the run has, as things stand (:mod:`~flctool.learners.extension`):
+        ``generations``, or more while an extended run improves."""
+        return self.extension.planned()
 
     def episodes_per_generation(self) -> int:
         """The training episodes one generation runs."""
@@ -362,9 +376,12 @@ class Learner(ABC):
             self.selection.restore(saved.hall, saved.best, saved.finalized, saved.validated,
                                    saved.racing, saved.race)
             self.budget.restore(saved.usage, saved.stop_reason)
+            self.extension.restore(saved.extension)
             self.confirmation.restore(checkpoint.selection.confirmations)
             self.baseline_check.restore(checkpoint.selection.baselines,
                                         checkpoint.selection.verdict)
+        else:
+            self.extension.restore(None)
         self.generation, self.elapsed = checkpoint.generation, checkpoint.elapsed
         self.population, self.fitness = checkpoint.population, checkpoint.fitness
         self.set_genes = checkpoint.set_genes

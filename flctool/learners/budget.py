@@ -42,6 +42,8 @@ class BudgetedRun(ConfirmedRun, Protocol):
 
     def episodes_per_generation(self) -> int: ...
 
+    def planned_generations(self) -> int: ...
+
 
 class Budget(RunCallback[BudgetedRun]):
     """Ends the run on ``learning.stop`` (see the module docstring): after a generation,
@@ -65,7 +67,7 @@ class Budget(RunCallback[BudgetedRun]):
         del result
         if self.target is not None and self.confirmation.reaches(learner, self.target):
             self.stop_reason = "target"
-        elif learner.generation + 1 < learner.config.generations:
+        elif learner.generation + 1 < learner.planned_generations():
             self.stop_reason = self.exhausted(learner.episodes_per_generation(),
                                               learner.elapsed)
 
@@ -129,6 +131,9 @@ class BudgetPlan:
     confirmation: int
     baselines: int  # the comparison with baselines, after a full confirmation
     limit: int | None  # stop.episodes
+    #: With ``learning.extend``: (the most generations, the patience); None: exactly
+    #: ``generations``.
+    extension: tuple[int, int] | None = None
 
     @property
     def most(self) -> int:
@@ -145,12 +150,20 @@ class BudgetPlan:
                   if all(x.source == "default" for x in protocol) else
                   ", ".join(f"{x.key} from {x.source}" for x in protocol
                             if x.source != "default") + ", the rest the paper's protocol")
+        generations = _count(s["generations"].value, "generation")
+        if self.extension is not None:
+            most, patience = self.extension
+            generations = (f"{s['generations'].value} to {most} generations (on past "
+                           f"{s['generations'].value} until {patience} pass without a better "
+                           f"selected controller; {most} from the problem's size unless "
+                           f"extend.most is given)")
+            source = source.replace("the paper's protocol: the file gives none of them",
+                                    "the file gives none of them")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
                  f"{self.commands} commands",
-                 f"  training: {_count(s['generations'].value, 'generation')} x "
-                 f"{s['population'].value} individuals x "
+                 f"  training: {generations} x {s['population'].value} individuals x "
                  f"{_count(s['trials'].value, 'trial')} ({source})"]
         if s["selection.candidates"].value:
             race = s["selection.race"]
@@ -188,6 +201,7 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     (:func:`~flctool.learners.selection.race_cost`) over all of them."""
     from flctool.behaviour.located import source_of
     from flctool.learners.baselines import baseline_episodes
+    from flctool.learners.extension import most_generations
     from flctool.learners.selection import race_cost
 
     config = behaviour.learning
@@ -217,18 +231,24 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
 
     settings = {".".join(path): setting(path) for path in _SETTINGS}
     selection = config.selection
-    validated = (config.generations + selection.candidates + int(getattr(config, "elites", 1))
+    rules, commands = len(behaviour.missing_rules()), len(behaviour.output.commands)
+    extension = None
+    generations = config.generations
+    if config.extend is not None:
+        generations = config.extend.most or most_generations(rules, commands, generations)
+        generations = max(generations, config.generations)
+        extension = (generations, config.extend.patience)
+    validated = (generations + selection.candidates + int(getattr(config, "elites", 1))
                  if selection.candidates else 0)
     most_selection = validated * selection.episodes
     if config.race_episodes > selection.episodes:
         most_selection += race_cost(validated, selection.episodes, config.race_episodes)
-    commands = len(behaviour.output.commands)
     confirming = selection.confirmation
-    return BudgetPlan(settings, len(behaviour.missing_rules()), commands,
-                      config.generations * config.population * config.trials, most_selection,
+    return BudgetPlan(settings, rules, commands,
+                      generations * config.population * config.trials, most_selection,
                       confirming,
                       baseline_episodes(commands, baselines, confirming) if confirming >= 2
-                      else 0, config.stop.episodes)
+                      else 0, config.stop.episodes, extension)
 
 
 def describe_budget(behaviour: Behaviour, baselines: int = 0) -> str:

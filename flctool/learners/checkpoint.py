@@ -79,6 +79,9 @@ class SelectionState:
     #: it), and the last race's rounds.
     racing: bool = False
     race: list[dict[str, Any]] = field(default_factory=list)
+    #: The extension's count (best figure, generation it improved at); None: a run without
+    #: an extension, or of a version without them.
+    extension: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -289,6 +292,10 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
         validated = [dict(v) for v in state["validated"]]
         racing = state.get("racing", False)
         race = [dict(r) for r in state.get("race", [])]
+        extension = state.get("extension")
+        if extension is not None:
+            extension = {"best_seen": float(extension["best_seen"]),
+                         "improved_at": int(extension["improved_at"])}
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
         raise damaged(f"'s selection record is damaged ({exc!r})") from None
     for candidate in [*hall, *([best] if best else [])]:
@@ -314,5 +321,9 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
                           "one of this behaviour")
     if not isinstance(racing, bool):
         raise damaged("'s selection record is damaged (racing is not true or false)")
+    if extension is not None and (math.isnan(extension["best_seen"])
+                                  or extension["improved_at"] < -1):
+        raise damaged("'s extension record is damaged (NaN, or a generation before the "
+                      "first)")
     return SelectionState(hall, best, usage, stop_reason, finalized, validated, confirmations,
-                          given, verdict, racing, race)
+                          given, verdict, racing, race, extension)

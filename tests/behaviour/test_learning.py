@@ -60,7 +60,7 @@ def test_a_section_without_learner_is_the_default_learners() -> None:
 
 def test_each_learner_reads_its_own_keys() -> None:
     common = {"learner", "seed", "population", "generations", "trials", "selection", "stop",
-              "sets"}
+              "sets", "protocol", "extend"}
     assert set(learner_keys(LearningConfig)) == common
     genetic = {"crossover", "mutation", "elites", "common_starts", "restart_after"}
     assert set(learner_keys(GeneticConfig)) == common | genetic
@@ -156,9 +156,10 @@ def test_a_section_an_earlier_version_recorded_loads_with_its_learners_keys(
     assert (learning.seed, learning.population, learning.trials) == (4, 6, 2)
     written = behaviour_to_data(parse_behaviour(GOOD).model_copy(update={"learning": learning}))
     # every key but those left unset (None), which are not written: 'sets' when no sets are
-    # learned, 'restart_after' when the learner's default applies
-    assert set(written["learning"]) == set(learner_keys(type(learning))) - {"sets",
-                                                                          "restart_after"}
+    # learned, 'restart_after' when the learner's default applies, 'extend' when the record
+    # gives its generations
+    assert set(written["learning"]) == set(learner_keys(type(learning))) - {
+        "sets", "restart_after", "extend"}
     if isinstance(learning, PittConfig):
         assert learning.pitt_crossover == "one_point" and learning.crossover == 0.3
     if isinstance(learning, (FuzzyQConfig, HybridConfig)):

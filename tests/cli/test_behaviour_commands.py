@@ -162,7 +162,8 @@ def test_validate_states_the_budget_and_where_each_number_came_from(tmp_path: Pa
     text = (BEHAVIOURS / "ballchase.yaml").read_text()
     assert "population:" not in text
     mine = tmp_path / "mine.yaml"
-    mine.write_text(text.replace("learning:\n", "learning:\n  population: 20\n", 1))
+    mine.write_text(text.replace("learning:\n", "learning:\n  population: 20\n"
+                                 "  protocol: paper\n", 1))
     result = runner.invoke(app, ["validate", str(mine)])
     assert result.exit_code == 0, result.output
     line = mine.read_text().splitlines().index("  population: 20") + 1

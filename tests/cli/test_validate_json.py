@@ -35,9 +35,11 @@ def test_problems_are_data_with_file_line_column_field_message_and_fix(
         "rules": 15, "rules_to_learn": 15, "budget": None, "problems": None, "warnings": [],
         "notes": []}
     budget = files[0]["budget"]
-    assert budget["training_episodes"] == 300
+    # no budget in the file: 30 generations, on while improving, to at most 60
+    assert budget["training_episodes"] == 600
+    assert budget["extend"] == {"most_generations": 60, "patience": 10}
     assert budget["settings"]["generations"] == {"value": 30, "from": "default"}
-    assert budget["most_episodes"] == 300 + budget["selection_episodes_at_most"] + 50 + 120
+    assert budget["most_episodes"] == 600 + budget["selection_episodes_at_most"] + 50 + 120
     assert budget["statement"][0].startswith("budget: at most")
     assert files[1]["budget"] is None  # invalid: nothing to state
     problems = files[1]["problems"]

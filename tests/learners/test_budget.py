@@ -5,9 +5,10 @@ from __future__ import annotations
 import pytest
 
 from flctool import load_behaviour
-from flctool.behaviour.learning import SelectionConfig
+from flctool.behaviour.learning import ExtendConfig, SelectionConfig
 from flctool.learners import make_learner, train
 from flctool.learners.budget import plan_budget
+from flctool.learners.extension import most_generations
 from flctool.learners.selection import race_cost
 from flctool.plugins import names
 from flctool.runs import resolve_behaviour
@@ -15,8 +16,10 @@ from tests.conftest import BEHAVIOURS
 from tests.learners.line_env import LineEnv, line_behaviour
 
 
-def test_the_paper_s_protocol_is_stated_as_the_default() -> None:
-    behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
+def test_the_paper_s_protocol_is_one_key_away() -> None:
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                                  {"protocol": "paper"})
+    assert behaviour.learning.extend is None
     plan = plan_budget(behaviour)
     selection = behaviour.learning.selection
     assert (plan.rules, plan.commands, plan.training) == (15, 5, 300)
@@ -27,11 +30,30 @@ def test_the_paper_s_protocol_is_stated_as_the_default() -> None:
         validated, selection.episodes, race)
     assert (plan.confirmation, plan.baselines) == (50, (5 + 3) * 10 + 40)
     assert plan.most == 300 + plan.selection + 50 + 120 and plan.limit is None
-    assert all(s.source == "default" for s in plan.settings.values())
     lines = plan.lines()
     assert lines[0].startswith(f"budget: at most {plan.most:,} episodes: 300 training")
     assert "30 generations x 10 individuals x 1 trial (the paper's protocol" in lines[1]
     assert "raced on to 60 episodes" in lines[2] and "selection.race 60 (default)" in lines[2]
+
+
+def test_a_file_without_a_budget_is_extended_up_to_a_bound_from_its_size() -> None:
+    behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
+    assert behaviour.learning.extend == ExtendConfig()
+    plan = plan_budget(behaviour)
+    # 15 rules x log2 5 = 34.8 units: 30 x ceil(34.8 / 30) = 60, and at least 2 x 30
+    assert most_generations(15, 5, 30) == 60 and plan.extension == (60, 10)
+    assert plan.training == 60 * 10
+    validated = 60 + behaviour.learning.selection.candidates + 1
+    assert plan.selection == validated * 20 + race_cost(validated, 20, 60)
+    assert all(s.source == "default" for s in plan.settings.values())
+    assert "30 to 60 generations (on past 30 until 10 pass without a better selected " \
+        "controller" in plan.lines()[1]
+    assert most_generations(54, 5, 30) == 150 and most_generations(40, 5, 50) == 120
+    # a budget given is exact: on the command line, in the file, or extend's own bound
+    given = resolve_behaviour(behaviour, {"generations": 12})
+    assert given.learning.extend is None and plan_budget(given).training == 120
+    bounded = resolve_behaviour(behaviour, {"extend.most": 45})
+    assert plan_budget(bounded).extension == (45, 10)
 
 
 def test_each_setting_says_where_it_came_from() -> None:

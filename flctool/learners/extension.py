@@ -1,0 +1,104 @@
+"""How long a run learns: ``generations``, and past them while the run still improves.
+
+The paper's 30 generations suit ballchase; a larger problem needs more, and how many depends
+on the task more than on its size (docs/learning.md, "How long a run learns"). So a run
+whose file says nothing of its budget (``learning.extend``, set by default) runs its
+``generations`` and then goes on while it improves: it ends once its selected controller --
+the best validated one, the controller it would return -- has not improved for
+``extend.patience`` generations, and at ``extend.most`` generations at the latest. A noisy
+validation can still set a new best by luck; the patience bounds what such luck costs.
+
+:class:`Extension` is the run callback that keeps this count. It runs after model selection
+(which validates each generation's leader) and before the budget, which reads the planned
+generations from it; its state is part of every checkpoint, so a resumed run ends where an
+uninterrupted one would. A run without ``extend`` (``protocol: paper``, or ``generations``
+given) has exactly its generations, as before.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Protocol
+
+from flctool.behaviour.learning import ExtendConfig
+from flctool.learners.metrics import FloatArray, GenerationResult
+from flctool.learners.run_callback import RunCallback
+from flctool.learners.selection import ModelSelection
+
+#: Generations per unit of M log2 K (rules to learn x bits to choose a command) at most,
+#: and the problem size one unit stands for: ``extend.most`` when unset.
+_PER_UNIT, _UNIT = 30, 30.0
+
+
+def most_generations(rules: int, commands: int, least: int) -> int:
+    """``extend.most`` when unset: 30 generations for every 30 units of M log2 K (a problem's
+    rules to learn M times the bits of a choice among K commands), and at least twice the
+    run's ``generations``: room to grow with the problem, a bound on what patience costs."""
+    size = max(rules, 1) * math.log2(max(commands, 2))
+    return max(2 * least, _PER_UNIT * math.ceil(size / _UNIT))
+
+
+class ExtendedRun(Protocol):
+    """What the extension reads of the run (a :class:`~flctool.learners.base.Learner`)."""
+
+    @property
+    def generation(self) -> int: ...
+
+    @property
+    def fitness(self) -> FloatArray: ...
+
+    @property
+    def selection(self) -> ModelSelection: ...
+
+
+class Extension(RunCallback[ExtendedRun]):
+    """The generations a run has (see the module docstring): ``least`` (the file's
+    ``generations``), and with ``config`` (``learning.extend``) more while the selected
+    controller improves, up to ``most``."""
+
+    def __init__(self, config: ExtendConfig | None, least: int, most: int) -> None:
+        self.config = config
+        self.least = least
+        self.most = max(most, least)
+        self.best_seen = -math.inf  # the selected controller's validated figure
+        self.improved_at = -1  # the generation after which it last improved
+
+    @property
+    def enabled(self) -> bool:
+        return self.config is not None
+
+    def on_trials(self, learner: ExtendedRun, result: GenerationResult) -> None:
+        del result
+        best = learner.selection.best
+        # without selection, the best training fitness is the figure (as restarts read it)
+        figure = best.validation_value() if best is not None else float(learner.fitness.max())
+        if figure > self.best_seen:
+            self.best_seen, self.improved_at = figure, learner.generation
+
+    def planned(self) -> int:
+        """The generations the run has, as things stand: ``least``, or with ``extend``
+        until ``patience`` generations without improvement, within ``[least, most]``."""
+        if self.config is None:
+            return self.least
+        return min(self.most, max(self.least, self.improved_at + 1 + self.config.patience))
+
+    def state_dict(self) -> dict[str, Any]:
+        if self.config is None:
+            return {}
+        return {"extension": {"best_seen": self.best_seen, "improved_at": self.improved_at}}
+
+    def restore(self, record: dict[str, Any] | None) -> None:
+        """Restore what :meth:`state_dict` saved (None: a checkpoint of a run without an
+        extension, which then ends at its generations, as it would have)."""
+        if record is None:
+            self.config = None
+            return
+        self.best_seen = float(record["best_seen"])
+        self.improved_at = int(record["improved_at"])
+
+    def describe(self) -> str:
+        """How the run's length is decided, for its budget statement."""
+        if self.config is None:
+            return f"{self.least} generations"
+        return (f"{self.least} generations, then on while the selected controller improves "
+                f"(until {self.config.patience} without), at most {self.most}")

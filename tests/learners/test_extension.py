@@ -1,0 +1,133 @@
+"""How long a run learns: its generations, and past them while it improves (learning.extend)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from flctool import load_behaviour
+from flctool.behaviour.learning import ExtendConfig
+from flctool.errors import LearnError, SpecError
+from flctool.learners import Callback, GenerationMetrics, make_learner, train
+from flctool.learners.extension import Extension, most_generations
+from flctool.runs import resolve_behaviour
+from flctool.training import resume_run, start_run
+from tests.conftest import BEHAVIOURS
+from tests.learners.line_env import LineEnv, line_behaviour
+
+
+def extended(**learning: object) -> object:
+    """The line behaviour with an extension (its file gives generations: so it has none)."""
+    return line_behaviour(**{"extend": {"patience": 3, "most": 20}, **learning})
+
+
+def test_a_file_without_a_budget_is_extended_and_one_with_a_budget_is_exact() -> None:
+    assert load_behaviour(BEHAVIOURS / "ballchase.yaml").learning.extend == ExtendConfig()
+    assert line_behaviour().learning.extend is None  # its file gives generations: 6
+    paper = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                              {"protocol": "paper"})
+    assert paper.learning.extend is None and paper.learning.generations == 30
+    with pytest.raises(SpecError, match="leave one of them out"):
+        line_behaviour(protocol="paper", extend={"patience": 2})
+
+
+def test_an_extended_run_goes_on_while_it_improves_and_ends_after_its_patience() -> None:
+    learner = make_learner(extended(generations=2), LineEnv())
+    history = train(learner)
+    extension = learner.extension
+    assert extension.enabled and len(history) > 2  # went on past its 2 generations
+    last = history[-1].generation
+    # it ended `patience` generations after the last improvement, or at `most`
+    assert last + 1 == min(20, extension.improved_at + 1 + 3)
+    assert learner.planned_generations() == last + 1
+
+
+def test_an_extended_run_never_passes_its_most() -> None:
+    learner = make_learner(extended(generations=2, extend={"patience": 50, "most": 5}),
+                           LineEnv())
+    assert len(train(learner)) == 5
+
+
+def test_without_extend_a_run_has_exactly_its_generations() -> None:
+    learner = make_learner(line_behaviour(generations=4), LineEnv())
+    assert len(train(learner)) == 4 and not learner.extension.enabled
+
+
+def test_an_extended_run_resumes_bit_for_bit() -> None:
+    behaviour = extended(generations=2)
+    whole = make_learner(behaviour, LineEnv())
+    train(whole)
+    state = json.loads(json.dumps(whole.state_dict()))
+
+    class StopAt(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            return metrics.generation < 3
+
+    first = make_learner(behaviour, LineEnv())
+    train(first, [StopAt()])
+    second = make_learner(behaviour, LineEnv())
+    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
+    train(second)
+    assert second.state_dict() == {**state, "elapsed": second.state_dict()["elapsed"]}
+
+
+def test_a_damaged_extension_record_is_a_clear_error() -> None:
+    learner = make_learner(extended(generations=2), LineEnv())
+    train(learner)
+    state = json.loads(json.dumps(learner.state_dict()))
+    state["selection"]["extension"]["improved_at"] = -7
+    with pytest.raises(LearnError, match="extension record is damaged"):
+        make_learner(extended(generations=2), LineEnv()).load_state_dict(state)
+    del state["selection"]["extension"]["best_seen"]
+    with pytest.raises(LearnError, match="selection record is damaged"):
+        make_learner(extended(generations=2), LineEnv()).load_state_dict(state)
+
+
+def test_a_checkpoint_without_an_extension_continues_without_one() -> None:
+    # a run of a version without extensions ends at its generations, as it would have
+    learner = make_learner(extended(generations=2), LineEnv())
+    train(learner)
+    state = json.loads(json.dumps(learner.state_dict()))
+    del state["selection"]["extension"]
+    again = make_learner(extended(generations=2), LineEnv())
+    again.load_state_dict(state)
+    assert not again.extension.enabled and again.planned_generations() == 2
+
+
+@given(rules=st.integers(0, 500), commands=st.integers(1, 20), least=st.integers(1, 200))
+def test_the_bound_from_the_problem_grows_with_it_and_leaves_room(rules: int, commands: int,
+                                                                   least: int) -> None:
+    most = most_generations(rules, commands, least)
+    assert most >= 2 * least and (most % 30 == 0 or most == 2 * least)
+    assert most_generations(rules + 30, commands, least) >= most
+
+
+@given(least=st.integers(1, 50), most=st.integers(1, 80), patience=st.integers(1, 20),
+       improved=st.integers(-1, 100))
+def test_the_planned_generations_stay_within_least_and_most(least: int, most: int,
+                                                            patience: int,
+                                                            improved: int) -> None:
+    extension = Extension(ExtendConfig(patience=patience), least, most)
+    extension.improved_at = improved
+    assert least <= extension.planned() <= max(least, most)
+
+
+def test_resuming_a_run_directory_keeps_its_extension(tmp_path: Path) -> None:
+    tiny = {"population": 4, "selection.candidates": 2, "selection.episodes": 3,
+            "selection.confirmation": 0, "extend.most": 4}
+    path = BEHAVIOURS / "ballchase.yaml"
+    training = start_run(path, tiny, tmp_path / "run")
+    summary = training.train()
+    assert summary.generations == 30  # a most below generations: exactly generations
+    recorded = training.run.behaviour.learning.extend
+    assert recorded is not None and recorded.most == 4
+    # the same file and options resume the same run; the budget is the run's own
+    resumed = resume_run(tmp_path / "run", path, tiny)
+    try:
+        assert resumed.run.behaviour.learning.extend == recorded
+    finally:
+        resumed.close()
