@@ -72,6 +72,10 @@ class Learner(ABC):
     fuzzy_q: RuleStrengths | None = None
     #: How the hall of fame ranks candidates (see :class:`ModelSelection`).
     rank_by: ClassVar[str] = "fitness"
+    #: Whether the learner can start a fresh attempt (:meth:`advance` then draws a new
+    #: population), so that an extended run spends its room on them
+    #: (:mod:`~flctool.learners.extension`).
+    fresh_attempts: ClassVar[bool] = False
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         self.behaviour = behaviour
@@ -118,7 +122,7 @@ class Learner(ABC):
         most = (extend.most if extend is not None and extend.most is not None else
                 most_generations(len(behaviour.missing_rules()), self.controller.n_commands,
                                  config.generations))
-        self.extension = Extension(extend, config.generations, most)
+        self.extension = Extension(extend, config.generations, most, self.fresh_attempts)
         self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
                              reserve=self.episodes_at_end)
         check_target(behaviour, env)
@@ -336,7 +340,8 @@ class Learner(ABC):
         record = {**self.selection.record(), "usage": self.usage.to_dict(),
                   "stop_reason": self.stop_reason,
                   "confirmation": self.confirmation.record(),
-                  "baseline": self.baseline_check.record()}
+                  "baseline": self.baseline_check.record(),
+                  "extension": self.extension.record()}
         genes = self.selected_sets()
         if self.codec is not None and genes is not None:
             record["sets"] = self.sets_record(genes)

@@ -19,7 +19,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Protocol
 
-from flctool.behaviour.learning import LearningConfig, StopConfig
+from flctool.behaviour.learning import GeneticConfig, LearningConfig, StopConfig
 from flctool.learners.confirmation import ConfirmedRun
 from flctool.learners.metrics import GenerationResult, Usage
 from flctool.learners.run_callback import RunCallback
@@ -134,6 +134,8 @@ class BudgetPlan:
     #: With ``learning.extend``: (the most generations, the patience); None: exactly
     #: ``generations``.
     extension: tuple[int, int] | None = None
+    #: Whether an extended run's room goes to fresh attempts (the genetic learners).
+    attempts: bool = False
 
     @property
     def most(self) -> int:
@@ -153,10 +155,12 @@ class BudgetPlan:
         generations = _count(s["generations"].value, "generation")
         if self.extension is not None:
             most, patience = self.extension
-            generations = (f"{s['generations'].value} to {most} generations (on past "
-                           f"{s['generations'].value} until {patience} pass without a better "
-                           f"selected controller; {most} from the problem's size unless "
-                           f"extend.most is given)")
+            least = s["generations"].value
+            fresh = (f", then fresh attempts of {least} while they fit" if self.attempts
+                     else "")
+            generations = (f"{least} to {most} generations (on past {least} until {patience} "
+                           f"pass without a better selected controller{fresh}; {most} from "
+                           f"the problem's size unless extend.most is given)")
             source = source.replace("the paper's protocol: the file gives none of them",
                                     "the file gives none of them")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
@@ -248,7 +252,8 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
                       generations * config.population * config.trials, most_selection,
                       confirming,
                       baseline_episodes(commands, baselines, confirming) if confirming >= 2
-                      else 0, config.stop.episodes, extension)
+                      else 0, config.stop.episodes, extension,
+                      isinstance(config, GeneticConfig))
 
 
 def describe_budget(behaviour: Behaviour, baselines: int = 0) -> str:

@@ -295,7 +295,8 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
         extension = state.get("extension")
         if extension is not None:
             extension = {"best_seen": float(extension["best_seen"]),
-                         "improved_at": int(extension["improved_at"])}
+                         "improved_at": int(extension["improved_at"]),
+                         "starts": [int(g) for g in extension.get("starts", [0])]}
     except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
         raise damaged(f"'s selection record is damaged ({exc!r})") from None
     for candidate in [*hall, *([best] if best else [])]:
@@ -322,8 +323,10 @@ def _selection(state: Any, expected: Expected) -> SelectionState | None:
     if not isinstance(racing, bool):
         raise damaged("'s selection record is damaged (racing is not true or false)")
     if extension is not None and (math.isnan(extension["best_seen"])
-                                  or extension["improved_at"] < -1):
-        raise damaged("'s extension record is damaged (NaN, or a generation before the "
-                      "first)")
+                                  or extension["improved_at"] < -1
+                                  or not extension["starts"] or extension["starts"][0] != 0
+                                  or extension["starts"] != sorted(set(extension["starts"]))):
+        raise damaged("'s extension record is damaged (NaN, a generation before the first, "
+                      "or attempts out of order)")
     return SelectionState(hall, best, usage, stop_reason, finalized, validated, confirmations,
                           given, verdict, racing, race, extension)

@@ -21,6 +21,9 @@ every operator (:meth:`~flctool.learners.base.Learner.keep_fixed`). With ``learn
 each controller also carries a set genome (``set_genes``), bred from the same parents by the
 set operators of :mod:`flctool.learners.set_genes`, and acts with its own sets.
 
+**Fresh attempts** (an extended run's room, :mod:`~flctool.learners.extension`) start the
+whole population, set genes and q table anew; the run's hall of fame carries on.
+
 **Restarts** answer premature convergence: when the run's selected controller (the best
 validated one; without selection, the best training fitness) has not improved for
 ``restart_after`` generations, every individual but the elites is drawn afresh after
@@ -106,6 +109,7 @@ class GeneticLearner(Learner):
     operator_set: ClassVar[OperatorSet]
     config: GeneticConfig
     fuzzy_q: FuzzyQ | None
+    fresh_attempts: ClassVar[bool] = True
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
@@ -156,6 +160,9 @@ class GeneticLearner(Learner):
         return GenerationResult(self.fitness, seeds.size, steps)
 
     def advance(self) -> None:
+        if self.extension.begins_attempt(self.generation + 1):
+            self._fresh_attempt()
+            return
         stalled = self._stalled()
         # the greedy individual starts from the last generation's best, taken before breeding
         leader = int(np.argmax(self.fitness))
@@ -175,6 +182,20 @@ class GeneticLearner(Learner):
                 self.set_genes[-1] = leader_genes
         # Given rules are fixed: whatever crossover and mutation did to them is undone.
         self.population = self.keep_fixed(population)
+
+    def _fresh_attempt(self) -> None:
+        """Start the run afresh (:mod:`~flctool.learners.extension`): a new random
+        population, new set genes and, with rule strengths, a new q table; the run's hall of
+        fame, validations and budget carry on."""
+        config = self.config
+        self.population = self.initial_population()
+        if self.set_genes is not None and self.codec is not None and config.sets is not None:
+            self.set_genes = initial_set_genes(self.rngs["ga"], config.population,
+                                               self.codec.size, config.sets.sigma)
+        q = getattr(config, "q", None)
+        if self.fuzzy_q is not None and isinstance(q, QConfig):
+            self.fuzzy_q = new_fuzzy_q(q, self.controller.n_rules, self.controller.n_commands)
+        self.stalled_for = 0
 
     def _restart(self, population: IntArray) -> None:
         """Redraw every individual of ``population`` (P, M) but the elites, in place (and

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 
@@ -36,14 +37,41 @@ def test_a_file_without_a_budget_is_extended_and_one_with_a_budget_is_exact() ->
 
 
 def test_an_extended_run_goes_on_while_it_improves_and_ends_after_its_patience() -> None:
-    learner = make_learner(extended(generations=2), LineEnv())
+    # fuzzy_q cannot start afresh: one attempt, extended while it improves
+    learner = make_learner(extended(generations=2, learner="fuzzy_q"), LineEnv())
     history = train(learner)
     extension = learner.extension
-    assert extension.enabled and len(history) > 2  # went on past its 2 generations
+    assert extension.enabled and extension.starts == [0]
     last = history[-1].generation
-    # it ended `patience` generations after the last improvement, or at `most`
-    assert last + 1 == min(20, extension.improved_at + 1 + 3)
+    # it ended `patience` generations after the last improvement (at least at 2), or at most
+    assert last + 1 == min(20, max(2, extension.improved_at + 1 + 3))
     assert learner.planned_generations() == last + 1
+
+
+@pytest.mark.parametrize("name", ["pitt", "hybrid"])
+def test_the_room_left_goes_to_fresh_attempts(name: str) -> None:
+    learner = make_learner(extended(generations=3, learner=name), LineEnv())
+    seen: dict[int, list[list[int]]] = {}
+
+    class Watch(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            assert self.learner is not None
+            seen[metrics.generation] = self.learner.population.tolist()
+            return True
+
+    history = train(learner, [Watch()])
+    starts = learner.extension.starts
+    assert len(starts) >= 2 and starts[0] == 0
+    last = history[-1].generation
+    # the run ends when no fresh attempt of 3 generations fits in most (20), or at most
+    assert last + 1 == 20 or last + 1 + 3 > 20
+    assert all(b - a >= 3 for a, b in itertools.pairwise(starts))
+    # an attempt's first generation is drawn afresh: no elite carried over from before
+    first = starts[1]
+    before = {tuple(row) for row in seen[first - 1]}
+    assert not {tuple(row) for row in seen[first]} <= before
+    record = learner.selection_record()["extension"]
+    assert record == {"attempts": starts, "most": 20, "patience": 3}
 
 
 def test_an_extended_run_never_passes_its_most() -> None:
