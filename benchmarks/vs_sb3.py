@@ -4,6 +4,13 @@
     python benchmarks/vs_sb3.py sb3 --seeds 5 --json vs_sb3_sb3.json
     python benchmarks/vs_sb3.py flctool --seeds 5 --json vs_sb3_flctool.json
     python benchmarks/vs_sb3.py table vs_sb3_sb3.json vs_sb3_flctool.json
+    python benchmarks/vs_sb3.py sb3 --tasks mountaincar --algos dqn --only-seeds 4 \
+        --max-steps 400000 --max-cpu 300 --json part.json --merge benchmarks/vs_sb3.json
+
+``--tasks``, ``--algos`` and ``--only-seeds`` run a part; ``--merge JSON`` (or ``merge JSON
+PART...`` for a part already run) adds a part's runs to a combined file such as
+``benchmarks/vs_sb3.json``, with its command line, replacing any run of the same task,
+method and seed. Merging computes nothing: the records are the part's, as written.
 
 Tasks (``TASKS``): CartPole-v1, Acrobot-v1 and MountainCar-v0 (Gymnasium), flctool's
 ballchase simulator and one pitch-world behaviour (face_goal), each with a threshold on the
@@ -40,6 +47,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import statistics
 import sys
 import tempfile
@@ -371,17 +379,44 @@ def write_results(args: argparse.Namespace, records: list[dict[str, Any]],
                   skipped: list[str]) -> None:
     args.json.write_text(json.dumps({
         "benchmark": "vs_sb3", "side": args.side, "zoo_commit": ZOO_COMMIT,
-        "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "argv": sys.argv[1:],
+        "started": args.started, "when": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "load_average": [round(x, 2) for x in os.getloadavg()], "argv": sys.argv[1:],
         "runs": records, "not_started": skipped}, indent=1) + "\n")
+
+
+def merge(combined: Path, parts: list[Path], note: str | None = None) -> None:
+    """Add each part file's runs to ``combined`` (``benchmarks/vs_sb3.json``'s layout: its
+    ``parts`` list each process's command line, and its ``runs`` are the table's), replacing
+    a run of the same task, method and seed and the entry of a part of the same file name."""
+    data = json.loads(combined.read_text())
+    for path in parts:
+        part = json.loads(path.read_text())
+        keys = {(r["task"], r["method"], r["seed"]) for r in part["runs"]}
+        data["runs"] = [r for r in data["runs"]
+                        if (r["task"], r["method"], r["seed"]) not in keys] + part["runs"]
+        entry = {"file": path.name, "side": part["side"], "argv": part["argv"],
+                 "when": part["when"], "runs": len(part["runs"]),
+                 "not_started": part["not_started"], "in_the_table": True}
+        for key in ("started", "load_average"):
+            if key in part:
+                entry[key] = part[key]
+        if note:
+            entry["note"] = note
+        data["parts"] = [p for p in data["parts"] if p["file"] != path.name] + [entry]
+    combined.write_text(json.dumps(data, indent=1) + "\n")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("side", choices=("sb3", "flctool", "table"))
-    parser.add_argument("files", nargs="*", type=Path, help="table: the JSON files to show")
+    parser.add_argument("side", choices=("sb3", "flctool", "table", "merge"))
+    parser.add_argument("files", nargs="*", type=Path,
+                        help="table: the JSON files to show; merge: the combined file, then "
+                             "the part files to add to it")
     parser.add_argument("--tasks", default=",".join(TASKS))
     parser.add_argument("--algos", default="ppo,dqn")
-    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--seeds", type=int, default=5, help="seeds 0 to SEEDS - 1")
+    parser.add_argument("--only-seeds", metavar="K,...",
+                        help="these seeds instead of --seeds' (e.g. 4)")
     parser.add_argument("--max-steps", type=int, default=1_000_000,
                         help="SB3: at most this many training steps (the zoo's budget "
                              "otherwise)")
@@ -391,11 +426,23 @@ def main() -> None:
     parser.add_argument("--until", metavar="HH:MM",
                         help="start no new run after this UTC time today (runs not started "
                              "are listed as skipped)")
+    parser.add_argument("--merge", type=Path, metavar="JSON",
+                        help="after each run, add this process's runs to this combined file")
+    parser.add_argument("--note", help="merge: a note kept with the parts' entries")
     args = parser.parse_args()
+    args.started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
     if args.side == "table":
         records = [r for f in args.files for r in json.loads(f.read_text())["runs"]]
         print(table(records))
         return
+    if args.side == "merge":
+        if len(args.files) < 2:
+            parser.error("merge: the combined file, then at least one part file")
+        merge(args.files[0], args.files[1:], args.note)
+        print(table(json.loads(args.files[0].read_text())["runs"]))
+        return
+    seeds = (range(args.seeds) if args.only_seeds is None
+             else [int(k) for k in args.only_seeds.split(",")])
     deadline = math.inf
     if args.until:
         hours, minutes = (int(part) for part in args.until.split(":"))
@@ -405,7 +452,7 @@ def main() -> None:
     for name in args.tasks.split(","):
         task = TASKS[name]
         for algo in args.algos.split(",") if args.side == "sb3" else ["file's learner"]:
-            for seed in range(args.seeds):
+            for seed in seeds:
                 if time.time() > deadline:
                     skipped.append(f"{name} {algo} seed {seed}")
                     continue
@@ -414,7 +461,11 @@ def main() -> None:
                 records.append(record)
                 print(json.dumps(record), flush=True)
                 write_results(args, records, skipped)
+                if args.merge:
+                    merge(args.merge, [args.json], args.note)
     write_results(args, records, skipped)
+    if args.merge:
+        merge(args.merge, [args.json], args.note)
     if skipped:
         print(f"not started (past --until {args.until}): {', '.join(skipped)}")
     print(table(records))
