@@ -1,6 +1,7 @@
 """How many of the example controllers that other toolchains ship flctool imports.
 
-    python benchmarks/interop_examples.py DIR [DIR ...] [--convert-mamdani] [--list]
+    python benchmarks/interop_examples.py DIR [DIR ...] [--convert-mamdani] [--convert-linear]
+        [--list]
 
 Walks each folder for ``.fll``, ``.fis`` and ``.fcl`` files and imports each one in process
 (one behaviour per output), then counts, per folder and in total:
@@ -8,9 +9,12 @@ Walks each folder for ``.fll``, ``.fis`` and ``.fcl`` files and imports each one
 - **exact**: imported, and the controller computes what the file says;
 - **approximated**: imported only with ``--convert-mamdani`` (a Mamdani FIS, FLL or FCL
   whose output sets are replaced by singletons at their centroids, its rules rewritten where
-  flctool's grid has none like them), with the largest deviation the import measures and
-  states, and whether fuzzylite 6's own output stays within it (1 % and 1e-12 allowed: the
-  bound is measured on other states);
+  flctool's grid has none like them) or ``--convert-linear`` (a first-order Takagi-Sugeno
+  one whose linear terms are replaced by constants fitted per rule: the import's
+  ``--linear-singletons``), with the largest deviation the import measures and states, and
+  whether fuzzylite 6's own output stays within it (1 % and 1e-12 allowed: the bound is
+  measured on other states); the quartiles of the stated deviations (as a share of the
+  output range) close the summary;
 - **incomplete**: imported, but its rules leave combinations of sets without a command, so
   the controller is not deployable (it can be learned) and cannot be compared;
 - **refused, clear**: refused with one of flctool's errors that names the file and a line,
@@ -90,12 +94,12 @@ def difference(path: Path, behaviours: list[Behaviour]) -> float | None:
 
 def stated(report: str) -> float:
     """The largest deviation the conversion reports (over every output)."""
-    found = [float(m) for m in re.findall(r"from the Mamdani output .*? is ([0-9.e+-]+)",
-                                          report)]
+    found = [float(m) for m in re.findall(
+        r"from the (?:Mamdani|Takagi-Sugeno) output .*? is ([0-9.e+-]+)", report)]
     return max(found, default=float("nan"))
 
 
-def outcome(path: Path, convert: bool) -> tuple[str, str]:
+def outcome(path: Path, convert: dict[str, bool]) -> tuple[str, str]:
     """(exact | approximated | incomplete | clear | unclear, message) for one file."""
     importer = IMPORTERS.get(path.suffix[1:].lower())()
     try:
@@ -107,8 +111,8 @@ def outcome(path: Path, convert: bool) -> tuple[str, str]:
     else:
         return measured(path, behaviours, "exact", "")
     suffix = path.suffix.lower()
-    if convert:
-        importer = IMPORTERS.get(suffix[1:])(mamdani_singletons=True)  # type: ignore[call-arg]
+    if any(convert.values()):
+        importer = IMPORTERS.get(suffix[1:])(**convert)  # type: ignore[call-arg]
         try:
             behaviours = importer.from_file_all(path)
         except FlcError as error:
@@ -156,6 +160,9 @@ def main() -> None:
     parser.add_argument("folders", nargs="+", type=Path)
     parser.add_argument("--convert-mamdani", action="store_true",
                         help="count files that import with Mamdani outputs as singletons")
+    parser.add_argument("--convert-linear", action="store_true",
+                        help="count files that import with first-order Takagi-Sugeno outputs "
+                        "as constants fitted per rule")
     parser.add_argument("--list", action="store_true", help="print every file's outcome")
     args = parser.parse_args()
     kinds = ("exact", "approximated", "incomplete", "clear", "unclear")
@@ -168,7 +175,8 @@ def main() -> None:
         counts: Counter[str] = Counter()
         files = sorted(p for p in folder.rglob("*") if p.suffix.lower() in SUFFIXES)
         for path in files:
-            kind, message = outcome(path, args.convert_mamdani)
+            kind, message = outcome(path, {"mamdani_singletons": args.convert_mamdani,
+                                           "linear_singletons": args.convert_linear})
             counts[kind] += 1
             content = path.read_bytes()
             if content not in distinct:

@@ -122,19 +122,37 @@ def written_activations(behaviour: Behaviour, output: MamdaniOutput, names: list
     """(S, R) each written rule's activation, as fuzzylite and MATLAB compute it: its weight
     times the minimum (eq. 2) or product of its conditions' memberships (1 - mu for NOT), or
     their maximum for an OR rule; and (R,) the index in ``names`` of each rule's command."""
+    alpha = rule_activations(behaviour, output.rules, output.conjunction, states)
+    return alpha, np.array([names.index(c) for _, _, c, _ in output.rules])
+
+
+def rule_activations(behaviour: Behaviour, rules: Sequence[OriginalRule], conjunction: str,
+                     states: np.ndarray) -> np.ndarray:
+    """(S, R) each rule's activation as written (see :func:`written_activations`), with the
+    conjunction ``conjunction`` (fuzzylite's name: Minimum or AlgebraicProduct)."""
     controller = compile_behaviour(behaviour)
     mus = controller.memberships(states)  # per input, (S, L_i)
     inputs = {name: (i, list(v.sets)) for i, (name, v) in enumerate(behaviour.inputs.items())}
-    combine = (np.multiply.reduce if output.conjunction == "AlgebraicProduct"
+    combine = (np.multiply.reduce if conjunction == "AlgebraicProduct"
                else np.minimum.reduce)
-    alpha = np.empty((len(states), len(output.rules)))
-    for r, (conditions, disjunction, _, weight) in enumerate(output.rules):
+    alpha = np.empty((len(states), len(rules)))
+    for r, (conditions, disjunction, _, weight) in enumerate(rules):
         columns = [mus[inputs[n][0]][:, inputs[n][1].index(t)] for n, t, _ in conditions]
         columns = [1.0 - c if negated else c
                    for c, (_, _, negated) in zip(columns, conditions, strict=True)]
         alpha[:, r] = weight * (np.maximum.reduce(columns) if disjunction
                                 else combine(columns))
-    return alpha, np.array([names.index(c) for _, _, c, _ in output.rules])
+    return alpha
+
+
+def round_up(x: float) -> float:
+    """``x`` rounded up to 4 significant digits, as a report states a measured deviation
+    (never below it)."""
+    if not (math.isfinite(x) and x > 0):
+        return x
+    step = 10.0 ** (math.floor(math.log10(x)) - 3)
+    stated = math.ceil(x / step) * step
+    return stated if stated >= x else math.nextafter(stated, math.inf)
 
 
 @dataclass(frozen=True)
@@ -151,11 +169,7 @@ class Conversion:
     def stated(self) -> float:
         """The deviation rounded up to 4 significant digits, as the report states it (never
         below the measured one)."""
-        x = self.deviation
-        if not (math.isfinite(x) and x > 0):
-            return x
-        step = 10.0 ** (math.floor(math.log10(x)) - 3)
-        return math.ceil(x / step) * step
+        return round_up(self.deviation)
 
     def report(self) -> str:
         stated = self.stated()
@@ -170,10 +184,10 @@ class Conversion:
                 f"{share}, measured on {self.states} states")
 
 
-def measurement_states(behaviour: Behaviour) -> np.ndarray:
-    """The states the deviation is measured on: random ones in the ranges (seed 0), every
+def measurement_states(behaviour: Behaviour, seed: int = 0) -> np.ndarray:
+    """The states the deviation is measured on: random ones in the ranges (``seed``), every
     range end and set parameter inside a range, and a grid across the ranges."""
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(seed)
     columns = []
     for variable in behaviour.inputs.values():
         lo, hi = variable.range
@@ -216,10 +230,13 @@ def mamdani_report(behaviour: Behaviour, output: MamdaniOutput) -> str:
 
 
 def import_notes(file: str, behaviours: Sequence[Behaviour],
-                 conversions: Sequence[tuple[ImportedController, MamdaniOutput] | None]) -> str:
+                 conversions: Sequence[tuple[ImportedController, MamdaniOutput] | str | None]
+                 ) -> str:
     """What importing ``file`` did, for the user: how a file of several outputs was split,
     then, for each output read as Mamdani sets (its controller as read and its sets; None
-    for a Sugeno output), what converting it to singletons changed."""
+    for a Sugeno output), what converting it to singletons changed; for an output whose
+    conversion was already measured (a first-order one, :mod:`flctool.export.linear`), its
+    note as given."""
     notes = []
     if len(behaviours) > 1:
         notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
@@ -227,7 +244,9 @@ def import_notes(file: str, behaviours: Sequence[Behaviour],
                      + "); each keeps the rules that conclude on its output, which computes "
                      "it exactly as the file does")
     for behaviour, conversion in zip(behaviours, conversions, strict=True):
-        if conversion is not None:
+        if isinstance(conversion, str):
+            notes.append(f"{file}: output '{behaviour.output.name}': {conversion}")
+        elif conversion is not None:
             controller, output = conversion
             written = dataclasses.replace(output, **as_written(controller))
             notes.append(f"{file}: output '{behaviour.output.name}': "
