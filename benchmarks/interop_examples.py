@@ -130,16 +130,19 @@ def measured(path: Path, behaviours: list[Behaviour], kind: str, report: str
     if not all(b.is_deployable for b in behaviours):
         return "incomplete", ("imported, but the rules do not give every combination of sets "
                               "a command, so the controller is not deployable")
+    unevaluated = ""
     try:
         gap = difference(path, behaviours)
     except (subprocess.SubprocessError, ValueError) as error:
-        return kind, f"fuzzylite 6 did not evaluate the file: {error}"
-    text = "" if gap is None else f"max |fuzzylite 6 - flctool| = {gap:.3g}"
+        gap, unevaluated = None, f"fuzzylite 6 did not evaluate the file: {error}"
+    text = unevaluated or ("" if gap is None else f"max |fuzzylite 6 - flctool| = {gap:.3g}")
     if kind == "approximated":
         bound = stated(report)
         # (plus 1e-12: fuzzylite rounds differently, and some conversions state ~1e-16)
-        within = gap is None or gap <= 1.01 * bound + 1e-12
-        text += f"; stated {bound:.4g}; within it: {within}"
+        within = "not checked" if gap is None else gap <= 1.01 * bound + 1e-12
+        shares = [float(s) for s in re.findall(r"\(([0-9.]+)% of the output range\)", report)]
+        share = f" ({max(shares):.2f}% of the output range)" if shares else ""
+        text += f"; stated {bound:.4g}{share}; within it: {within}"
     return kind, text
 
 
@@ -171,6 +174,8 @@ def main() -> None:
     reasons: Counter[str] = Counter()  # the first construct each refused file lists
     every: Counter[str] = Counter()  # every construct each refused file lists
     alone: Counter[str] = Counter()  # the constructs that are a refused file's only one
+    shares: dict[bytes, float] = {}  # an approximated file's stated share of its range
+    by_folder: dict[Path, list[float]] = {}
     for folder in args.folders:
         counts: Counter[str] = Counter()
         files = sorted(p for p in folder.rglob("*") if p.suffix.lower() in SUFFIXES)
@@ -179,6 +184,10 @@ def main() -> None:
                                            "linear_singletons": args.convert_linear})
             counts[kind] += 1
             content = path.read_bytes()
+            share = re.search(r"stated \S+ \(([0-9.]+)% of the output range\)", message)
+            if kind == "approximated" and share:
+                shares.setdefault(content, float(share.group(1)))
+                by_folder.setdefault(folder, []).append(float(share.group(1)))
             if content not in distinct:
                 distinct[content] = kind
                 if kind in ("clear", "unclear"):
@@ -196,6 +205,16 @@ def main() -> None:
     print(f"total: {sum(total.values())} files; " + ", ".join(f"{k} {total[k]}" for k in kinds))
     unique = Counter(distinct.values())
     print(f"distinct: {len(distinct)} files; " + ", ".join(f"{k} {unique[k]}" for k in kinds))
+    imported = unique["exact"] + unique["approximated"]
+    print(f"imported (exact + approximated): {imported} of {len(distinct)} distinct files "
+          f"({imported / max(1, len(distinct)):.1%})")
+    print("stated difference as a share of the output range, quartiles (min / 25 % / median "
+          "/ 75 % / max), of the approximated files:")
+    for name, values in [*((str(f), v) for f, v in by_folder.items()),
+                         ("distinct", list(shares.values()))]:
+        if values:
+            q = np.percentile(values, [0, 25, 50, 75, 100])
+            print(f"  {name}: {len(values)} files; " + " / ".join(f"{v:.2f} %" for v in q))
     for title, table in (("refusals of distinct files by their first construct", reasons),
                          ("refused distinct files listing each construct", every),
                          ("refused distinct files whose only construct it is", alone)):

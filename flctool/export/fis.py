@@ -480,16 +480,21 @@ class _FisReader:
         """The Mamdani settings that the conversion's measurement computes."""
         expected = {"ImpMethod": ("min", "prod"), "AggMethod": ("max", "probor"),
                     "DefuzzMethod": ("centroid",), "NumOutputs": ("1",)}
+        found = []  # each reported with the file's other refusals (build_behaviour)
         for key, allowed in expected.items():
             value, at = self.system.get(key, (allowed[0], line))
             if value.lower() not in allowed:
-                raise self.fail(at, f"{key}='{value}': the conversion of a Mamdani system "
-                                f"measures its error against {key}="
-                                f"{' or '.join(repr(a) for a in allowed)}",
-                                f"use {key}='{allowed[0]}' (or convert the system by hand)")
+                found.append(self.fail(at, f"{key}='{value}': the conversion of a Mamdani "
+                                       f"system measures its error against {key}="
+                                       f"{' or '.join(repr(a) for a in allowed)}",
+                                       f"use {key}='{allowed[0]}' (or convert the system by "
+                                       "hand)"))
         if len(self.output_sets) != len(self.result.commands):
-            raise self.fail(line, "a Mamdani system with constant or linear output MFs",
-                            "make every output MF a set (trimf, trapmf, gaussmf, ...)")
+            found.append(self.fail(line, "a Mamdani system with constant or linear output MFs",
+                                   "make every output MF a set (trimf, trapmf, gaussmf, ...)"))
+        if found:
+            self.result.pending += found
+            return
         # the singletons of other shapes are their centroids over the output range
         for command in self.result.commands:
             command.value = self.mamdani_output().singleton(identifier(command.name))

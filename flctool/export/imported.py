@@ -271,6 +271,9 @@ class ImportedController:
     #: A first-order output being converted: the output terms as the file gives them
     #: (renamed), before :func:`_own_commands` gave rules commands of their own.
     terms: list[ImportedCommand] = field(default_factory=list)
+    #: What a conversion changed besides the rules and commands, for the user (the sets
+    #: :func:`_fill_gaps` added).
+    notes: list[str] = field(default_factory=list)
     #: A Takagi-Sugeno output that may be converted (``--linear-singletons``): it is, by
     #: :mod:`flctool.export.linear`, when it has a first-order term or a rule flctool's grid
     #: has none like (OR, NOT, a weight, an input left out), which is then expanded as a
@@ -522,6 +525,8 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     if found:
         raise refusals(file, found)
     _identifiers(imported)
+    if imported.expand_rules:
+        _fill_gaps(imported)
     rules = expanded_rules(imported) if imported.expand_rules else imported.rules
     linear = imported.convert_linear
     if linear:
@@ -613,6 +618,45 @@ def expanded_rules(imported: ImportedController) -> list[ImportedRule]:
     return _merge_conflicts(imported, result)
 
 
+def _fill_gaps(imported: ImportedController) -> None:
+    """A conversion (measured): over each stretch of an input's range that no set covers
+    (membership 0 in every set, which flctool's inputs may not have), add a set of
+    membership 1 there and 0 elsewhere, ``gap1``, ``gap2``, ... Where the file's rules fire
+    there (an OR rule's other condition, a rule that leaves the input out) the expanded rules
+    fire with the new set just so; where none does, the file has no output there and the
+    rules leave the new set's combinations without a command. Trapezoid inputs only (the
+    other shapes reach across the whole line)."""
+    from flctool.behaviour.checks import uncovered_gap
+    from flctool.behaviour.fuzzy import InputVariable
+
+    for variable in imported.inputs:
+        if any(s.shape for s in variable.sets) or not variable.sets:
+            continue
+        try:
+            quads = variable.resolved_quads(imported.file)
+            model = InputVariable(range=variable.resolved_range(), sets=dict(quads))
+        except (ExportError, ValueError):
+            continue  # refused as the file writes it, later
+        names = {s.name for s in variable.sets}
+        for _ in range(len(variable.sets) + 1):  # at most one gap between two sets
+            gap = uncovered_gap(model)
+            if gap is None or not gap[0] < gap[1]:
+                break
+            k = 1
+            while f"gap{k}" in names:
+                k += 1
+            name = f"gap{k}"
+            names.add(name)
+            a, b = gap
+            variable.sets.append(ImportedSet(name, (a, a, b, b), variable.line))
+            model = InputVariable(range=model.range, sets={**model.sets, name: (a, a, b, b)})
+            imported.notes.append(
+                f"input '{variable.name}': the values between {a:g} and {b:g} belong to no "
+                f"set; a set '{name}' [{a:g}, {a:g}, {b:g}, {b:g}] is added there, so that "
+                "the rules that fire there in the file (an OR rule's other condition, a rule "
+                "that leaves the input out) fire with it (part of the measured difference)")
+
+
 def _own_commands(imported: ImportedController, rules: list[ImportedRule]
                   ) -> list[ImportedRule]:
     """A first-order output being converted: each rule concluding a first-order term (or a
@@ -624,7 +668,8 @@ def _own_commands(imported: ImportedController, rules: list[ImportedRule]
     functions = {c.name: c.linear if c.linear is not None else (0.0,) * n + (c.value,)
                  for c in imported.terms}
     linear = {c.name for c in imported.terms if c.linear is not None}
-    free = {c: c in linear or any(part in linear for part in c.split("_or_"))
+    merged = set(imported.merged_commands)  # fitted too: the file gives them no value
+    free = {c: c in linear or c in merged or any(part in linear for part in c.split("_or_"))
             for c in {r.command for r in rules}}
 
     def function(command: str) -> tuple[float, ...]:
@@ -702,7 +747,7 @@ def as_written(imported: ImportedController) -> dict[str, Any]:
     rules = tuple((tuple((n, t, n in r.negated) for n, t in r.disjuncts or
                          r.antecedent.items()), bool(r.disjuncts), r.command, r.weight)
                   for r in imported.rules)
-    rewritten = bool(imported.merged_commands) or any(
+    rewritten = bool(imported.merged_commands or imported.notes) or any(
         r.disjuncts or r.negated or set(r.antecedent) != names or r.weight != 1.0
         for r in imported.rules)
     product = imported.conjunction is not None and imported.conjunction.product

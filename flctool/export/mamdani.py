@@ -248,6 +248,7 @@ def import_notes(file: str, behaviours: Sequence[Behaviour],
             notes.append(f"{file}: output '{behaviour.output.name}': {conversion}")
         elif conversion is not None:
             controller, output = conversion
+            notes += [f"{file}: {note}" for note in controller.notes]
             written = dataclasses.replace(output, **as_written(controller))
             notes.append(f"{file}: output '{behaviour.output.name}': "
                          + mamdani_report(behaviour, written))
