@@ -140,7 +140,8 @@ def measured(path: Path, behaviours: list[Behaviour], kind: str, report: str
         bound = stated(report)
         # (plus 1e-12: fuzzylite rounds differently, and some conversions state ~1e-16)
         within = "not checked" if gap is None else gap <= 1.01 * bound + 1e-12
-        shares = [float(s) for s in re.findall(r"\(([0-9.]+)% of the output range\)", report)]
+        shares = [float(s) for s in re.findall(r"\(([0-9.]+)% of the output(?: range|'s span)",
+                                                report)]
         share = f" ({max(shares):.2f}% of the output range)" if shares else ""
         text += f"; stated {bound:.4g}{share}; within it: {within}"
     return kind, text

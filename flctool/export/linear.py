@@ -13,6 +13,10 @@ constants whose largest difference is smallest. That largest difference, measure
 states and on :func:`~flctool.export.mamdani.measurement_states`' (the file's rules as
 written, with its conjunction, weights, OR and NOT), is reported, so the user decides whether
 the approximation is good enough. Constant terms stay exact.
+
+The same option rewrites a Takagi-Sugeno output's rules that flctool's grid has none like
+(OR, NOT, weights, inputs left out; :func:`flctool.export.imported.expanded_rules`), in a
+zero-order output too, and measures that the same way.
 """
 
 from __future__ import annotations
@@ -55,8 +59,8 @@ class LinearOutput:
 
 def linear_output(controller: ImportedController, output_range: tuple[float, float]
                   ) -> LinearOutput:
-    """The first-order output of ``controller`` (after :func:`build_behaviour`), with the
-    terms as the file gives them: its commands as read are in ``controller.rules``."""
+    """The Takagi-Sugeno output of ``controller`` (after :func:`build_behaviour`): the terms
+    as the file gives them (``controller.terms``) and its rules as written."""
     n = len(controller.inputs)
     terms = {c.name: c.linear if c.linear is not None and len(c.linear) == n + 1
              else (0.0,) * n + (c.value,) for c in controller.terms}
@@ -149,8 +153,8 @@ def fit(weights: np.ndarray, target: np.ndarray, start: np.ndarray) -> np.ndarra
 @dataclass(frozen=True)
 class LinearConversion:
     """What converting a first-order output changed, measured: ``deviation`` is the largest
-    |converted - first-order| output over ``states`` states; ``span`` the output range's
-    width."""
+    |converted - first-order| output over ``states`` states; ``span`` the width of the file's
+    output over them."""
 
     deviation: float
     states: int
@@ -166,7 +170,8 @@ class LinearConversion:
 
     def report(self) -> str:
         stated = self.stated()
-        share = f" ({stated / self.span:.2%} of the output range)" if self.span > 0 else ""
+        share = (f" ({stated / self.span:.2%} of the output's span on those states)"
+                 if self.span > 0 else "")
         rules = ("rules rewritten as flctool's (OR, NOT and rules that leave out an input "
                  "expanded over the sets, a combination given several terms given a constant "
                  "of its own, weights dropped; measured against the rules as written)")
@@ -219,11 +224,12 @@ def convert(behaviour: Behaviour, output: LinearOutput, free: Mapping[str, tuple
         fit_states = np.vstack([fit_states, states[len(checked):]])
     assert best is not None
     deviation, behaviour, states = best
+    # the share is of the span the file's output covers (a Takagi-Sugeno output is not held
+    # to its declared range: MATLAB's invkine1 declares [0, 1.5] and spans 20)
     want = first_order_outputs(behaviour, output, states)
     finite = np.isfinite(want)
-    lo, hi = output.range
-    if not lo < hi and finite.any():
-        lo, hi = float(np.min(want[finite])), float(np.max(want[finite]))
+    lo, hi = ((float(np.min(want[finite])), float(np.max(want[finite]))) if finite.any()
+              else output.range)
     linear = any(any(f[:-1]) for f in output.terms.values())
     conversion = LinearConversion(deviation, len(states), hi - lo, len(fitted),
                                   output.rewritten, linear)
