@@ -28,10 +28,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from flctool.behaviour import Behaviour
-from flctool.behaviour.shapes import set_row
 from flctool.compile import compile_behaviour
 from flctool.export.imported import ImportedController, OriginalRule, as_written
-from flctool.export.mamdani import measurement_states, round_up, rule_activations
+from flctool.export.mamdani import (
+    climbed,
+    grid_states,
+    measurement_states,
+    round_up,
+    rule_activations,
+)
 
 #: Rounds of Lawson's re-weighting after the least-squares fit (fewer for a large fit).
 ROUNDS = 40
@@ -236,42 +241,6 @@ def convert(behaviour: Behaviour, output: LinearOutput, free: Mapping[str, tuple
     return behaviour, conversion.report()
 
 
-#: The most states :func:`grid_states` gives.
-GRID_STATES = 20_000
-
-
-def grid_states(behaviour: Behaviour) -> np.ndarray:
-    """Every combination of each input's range ends and set parameters inside its range
-    (where the differences have their kinds), and of points evenly across it, as many as
-    GRID_STATES allows; none when the parameters alone exceed it."""
-    axes = []
-    for variable in behaviour.inputs.values():
-        lo, hi = variable.range
-        axes.append(sorted({lo, hi, *(x for q in variable.sets.values()
-                                      for x in set_row(q)[1] if lo <= x <= hi)}))
-    size = math.prod(len(a) for a in axes)
-    if size > GRID_STATES:
-        return np.empty((0, len(axes)))
-    extra = int((GRID_STATES / size) ** (1 / len(axes)))  # points added to each axis
-    for i, variable in enumerate(behaviour.inputs.values()):
-        if extra > 1:
-            axes[i] = sorted({*axes[i], *np.linspace(*variable.range, extra + 1)})
-    while math.prod(len(a) for a in axes) > GRID_STATES:  # (the union may add fewer)
-        longest = max(range(len(axes)), key=lambda k: len(axes[k]))
-        axes[longest] = axes[longest][::2] + ([axes[longest][-1]]
-                                             if len(axes[longest]) % 2 == 0 else [])
-    mesh = np.meshgrid(*[np.asarray(a, dtype=np.float64) for a in axes], indexing="ij")
-    return np.column_stack([m.ravel() for m in mesh])
-
-
-#: The hill climb towards the largest difference: from how many of the worst states, how
-#: many rounds, and how many steps around each per round.
-CLIMBERS, CLIMB_ROUNDS, CLIMB_STEPS = 32, 40, 32
-#: Climbers start from the worst of this many states, each at least APART (a share of each
-#: range) from the others.
-CANDIDATES, APART = 4_000, 0.1
-
-
 def differences(behaviour: Behaviour, output: LinearOutput
                 ) -> Callable[[np.ndarray], np.ndarray]:
     """|converted - Takagi-Sugeno| at given states (0 where no rule fires)."""
@@ -282,39 +251,6 @@ def differences(behaviour: Behaviour, output: LinearOutput
         return np.where(np.isfinite(gap), gap, 0.0)
 
     return difference
-
-
-def climbed(difference: Callable[[np.ndarray], np.ndarray], states: np.ndarray,
-            behaviour: Behaviour) -> np.ndarray:
-    """States where ``difference`` is larger than at ``states``, found by climbing from the
-    worst of them (random steps, shrinking, inside the ranges; seed 2): a sample's largest
-    difference falls short of the largest one between its states, more so with more
-    inputs."""
-    rng = np.random.default_rng(2)
-    ranges = np.array([v.range for v in behaviour.inputs.values()], dtype=np.float64)
-    gaps = difference(states)
-    # from the worst states that lie apart (each its own hill, not all on the highest one)
-    span = np.where(ranges[:, 1] > ranges[:, 0], ranges[:, 1] - ranges[:, 0], 1.0)
-    scaled = (states - ranges[:, 0]) / span
-    order: list[int] = []
-    for k in np.argsort(gaps)[::-1][:CANDIDATES]:
-        if all(np.max(np.abs(scaled[k] - scaled[j])) > APART for j in order):
-            order.append(int(k))
-            if len(order) == CLIMBERS:
-                break
-    points, best = states[order].copy(), gaps[order].copy()
-    width = (ranges[:, 1] - ranges[:, 0]) / 8.0
-    n = len(points)
-    for _ in range(CLIMB_ROUNDS):
-        steps = points[:, None, :] + rng.normal(size=(n, CLIMB_STEPS, points.shape[1])) * width
-        steps = np.clip(steps, ranges[:, 0], ranges[:, 1])
-        found = difference(steps.reshape(-1, points.shape[1])).reshape(n, CLIMB_STEPS)
-        pick = np.argmax(found, axis=1)
-        better = found[np.arange(n), pick] > best
-        points[better] = steps[np.arange(n), pick][better]
-        best[better] = found[np.arange(n), pick][better]
-        width = width * 0.85
-    return np.asarray(points, dtype=np.float64)
 
 
 def with_commands(behaviour: Behaviour, values: Mapping[str, float]) -> Behaviour:
