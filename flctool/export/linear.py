@@ -40,6 +40,8 @@ from flctool.export.mamdani import (
 
 #: Rounds of Lawson's re-weighting after the least-squares fit (fewer for a large fit).
 ROUNDS = 40
+#: Rounds without a 0.1 % smaller largest difference after which the re-weighting stops.
+PATIENCE = 8
 #: The most multiply-adds the re-weighting spends (rows x constants^2, per round).
 BUDGET = 3e10
 #: Fits, each on the states where the last erred most too; the best is kept.
@@ -137,7 +139,7 @@ def fit(weights: np.ndarray, target: np.ndarray, start: np.ndarray) -> np.ndarra
     rows, k = weights.shape
     rounds = max(1, min(ROUNDS, int(BUDGET / max(1, rows * k * k))))
     w = np.full(rows, 1.0 / rows)
-    best, best_error = start, math.inf
+    best, best_error, stalled = start, math.inf, 0
     for _ in range(rounds + 1):
         root = np.sqrt(w)
         step = np.linalg.lstsq(weights * root[:, None], root * (target - weights @ start),
@@ -145,8 +147,11 @@ def fit(weights: np.ndarray, target: np.ndarray, start: np.ndarray) -> np.ndarra
         constants = start + step
         error = np.abs(weights @ constants - target)
         worst = float(error.max()) if rows else 0.0
+        stalled = 0 if worst < best_error * (1 - 1e-3) else stalled + 1
         if worst < best_error:
             best, best_error = constants, worst
+        if stalled >= PATIENCE:
+            break
         w = w * error
         total = w.sum()
         if not (total > 0 and math.isfinite(total)):
