@@ -1,6 +1,7 @@
 """How many of the example controllers that other toolchains ship flctool imports.
 
-    python benchmarks/interop_examples.py DIR [DIR ...] [--convert-mamdani] [--list]
+    python benchmarks/interop_examples.py DIR [DIR ...] [--convert-mamdani] [--convert-linear]
+        [--list]
 
 Walks each folder for ``.fll``, ``.fis`` and ``.fcl`` files and imports each one in process
 (one behaviour per output), then counts, per folder and in total:
@@ -8,9 +9,12 @@ Walks each folder for ``.fll``, ``.fis`` and ``.fcl`` files and imports each one
 - **exact**: imported, and the controller computes what the file says;
 - **approximated**: imported only with ``--convert-mamdani`` (a Mamdani FIS, FLL or FCL
   whose output sets are replaced by singletons at their centroids, its rules rewritten where
-  flctool's grid has none like them), with the largest deviation the import measures and
-  states, and whether fuzzylite 6's own output stays within it (1 % and 1e-12 allowed: the
-  bound is measured on other states);
+  flctool's grid has none like them) or ``--convert-linear`` (a first-order Takagi-Sugeno
+  one whose linear terms are replaced by constants fitted per rule: the import's
+  ``--linear-singletons``), with the largest deviation the import measures and states, and
+  whether fuzzylite 6's own output stays within it (1 % and 1e-12 allowed: the bound is
+  measured on other states); the quartiles of the stated deviations (as a share of the
+  output range) close the summary;
 - **incomplete**: imported, but its rules leave combinations of sets without a command, so
   the controller is not deployable (it can be learned) and cannot be compared;
 - **refused, clear**: refused with one of flctool's errors that names the file and a line,
@@ -90,12 +94,12 @@ def difference(path: Path, behaviours: list[Behaviour]) -> float | None:
 
 def stated(report: str) -> float:
     """The largest deviation the conversion reports (over every output)."""
-    found = [float(m) for m in re.findall(r"from the Mamdani output .*? is ([0-9.e+-]+)",
-                                          report)]
+    found = [float(m) for m in re.findall(
+        r"from the (?:Mamdani|Takagi-Sugeno) output .*? is ([0-9.e+-]+)", report)]
     return max(found, default=float("nan"))
 
 
-def outcome(path: Path, convert: bool) -> tuple[str, str]:
+def outcome(path: Path, convert: dict[str, bool]) -> tuple[str, str]:
     """(exact | approximated | incomplete | clear | unclear, message) for one file."""
     importer = IMPORTERS.get(path.suffix[1:].lower())()
     try:
@@ -107,8 +111,8 @@ def outcome(path: Path, convert: bool) -> tuple[str, str]:
     else:
         return measured(path, behaviours, "exact", "")
     suffix = path.suffix.lower()
-    if convert:
-        importer = IMPORTERS.get(suffix[1:])(mamdani_singletons=True)  # type: ignore[call-arg]
+    if any(convert.values()):
+        importer = IMPORTERS.get(suffix[1:])(**convert)  # type: ignore[call-arg]
         try:
             behaviours = importer.from_file_all(path)
         except FlcError as error:
@@ -126,16 +130,20 @@ def measured(path: Path, behaviours: list[Behaviour], kind: str, report: str
     if not all(b.is_deployable for b in behaviours):
         return "incomplete", ("imported, but the rules do not give every combination of sets "
                               "a command, so the controller is not deployable")
+    unevaluated = ""
     try:
         gap = difference(path, behaviours)
     except (subprocess.SubprocessError, ValueError) as error:
-        return kind, f"fuzzylite 6 did not evaluate the file: {error}"
-    text = "" if gap is None else f"max |fuzzylite 6 - flctool| = {gap:.3g}"
+        gap, unevaluated = None, f"fuzzylite 6 did not evaluate the file: {error}"
+    text = unevaluated or ("" if gap is None else f"max |fuzzylite 6 - flctool| = {gap:.3g}")
     if kind == "approximated":
         bound = stated(report)
         # (plus 1e-12: fuzzylite rounds differently, and some conversions state ~1e-16)
-        within = gap is None or gap <= 1.01 * bound + 1e-12
-        text += f"; stated {bound:.4g}; within it: {within}"
+        within = "not checked" if gap is None else gap <= 1.01 * bound + 1e-12
+        shares = [float(s) for s in re.findall(r"\(([0-9.]+)% of the output(?: range|'s span)",
+                                                report)]
+        share = f" ({max(shares):.2f}% of the output range)" if shares else ""
+        text += f"; stated {bound:.4g}{share}; within it: {within}"
     return kind, text
 
 
@@ -156,6 +164,9 @@ def main() -> None:
     parser.add_argument("folders", nargs="+", type=Path)
     parser.add_argument("--convert-mamdani", action="store_true",
                         help="count files that import with Mamdani outputs as singletons")
+    parser.add_argument("--convert-linear", action="store_true",
+                        help="count files that import with first-order Takagi-Sugeno outputs "
+                        "as constants fitted per rule")
     parser.add_argument("--list", action="store_true", help="print every file's outcome")
     args = parser.parse_args()
     kinds = ("exact", "approximated", "incomplete", "clear", "unclear")
@@ -164,13 +175,20 @@ def main() -> None:
     reasons: Counter[str] = Counter()  # the first construct each refused file lists
     every: Counter[str] = Counter()  # every construct each refused file lists
     alone: Counter[str] = Counter()  # the constructs that are a refused file's only one
+    shares: dict[bytes, float] = {}  # an approximated file's stated share of its range
+    by_folder: dict[Path, list[float]] = {}
     for folder in args.folders:
         counts: Counter[str] = Counter()
         files = sorted(p for p in folder.rglob("*") if p.suffix.lower() in SUFFIXES)
         for path in files:
-            kind, message = outcome(path, args.convert_mamdani)
+            kind, message = outcome(path, {"mamdani_singletons": args.convert_mamdani,
+                                           "linear_singletons": args.convert_linear})
             counts[kind] += 1
             content = path.read_bytes()
+            share = re.search(r"stated \S+ \(([0-9.]+)% of the output range\)", message)
+            if kind == "approximated" and share:
+                shares.setdefault(content, float(share.group(1)))
+                by_folder.setdefault(folder, []).append(float(share.group(1)))
             if content not in distinct:
                 distinct[content] = kind
                 if kind in ("clear", "unclear"):
@@ -188,6 +206,16 @@ def main() -> None:
     print(f"total: {sum(total.values())} files; " + ", ".join(f"{k} {total[k]}" for k in kinds))
     unique = Counter(distinct.values())
     print(f"distinct: {len(distinct)} files; " + ", ".join(f"{k} {unique[k]}" for k in kinds))
+    imported = unique["exact"] + unique["approximated"]
+    print(f"imported (exact + approximated): {imported} of {len(distinct)} distinct files "
+          f"({imported / max(1, len(distinct)):.1%})")
+    print("stated difference as a share of the output range, quartiles (min / 25 % / median "
+          "/ 75 % / max), of the approximated files:")
+    for name, values in [*((str(f), v) for f, v in by_folder.items()),
+                         ("distinct", list(shares.values()))]:
+        if values:
+            q = np.percentile(values, [0, 25, 50, 75, 100])
+            print(f"  {name}: {len(values)} files; " + " / ".join(f"{v:.2f} %" for v in q))
     for title, table in (("refusals of distinct files by their first construct", reasons),
                          ("refused distinct files listing each construct", every),
                          ("refused distinct files whose only construct it is", alone)):

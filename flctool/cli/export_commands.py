@@ -82,7 +82,8 @@ def export_controller(
 
 @app.command("import", epilog=example(
     "flctool import controller.fll -o behaviours/imported.yaml",
-    "flctool import legacy.txt --format fis"))
+    "flctool import legacy.txt --format fis",
+    "flctool import sugeno.fis --linear-singletons -o behaviours/sugeno.yaml"))
 def import_controller(
     file: Annotated[Path, typer.Argument(help="An .fll, .fcl or .fis controller.")],
     output: Annotated[Path | None, typer.Option(
@@ -94,6 +95,11 @@ def import_controller(
         "--mamdani-singletons", help="Replace a Mamdani system's output sets by "
         "singletons at their centroids (and its OR, NOT, partial or weighted rules by "
         "flctool's), and report the largest error this makes.")] = False,
+    linear_singletons: Annotated[bool, typer.Option(
+        "--linear-singletons", help="Replace a first-order Takagi-Sugeno output's linear "
+        "terms by constants, one per rule, fitted to the first-order output (and its OR, "
+        "NOT, partial or weighted rules by flctool's), and report the largest error this "
+        "makes.")] = False,
 ) -> None:
     """Import a controller from FLL, FCL or FIS as a behaviour file."""
     from flctool.export import IMPORTERS
@@ -112,8 +118,10 @@ def import_controller(
                                f"suffix of {implied}",
                                hint="name it .yaml, or use 'flctool export' for other formats")
         importer_class = IMPORTERS.get(name)
-        importer = (importer_class(mamdani_singletons=True)  # type: ignore[call-arg]
-                    if mamdani_singletons else importer_class())
+        conversions = {"mamdani_singletons": mamdani_singletons,
+                       "linear_singletons": linear_singletons}
+        importer = (importer_class(**conversions)
+                    if any(conversions.values()) else importer_class())
         behaviours = importer.from_file_all(file)
         if importer.report:  # on stderr: the YAML may be going to stdout
             say(importer.report, err=True)

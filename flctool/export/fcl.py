@@ -44,12 +44,13 @@ from flctool.export.imported import (
     build_behaviour,
     check_unique,
     fuzzylite_set,
+    output_constant,
     parse_number,
     quad_from_points,
     span,
     unsupported,
-    zero_order_constant,
 )
+from flctool.export.linear import converted_notes
 from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, import_notes
 
 #: fuzzylite 6's resolution of a Centroid read from FCL (the one FIS and FLL use).
@@ -240,20 +241,26 @@ class FclImporter(Importer):
 
     format = "fcl"
 
-    def __init__(self, mamdani_singletons: bool = False) -> None:
+    def __init__(self, mamdani_singletons: bool = False, linear_singletons: bool = False
+                 ) -> None:
         self.mamdani_singletons = mamdani_singletons
+        self.linear_singletons = linear_singletons
         self.report = ""
 
     def parse(self, text: str, file: str) -> Behaviour:
         return self.from_string(text, file)
 
     def parse_all(self, text: str, file: str) -> list[Behaviour]:
-        parser = _FclParser(tokenize(text, file), file, self.mamdani_singletons)
+        parser = _FclParser(tokenize(text, file), file, self.mamdani_singletons,
+                            self.linear_singletons)
         controllers = parser.parse_all()
-        behaviours = [build_behaviour(c) for c in controllers]
+        behaviours, notes = converted_notes(
+            [build_behaviour(c) for c in controllers], controllers,
+            [o.range or (0.0, 0.0) for o in parser.outputs])
         self.report = import_notes(file, behaviours, [
-            (controller, output.mamdani()) if output.sets else None
-            for output, controller in zip(parser.outputs, controllers, strict=True)])
+            (controller, output.mamdani()) if output.sets else note
+            for output, controller, note in zip(parser.outputs, controllers, notes,
+                                                strict=True)])
         return behaviours
 
 
@@ -302,11 +309,12 @@ class _Output:
 
 
 class _FclParser:
-    def __init__(self, tokens: list[Token], file: str, mamdani_singletons: bool = False
-                 ) -> None:
+    def __init__(self, tokens: list[Token], file: str, mamdani_singletons: bool = False,
+                 linear_singletons: bool = False) -> None:
         self.tokens = tokens
         self.file = file
         self.mamdani_singletons = mamdani_singletons
+        self.linear_singletons = linear_singletons
         self.at = 0
         self.result = ImportedController(file)
         self.input_names: list[tuple[str, int]] = []
@@ -362,8 +370,14 @@ class _FclParser:
         """One controller per output, each with the rules that conclude on it (outputs are
         computed independently, so each is exact)."""
         self.parse()
+        order = [v.name for v in self.result.inputs]  # FUZZIFY's order, the behaviour's
+        declared = [name for name, _ in self.input_names]
         controllers = []
         for output in self.outputs:
+            for command in output.commands:  # a linear term's coefficients: VAR_INPUT's order
+                if command.linear is not None and sorted(order) == sorted(declared):
+                    by_name = dict(zip(declared, command.linear, strict=False))
+                    command.linear = (*(by_name[n] for n in order), command.linear[-1])
             pending = [*self.result.pending, *output.pending]
             try:
                 self.check_output(output)
@@ -377,7 +391,9 @@ class _FclParser:
                     for antecedent, disjuncts, negated, conclusions, line, text in self.rules
                     for name, term, weight in conclusions if name == output.name],
                 accumulation=None, pending=pending, merged_commands=[],
-                expand_rules=output.mamdani_terms and self.mamdani_singletons)
+                expand_rules=output.mamdani_terms and self.mamdani_singletons,
+                # a Takagi-Sugeno output, converted if it needs to be (build_behaviour)
+                convert_linear=self.linear_singletons and not output.mamdani_terms)
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line
             word = output.accumulation_word()
@@ -567,12 +583,13 @@ class _FclParser:
         name, values = shapes.from_jfuzzylogic(kind.text, values)  # gauss 0.2 0.1, ...
         return fuzzylite_set(term.text, name, values, self.file, kind.line)
 
-    def output_term(self, term: Token, output: _Output) -> float:
+    def output_term(self, term: Token, output: _Output
+                    ) -> tuple[float, tuple[float, ...] | None]:
         """An output term: a singleton (``c``, fuzzylite's ``Constant c`` or zero-order
         ``Linear 0 ... 0 c``), or a Mamdani set (points, or a fuzzylite or jFuzzyLogic term)
         whose singleton :meth:`check_output` gives when converting."""
         if self.peek().kind == "number":
-            return self.number()
+            return self.number(), None
         if self.peek().kind == "name":
             kind = self.take()
             if kind.word in ("CONSTANT", "LINEAR"):
@@ -582,13 +599,14 @@ class _FclParser:
                 if self.peek().word != ";":
                     numbers = []  # not numbers only: refused below as not a constant
                 try:
-                    return zero_order_constant(kind.text, numbers, len(self.input_names),
-                                               self.file, kind.line, term.text)
+                    return output_constant(kind.text, numbers, len(self.input_names),
+                                           self.file, kind.line, term.text,
+                                           self.linear_singletons)
                 except ExportError as error:  # reported with the output's other refusals
                     while self.peek().word != ";":
                         self.take()
                     output.pending.append(error)
-                    return 0.0
+                    return 0.0, None
             item = self.fuzzylite_term(term, kind)
             output.sets[term.text] = set_row(item.shape_value())
         elif self.peek().word == "(":
@@ -599,7 +617,7 @@ class _FclParser:
                             "neither a singleton nor a set", "write TERM name := value;")
         if not output.set_line:
             output.set_line, output.set_name = term.line, term.text
-        return 0.0  # the singleton, once the range is known (check_output)
+        return 0.0, None  # the singleton, once the range is known (check_output)
 
     def points(self, term: Token) -> list[tuple[float, float]]:
         points = []
@@ -641,9 +659,9 @@ class _FclParser:
             if key.word == "TERM":
                 term = self.name()
                 self.expect(":=")
-                value = self.output_term(term, output)
+                value, linear = self.output_term(term, output)
                 self.expect(";")
-                output.commands.append(ImportedCommand(term.text, value, term.line))
+                output.commands.append(ImportedCommand(term.text, value, term.line, linear))
             elif key.word == "METHOD":
                 self.expect(":")
                 method = self.take()

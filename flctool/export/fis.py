@@ -33,10 +33,11 @@ from flctool.export.imported import (
     excerpt,
     fuzzylite_quad,
     identifier,
+    output_constant,
     parse_number,
     shaped_set,
-    zero_order_constant,
 )
+from flctool.export.linear import converted_notes
 from flctool.export.mamdani import MAMDANI_HINT, MamdaniOutput, centroid, import_notes
 
 #: Eq. 2 as FIS names it, by the behaviour's activation.
@@ -111,8 +112,10 @@ class FisImporter(Importer):
 
     format = "fis"
 
-    def __init__(self, mamdani_singletons: bool = False) -> None:
+    def __init__(self, mamdani_singletons: bool = False, linear_singletons: bool = False
+                 ) -> None:
         self.mamdani_singletons = mamdani_singletons
+        self.linear_singletons = linear_singletons
         self.report = ""
 
     def parse(self, text: str, file: str) -> Behaviour:
@@ -122,16 +125,19 @@ class FisImporter(Importer):
         """One behaviour per output: each output's system (:func:`one_output`) read alone."""
         outputs = output_count(text)
         behaviours: list[Behaviour] = []
-        conversions: list[tuple[ImportedController, MamdaniOutput] | None] = []
+        conversions: list[tuple[ImportedController, MamdaniOutput] | str | None] = []
         for k in range(1, outputs + 1):
-            reader = _FisReader(file, self.mamdani_singletons)
+            reader = _FisReader(file, self.mamdani_singletons, self.linear_singletons)
             behaviour = build_behaviour(reader.read(one_output(text, k) if outputs > 1
                                                    else text))
+            converted, notes = converted_notes([behaviour], [reader.result],
+                                               [reader.output_range])
+            behaviour = converted[0]
             if outputs > 1:  # named after its output
                 behaviour = behaviour.model_copy(update={"name": behaviour.output.name})
             behaviours.append(behaviour)
             conversions.append((reader.result, reader.mamdani_output()) if reader.output_sets
-                               else None)
+                               else notes[0])
         self.report = import_notes(file, behaviours, conversions)
         return behaviours
 
@@ -195,9 +201,11 @@ def one_output(text: str, k: int) -> str:
 
 
 class _FisReader:
-    def __init__(self, file: str, mamdani_singletons: bool = False) -> None:
+    def __init__(self, file: str, mamdani_singletons: bool = False,
+                 linear_singletons: bool = False) -> None:
         self.file = file
         self.mamdani_singletons = mamdani_singletons
+        self.linear_singletons = linear_singletons
         #: Mamdani output sets (name -> shape code and row) replaced by singletons
         self.output_sets: dict[str, tuple[int, tuple[float, float, float, float]]] = {}
         self.output_range = (0.0, 1.0)
@@ -228,6 +236,9 @@ class _FisReader:
         self.check_system()
         self.check_counts()
         self.result.expand_rules = bool(self.output_sets)  # a Mamdani output, converting
+        # a Takagi-Sugeno output, converted if it needs to be (build_behaviour)
+        self.result.convert_linear = (self.linear_singletons and not self.mamdani
+                                      and not self.output_sets)
         disjunction, at = self.system.get("OrMethod", ("max", 1))
         if disjunction.lower() != "max":
             self.result.disjunction = Method(f"OrMethod='{disjunction}'", at,
@@ -352,10 +363,13 @@ class _FisReader:
                 constant = self.mamdani_set(name, kind, params, line)
             else:
                 try:  # a refusal is reported with the file's others
-                    constant = zero_order_constant(kind, params, len(self.result.inputs),
-                                                   self.file, line, name)
+                    constant, linear = output_constant(kind, params, len(self.result.inputs),
+                                                       self.file, line, name,
+                                                       self.linear_singletons)
                 except ExportError as error:
-                    constant = self.result.put_off(error, 0.0)
+                    constant, linear = self.result.put_off(error, 0.0), None
+                self.result.commands.append(ImportedCommand(name, constant, line, linear))
+                return
             self.result.commands.append(ImportedCommand(name, constant, line))
         elif key == "NumMFs":
             self.output_mfs = (self.count(value, line, key), line)
@@ -466,16 +480,21 @@ class _FisReader:
         """The Mamdani settings that the conversion's measurement computes."""
         expected = {"ImpMethod": ("min", "prod"), "AggMethod": ("max", "probor"),
                     "DefuzzMethod": ("centroid",), "NumOutputs": ("1",)}
+        found = []  # each reported with the file's other refusals (build_behaviour)
         for key, allowed in expected.items():
             value, at = self.system.get(key, (allowed[0], line))
             if value.lower() not in allowed:
-                raise self.fail(at, f"{key}='{value}': the conversion of a Mamdani system "
-                                f"measures its error against {key}="
-                                f"{' or '.join(repr(a) for a in allowed)}",
-                                f"use {key}='{allowed[0]}' (or convert the system by hand)")
+                found.append(self.fail(at, f"{key}='{value}': the conversion of a Mamdani "
+                                       f"system measures its error against {key}="
+                                       f"{' or '.join(repr(a) for a in allowed)}",
+                                       f"use {key}='{allowed[0]}' (or convert the system by "
+                                       "hand)"))
         if len(self.output_sets) != len(self.result.commands):
-            raise self.fail(line, "a Mamdani system with constant or linear output MFs",
-                            "make every output MF a set (trimf, trapmf, gaussmf, ...)")
+            found.append(self.fail(line, "a Mamdani system with constant or linear output MFs",
+                                   "make every output MF a set (trimf, trapmf, gaussmf, ...)"))
+        if found:
+            self.result.pending += found
+            return
         # the singletons of other shapes are their centroids over the output range
         for command in self.result.commands:
             command.value = self.mamdani_output().singleton(identifier(command.name))

@@ -36,9 +36,10 @@ from flctool.export.imported import (
     build_behaviour,
     excerpt,
     fuzzylite_set,
+    output_constant,
     parse_number,
-    zero_order_constant,
 )
+from flctool.export.linear import converted_notes
 from flctool.export.mamdani import (
     AGGREGATIONS,
     IMPLICATIONS,
@@ -128,20 +129,24 @@ class FllImporter(Importer):
 
     format = "fll"
 
-    def __init__(self, mamdani_singletons: bool = False) -> None:
+    def __init__(self, mamdani_singletons: bool = False, linear_singletons: bool = False
+                 ) -> None:
         self.mamdani_singletons = mamdani_singletons
+        self.linear_singletons = linear_singletons
         self.report = ""
 
     def parse(self, text: str, file: str) -> Behaviour:
         return self.from_string(text, file)
 
     def parse_all(self, text: str, file: str) -> list[Behaviour]:
-        reader = _FllReader(file, self.mamdani_singletons)
+        reader = _FllReader(file, self.mamdani_singletons, self.linear_singletons)
         controllers = reader.read_all(text)
-        behaviours = [build_behaviour(c) for c in controllers]
+        behaviours, notes = converted_notes([build_behaviour(c) for c in controllers],
+                                            controllers, [o.range for o in reader.outputs])
         self.report = import_notes(file, behaviours, [
-            (controller, output.mamdani()) if output.sets else None
-            for output, controller in zip(reader.outputs, controllers, strict=True)])
+            (controller, output.mamdani()) if output.sets else note
+            for output, controller, note in zip(reader.outputs, controllers, notes,
+                                                strict=True)])
         return behaviours
 
 
@@ -172,9 +177,11 @@ class _Output:
 
 
 class _FllReader:
-    def __init__(self, file: str, mamdani_singletons: bool = False) -> None:
+    def __init__(self, file: str, mamdani_singletons: bool = False,
+                 linear_singletons: bool = False) -> None:
         self.file = file
         self.mamdani_singletons = mamdani_singletons
+        self.linear_singletons = linear_singletons
         self.result = ImportedController(file)
         self.fail = self.result.error
         self.section = ""
@@ -213,6 +220,8 @@ class _FllReader:
             if len(self.outputs) > 1:
                 imported.name, imported.name_line = output.name, output.line
             imported.expand_rules = bool(output.sets) and self.mamdani_singletons
+            # a Takagi-Sugeno output, converted if it needs to be (build_behaviour)
+            imported.convert_linear = self.linear_singletons and not output.sets
             if not output.sets and output.aggregation[0].lower() != "none":
                 imported.accumulation = Method(f"aggregation {output.aggregation[0]}",
                                                output.aggregation[1], "use aggregation: none")
@@ -368,11 +377,14 @@ class _FllReader:
             if kind in ("Constant", "Linear"):
                 numbers = [parse_number(p, self.file, line, f"term '{name}'") for p in params]
                 try:
-                    constant = zero_order_constant(kind, numbers, len(self.result.inputs),
-                                                   self.file, line, name)
+                    constant, linear = output_constant(kind, numbers, len(self.result.inputs),
+                                                       self.file, line, name,
+                                                       self.linear_singletons)
                 except ExportError as error:  # reported with the output's other refusals
                     output.pending.append(error)
-                    constant = 0.0
+                    constant, linear = 0.0, None
+                output.commands.append(ImportedCommand(name, constant, line, linear))
+                return
             else:  # a Mamdani output set: a singleton at its centroid, if converting
                 values = [self.point(p, line, kind) for p in params]
                 item = fuzzylite_set(name, kind, values, self.file, line)

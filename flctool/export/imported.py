@@ -9,6 +9,7 @@ line and text, never by a behaviour file's field path.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import re
@@ -182,6 +183,10 @@ class ImportedCommand:
     name: str
     value: float
     line: int
+    #: A first-order Takagi-Sugeno term being converted (:mod:`flctool.export.linear`): its
+    #: input coefficients, in the order of the inputs, then its constant. ``value`` is then
+    #: fitted once the behaviour is built.
+    linear: tuple[float, ...] | None = None
 
 
 @dataclass
@@ -263,6 +268,17 @@ class ImportedController:
     pending: list[ExportError] = field(default_factory=list)
     #: The commands :func:`expanded_rules` added (the mean of several), none in the file.
     merged_commands: list[str] = field(default_factory=list)
+    #: A first-order output being converted: the output terms as the file gives them
+    #: (renamed), before :func:`_own_commands` gave rules commands of their own.
+    terms: list[ImportedCommand] = field(default_factory=list)
+    #: What a conversion changed besides the rules and commands, for the user (the sets
+    #: :func:`_fill_gaps` added).
+    notes: list[str] = field(default_factory=list)
+    #: A Takagi-Sugeno output that may be converted (``--linear-singletons``): it is, by
+    #: :mod:`flctool.export.linear`, when it has a first-order term or a rule flctool's grid
+    #: has none like (OR, NOT, a weight, an input left out), which is then expanded as a
+    #: Mamdani conversion's; :func:`build_behaviour` clears it otherwise.
+    convert_linear: bool = False
 
     def put_off(self, error: ExportError, fallback: _T) -> _T:
         """Keep ``error`` for :func:`build_behaviour` to report with the file's other
@@ -418,6 +434,24 @@ NOT_A_CONSTANT = ("flctool's commands are constants: give each output term one v
                   "Mamdani controller's output)")
 
 
+#: The fix offered when a first-order Takagi-Sugeno output is imported without converting.
+LINEAR_HINT = ("import with --linear-singletons to replace each rule's linear function by a "
+               "constant fitted to the first-order output: an approximation, whose largest "
+               "error the import measures and reports; or set every input coefficient to 0")
+
+
+def output_constant(kind: str, params: list[float], inputs: int, file: str, line: int,
+                    name: str, linear: bool = False) -> tuple[float, tuple[float, ...] | None]:
+    """A Takagi-Sugeno output term's constant (:func:`zero_order_constant`), and, when
+    ``linear`` (a first-order output being converted) and the term is first-order, its
+    coefficients (the constant then being a placeholder, fitted later:
+    :mod:`flctool.export.linear`)."""
+    if (linear and kind.lower() == "linear" and len(params) == inputs + 1
+            and any(c != 0 for c in params[:-1])):
+        return params[-1], tuple(params)
+    return zero_order_constant(kind, params, inputs, file, line, name), None
+
+
 def zero_order_constant(kind: str, params: list[float], inputs: int, file: str, line: int,
                         name: str) -> float:
     """The constant of a zero-order Takagi-Sugeno output term: a constant, or a linear term
@@ -430,8 +464,7 @@ def zero_order_constant(kind: str, params: list[float], inputs: int, file: str, 
             return params[-1]
         raise unsupported(file, line, f"output term '{name}' is first-order Takagi-Sugeno "
                           f"(linear with coefficients {params[:-1]}): flctool's commands are "
-                          "constants (eq. 3)", "set every input coefficient to 0, or "
-                          "replace the term by a constant")
+                          "constants (eq. 3)", LINEAR_HINT)
     if kind.lower() == "linear":
         raise unsupported(file, line, f"output term '{name}' is linear with {len(params)} "
                           f"numbers; the controller has {inputs} inputs",
@@ -444,8 +477,8 @@ def zero_order_constant(kind: str, params: list[float], inputs: int, file: str, 
 DONT_CARE_HINT = ("name a set of every input in each rule (one rule per set of the input left "
                   "out), accepting the change in weight, or write the rules in a behaviour "
                   "file, where leaving out an input means just that expansion; a Mamdani "
-                  "output imported with --mamdani-singletons is expanded so, and the "
-                  "difference measured")
+                  "output imported with --mamdani-singletons (a first-order one with "
+                  "--linear-singletons) is expanded so, and the difference measured")
 
 
 def check_unique(file: str, items: Iterable[tuple[str, int]], kind: str, of: str = "") -> None:
@@ -469,6 +502,12 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     # Every construct that keeps the file out is reported together (each at its first line):
     # the ones the reader put off (pending) and each of these checks'.
     found = list(imported.pending)
+    if imported.convert_linear:
+        names = {v.name for v in imported.inputs}
+        imported.convert_linear = any(c.linear is not None for c in imported.commands) or any(
+            r.disjuncts or r.negated or r.weight != 1.0 or set(r.antecedent) != names
+            for r in imported.rules)
+        imported.expand_rules = imported.convert_linear
     checks = [_check_names_unique, _check_methods]
     if not imported.expand_rules:
         checks = [_check_no_or_rule, _check_no_negation, _check_weights,
@@ -486,7 +525,14 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
     if found:
         raise refusals(file, found)
     _identifiers(imported)
+    if imported.expand_rules:
+        _fill_gaps(imported)
     rules = expanded_rules(imported) if imported.expand_rules else imported.rules
+    linear = imported.convert_linear
+    if linear:
+        imported.terms = [dataclasses.replace(c) for c in imported.commands
+                          if c.name not in imported.merged_commands]
+        rules = _own_commands(imported, rules)
     marks: dict[tuple[PathPart, ...], tuple[int, int]] = {
         (): (1, 1), ("name",): (imported.name_line, 1), ("output",): (imported.output_line, 1)}
     data: dict[str, Any] = {"flctool": FORMAT_VERSION, "name": imported.name or "imported"}
@@ -507,7 +553,7 @@ def build_behaviour(imported: ImportedController) -> Behaviour:
         marks[("rules", index)] = (rule.line, 1)
     data["rules"] = [{"if": dict(rule.antecedent), "then": rule.command} for rule in rules]
     if (imported.conjunction is not None and imported.conjunction.product
-            and not imported.expand_rules):
+            and (linear or not imported.expand_rules)):
         # eq. 2 as the file computes it. A Mamdani conversion keeps the minimum instead, its
         # difference from the product measured with the rest: on the product-conjunction
         # Mamdani examples (MATLAB's tank and tank2, Octave's tipper) the minimum's singleton
@@ -572,6 +618,93 @@ def expanded_rules(imported: ImportedController) -> list[ImportedRule]:
     return _merge_conflicts(imported, result)
 
 
+def _fill_gaps(imported: ImportedController) -> None:
+    """A conversion (measured): over each stretch of an input's range that no set covers
+    (membership 0 in every set, which flctool's inputs may not have), add a set of
+    membership 1 there and 0 elsewhere, ``gap1``, ``gap2``, ... Where the file's rules fire
+    there (an OR rule's other condition, a rule that leaves the input out) the expanded rules
+    fire with the new set just so; where none does, the file has no output there and the
+    rules leave the new set's combinations without a command. Trapezoid inputs only (the
+    other shapes reach across the whole line)."""
+    from flctool.behaviour.checks import uncovered_gap
+    from flctool.behaviour.fuzzy import InputVariable
+
+    for variable in imported.inputs:
+        if any(s.shape for s in variable.sets) or not variable.sets:
+            continue
+        try:
+            quads = variable.resolved_quads(imported.file)
+            model = InputVariable(range=variable.resolved_range(), sets=dict(quads))
+        except (ExportError, ValueError):
+            continue  # refused as the file writes it, later
+        names = {s.name for s in variable.sets}
+        for _ in range(len(variable.sets) + 1):  # at most one gap between two sets
+            gap = uncovered_gap(model)
+            if gap is None or not gap[0] < gap[1]:
+                break
+            k = 1
+            while f"gap{k}" in names:
+                k += 1
+            name = f"gap{k}"
+            names.add(name)
+            a, b = gap
+            variable.sets.append(ImportedSet(name, (a, a, b, b), variable.line))
+            model = InputVariable(range=model.range, sets={**model.sets, name: (a, a, b, b)})
+            imported.notes.append(
+                f"input '{variable.name}': the values between {a:g} and {b:g} belong to no "
+                f"set; a set '{name}' [{a:g}, {a:g}, {b:g}, {b:g}] is added there, so that "
+                "the rules that fire there in the file (an OR rule's other condition, a rule "
+                "that leaves the input out) fire with it (part of the measured difference)")
+
+
+def _own_commands(imported: ImportedController, rules: list[ImportedRule]
+                  ) -> list[ImportedRule]:
+    """A first-order output being converted: each rule concluding a first-order term (or a
+    command :func:`_merge_conflicts` made of one) gets a command of its own, named after the
+    term and numbered (``term_2``), whose constant :mod:`flctool.export.linear` fits; a term
+    only one rule concludes keeps its name. Terms that no rule concludes any more are
+    dropped; constant terms stay as they are (exact)."""
+    n = len(imported.inputs)
+    functions = {c.name: c.linear if c.linear is not None else (0.0,) * n + (c.value,)
+                 for c in imported.terms}
+    linear = {c.name for c in imported.terms if c.linear is not None}
+    merged = set(imported.merged_commands)  # fitted too: the file gives them no value
+    free = {c: c in linear or c in merged or any(part in linear for part in c.split("_or_"))
+            for c in {r.command for r in rules}}
+
+    def function(command: str) -> tuple[float, ...]:
+        """A command's function; a merged command's the mean of its terms'."""
+        parts = [functions[p] for p in command.split("_or_") if p in functions]
+        if command in functions or not parts:
+            return functions.get(command, (0.0,))
+        return tuple(math.fsum(f[i] for f in parts) / len(parts) for i in range(n + 1))
+    uses: dict[str, int] = {}
+    for rule in rules:
+        uses[rule.command] = uses.get(rule.command, 0) + 1
+    taken = {c.name for c in imported.commands}
+    count: dict[str, int] = {}
+    result = []
+    added: list[ImportedCommand] = []
+    for rule in rules:
+        if not free.get(rule.command, False) or uses[rule.command] == 1:
+            result.append(rule)
+            continue
+        count[rule.command] = count.get(rule.command, 0) + 1
+        name = f"{rule.command}_{count[rule.command]}"
+        while name in taken:
+            name += "_"
+        taken.add(name)
+        added.append(ImportedCommand(name, 0.0, rule.line, function(rule.command)))
+        result.append(ImportedRule(rule.antecedent, name, rule.line, rule.text))
+    used = {r.command for r in result}
+    imported.commands[:] = [c for c in imported.commands
+                            if c.name in used or c.linear is None] + added
+    for command in imported.commands:
+        if free.get(command.name, False) and command.linear is None:
+            command.linear = function(command.name)  # a merged command: fitted too
+    return result
+
+
 def _merge_conflicts(imported: ImportedController, rules: list[ImportedRule]
                      ) -> list[ImportedRule]:
     """One rule per combination of sets: where expanded rules give one combination several
@@ -614,7 +747,7 @@ def as_written(imported: ImportedController) -> dict[str, Any]:
     rules = tuple((tuple((n, t, n in r.negated) for n, t in r.disjuncts or
                          r.antecedent.items()), bool(r.disjuncts), r.command, r.weight)
                   for r in imported.rules)
-    rewritten = bool(imported.merged_commands) or any(
+    rewritten = bool(imported.merged_commands or imported.notes) or any(
         r.disjuncts or r.negated or set(r.antecedent) != names or r.weight != 1.0
         for r in imported.rules)
     product = imported.conjunction is not None and imported.conjunction.product
@@ -629,8 +762,9 @@ def _check_no_or_rule(imported: ImportedController) -> None:
                               "AND chain (eq. 1), and an OR rule's activation (the maximum "
                               "of its conditions) is no sum of such rules' activations",
                               "write it as AND rules over every input, accepting the change, "
-                              "or (a Mamdani output) import with --mamdani-singletons, which "
-                              "measures the difference")
+                              "or (a Mamdani output) import with --mamdani-singletons, (a "
+                              "first-order one) with --linear-singletons, which measures the "
+                              "difference")
 
 
 _NOT_IDENTIFIER = re.compile(r"[^A-Za-z0-9_]")
@@ -732,7 +866,8 @@ def _check_no_negation(imported: ImportedController) -> None:
                               "rules use plain terms (eq. 1), and NOT's membership (1 - mu) is "
                               "no sum of the other sets'", "name the sets meant instead, one "
                               "rule each, or (a Mamdani output) import with "
-                              "--mamdani-singletons, which measures the difference")
+                              "--mamdani-singletons, (a first-order one) with "
+                              "--linear-singletons, which measures the difference")
 
 
 def _check_weights(imported: ImportedController) -> None:
@@ -741,8 +876,8 @@ def _check_weights(imported: ImportedController) -> None:
             raise unsupported(imported.file, rule.line, f"a rule weight of {rule.weight!r}: "
                               "flctool's rules all weigh 1",
                               "remove the weight (accepting the change), or (a Mamdani "
-                              "output) import with --mamdani-singletons, which measures the "
-                              "difference")
+                              "output) import with --mamdani-singletons, (a first-order one) "
+                              "with --linear-singletons, which measures the difference")
 
 
 def _check_methods(imported: ImportedController) -> None:

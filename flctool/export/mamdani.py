@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,19 +122,37 @@ def written_activations(behaviour: Behaviour, output: MamdaniOutput, names: list
     """(S, R) each written rule's activation, as fuzzylite and MATLAB compute it: its weight
     times the minimum (eq. 2) or product of its conditions' memberships (1 - mu for NOT), or
     their maximum for an OR rule; and (R,) the index in ``names`` of each rule's command."""
+    alpha = rule_activations(behaviour, output.rules, output.conjunction, states)
+    return alpha, np.array([names.index(c) for _, _, c, _ in output.rules])
+
+
+def rule_activations(behaviour: Behaviour, rules: Sequence[OriginalRule], conjunction: str,
+                     states: np.ndarray) -> np.ndarray:
+    """(S, R) each rule's activation as written (see :func:`written_activations`), with the
+    conjunction ``conjunction`` (fuzzylite's name: Minimum or AlgebraicProduct)."""
     controller = compile_behaviour(behaviour)
     mus = controller.memberships(states)  # per input, (S, L_i)
     inputs = {name: (i, list(v.sets)) for i, (name, v) in enumerate(behaviour.inputs.items())}
-    combine = (np.multiply.reduce if output.conjunction == "AlgebraicProduct"
+    combine = (np.multiply.reduce if conjunction == "AlgebraicProduct"
                else np.minimum.reduce)
-    alpha = np.empty((len(states), len(output.rules)))
-    for r, (conditions, disjunction, _, weight) in enumerate(output.rules):
+    alpha = np.empty((len(states), len(rules)))
+    for r, (conditions, disjunction, _, weight) in enumerate(rules):
         columns = [mus[inputs[n][0]][:, inputs[n][1].index(t)] for n, t, _ in conditions]
         columns = [1.0 - c if negated else c
                    for c, (_, _, negated) in zip(columns, conditions, strict=True)]
         alpha[:, r] = weight * (np.maximum.reduce(columns) if disjunction
                                 else combine(columns))
-    return alpha, np.array([names.index(c) for _, _, c, _ in output.rules])
+    return alpha
+
+
+def round_up(x: float) -> float:
+    """``x`` rounded up to 4 significant digits, as a report states a measured deviation
+    (never below it)."""
+    if not (math.isfinite(x) and x > 0):
+        return x
+    step = 10.0 ** (math.floor(math.log10(x)) - 3)
+    stated = math.ceil(x / step) * step
+    return stated if stated >= x else math.nextafter(stated, math.inf)
 
 
 @dataclass(frozen=True)
@@ -151,11 +169,7 @@ class Conversion:
     def stated(self) -> float:
         """The deviation rounded up to 4 significant digits, as the report states it (never
         below the measured one)."""
-        x = self.deviation
-        if not (math.isfinite(x) and x > 0):
-            return x
-        step = 10.0 ** (math.floor(math.log10(x)) - 3)
-        return math.ceil(x / step) * step
+        return round_up(self.deviation)
 
     def report(self) -> str:
         stated = self.stated()
@@ -170,10 +184,10 @@ class Conversion:
                 f"{share}, measured on {self.states} states")
 
 
-def measurement_states(behaviour: Behaviour) -> np.ndarray:
-    """The states the deviation is measured on: random ones in the ranges (seed 0), every
+def measurement_states(behaviour: Behaviour, seed: int = 0) -> np.ndarray:
+    """The states the deviation is measured on: random ones in the ranges (``seed``), every
     range end and set parameter inside a range, and a grid across the ranges."""
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(seed)
     columns = []
     for variable in behaviour.inputs.values():
         lo, hi = variable.range
@@ -188,15 +202,94 @@ def measurement_states(behaviour: Behaviour) -> np.ndarray:
 
 
 def measure(behaviour: Behaviour, output: MamdaniOutput) -> Conversion:
-    """The converted controller against the Mamdani one (:func:`measurement_states`)."""
-    states = measurement_states(behaviour)
-    want = mamdani_outputs(behaviour, output, states)
-    got = compile_behaviour(behaviour).output(states)
-    finite = np.isfinite(want)
-    deviation = float(np.max(np.abs(got[finite] - want[finite]))) if finite.any() else 0.0
+    """The converted controller against the Mamdani one: on :func:`measurement_states`, on
+    :func:`grid_states`, and on the states :func:`climbed` finds from the worst of them."""
+    controller = compile_behaviour(behaviour)
+
+    def difference(at: np.ndarray) -> np.ndarray:
+        gap = np.abs(controller.output(at) - mamdani_outputs(behaviour, output, at))
+        return np.where(np.isfinite(gap), gap, 0.0)
+
+    states = np.vstack([measurement_states(behaviour), grid_states(behaviour, MAMDANI_GRID)])
+    states = np.vstack([states, climbed(difference, states, behaviour)])
+    deviation = float(np.max(difference(states)))
     lo, hi = output.range
     return Conversion(deviation, len(states), hi - lo, output.resolution,
                       output.rewritten or output.conjunction != "Minimum")
+
+
+#: The most states :func:`grid_states` gives.
+GRID_STATES = 20_000
+
+
+def grid_states(behaviour: Behaviour, most: int = GRID_STATES) -> np.ndarray:
+    """Every combination of each input's range ends and set parameters inside its range
+    (where the differences have their kinds), and of points evenly across it, as many as
+    ``most`` allows; none when the parameters alone exceed it."""
+    axes = []
+    for variable in behaviour.inputs.values():
+        lo, hi = variable.range
+        axes.append(sorted({lo, hi, *(x for q in variable.sets.values()
+                                      for x in set_row(q)[1] if lo <= x <= hi)}))
+    size = math.prod(len(a) for a in axes)
+    if size > most:
+        return np.empty((0, len(axes)))
+    factor = (most / size) ** (1 / len(axes))  # how much longer each axis may get
+    for i, variable in enumerate(behaviour.inputs.values()):
+        across = int(len(axes[i]) * factor)  # points evenly across the range
+        if across > 2:
+            axes[i] = sorted({*axes[i], *np.linspace(*variable.range, across)})
+    while math.prod(len(a) for a in axes) > most:  # (the union may add fewer)
+        longest = max(range(len(axes)), key=lambda k: len(axes[k]))
+        axes[longest] = axes[longest][::2] + ([axes[longest][-1]]
+                                             if len(axes[longest]) % 2 == 0 else [])
+    mesh = np.meshgrid(*[np.asarray(a, dtype=np.float64) for a in axes], indexing="ij")
+    return np.column_stack([m.ravel() for m in mesh])
+
+
+#: The hill climb towards the largest difference: from how many of the worst states, how
+#: many rounds, and how many steps around each per round.
+CLIMBERS, CLIMB_ROUNDS, CLIMB_STEPS = 32, 40, 32
+#: Climbers start from the worst of this many states, each at least APART (a share of each
+#: range) from the others.
+CANDIDATES, APART = 4_000, 0.1
+
+
+def climbed(difference: Callable[[np.ndarray], np.ndarray], states: np.ndarray,
+            behaviour: Behaviour) -> np.ndarray:
+    """States where ``difference`` is larger than at ``states``, found by climbing from the
+    worst of them (random steps, shrinking, inside the ranges; seed 2): a sample's largest
+    difference falls short of the largest one between its states, more so with more
+    inputs."""
+    rng = np.random.default_rng(2)
+    ranges = np.array([v.range for v in behaviour.inputs.values()], dtype=np.float64)
+    gaps = difference(states)
+    # from the worst states that lie apart (each its own hill, not all on the highest one)
+    span = np.where(ranges[:, 1] > ranges[:, 0], ranges[:, 1] - ranges[:, 0], 1.0)
+    scaled = (states - ranges[:, 0]) / span
+    order: list[int] = []
+    for k in np.argsort(gaps)[::-1][:CANDIDATES]:
+        if all(np.max(np.abs(scaled[k] - scaled[j])) > APART for j in order):
+            order.append(int(k))
+            if len(order) == CLIMBERS:
+                break
+    points, best = states[order].copy(), gaps[order].copy()
+    width = (ranges[:, 1] - ranges[:, 0]) / 8.0
+    n = len(points)
+    for _ in range(CLIMB_ROUNDS):
+        steps = points[:, None, :] + rng.normal(size=(n, CLIMB_STEPS, points.shape[1])) * width
+        steps = np.clip(steps, ranges[:, 0], ranges[:, 1])
+        found = difference(steps.reshape(-1, points.shape[1])).reshape(n, CLIMB_STEPS)
+        pick = np.argmax(found, axis=1)
+        better = found[np.arange(n), pick] > best
+        points[better] = steps[np.arange(n), pick][better]
+        best[better] = found[np.arange(n), pick][better]
+        width = width * 0.85
+    return np.asarray(points, dtype=np.float64)
+
+
+#: The most states :func:`grid_states` gives a Mamdani measurement (each costs a centroid).
+MAMDANI_GRID = 5_000
 
 
 #: The fix offered when a Mamdani output is imported without the conversion.
@@ -216,10 +309,13 @@ def mamdani_report(behaviour: Behaviour, output: MamdaniOutput) -> str:
 
 
 def import_notes(file: str, behaviours: Sequence[Behaviour],
-                 conversions: Sequence[tuple[ImportedController, MamdaniOutput] | None]) -> str:
+                 conversions: Sequence[tuple[ImportedController, MamdaniOutput] | str | None]
+                 ) -> str:
     """What importing ``file`` did, for the user: how a file of several outputs was split,
     then, for each output read as Mamdani sets (its controller as read and its sets; None
-    for a Sugeno output), what converting it to singletons changed."""
+    for a Sugeno output), what converting it to singletons changed; for an output whose
+    conversion was already measured (a first-order one, :mod:`flctool.export.linear`), its
+    note as given."""
     notes = []
     if len(behaviours) > 1:
         notes.append(f"{file}: {len(behaviours)} outputs, imported as one behaviour each, "
@@ -227,8 +323,11 @@ def import_notes(file: str, behaviours: Sequence[Behaviour],
                      + "); each keeps the rules that conclude on its output, which computes "
                      "it exactly as the file does")
     for behaviour, conversion in zip(behaviours, conversions, strict=True):
-        if conversion is not None:
+        if isinstance(conversion, str):
+            notes.append(f"{file}: output '{behaviour.output.name}': {conversion}")
+        elif conversion is not None:
             controller, output = conversion
+            notes += [f"{file}: {note}" for note in controller.notes]
             written = dataclasses.replace(output, **as_written(controller))
             notes.append(f"{file}: output '{behaviour.output.name}': "
                          + mamdani_report(behaviour, written))

@@ -4,6 +4,7 @@ output the measurement uses is fuzzylite 6's."""
 from __future__ import annotations
 
 import dataclasses
+import re
 import subprocess
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from typer.testing import CliRunner
 
 from flctool import compile_behaviour
 from flctool.cli import app
-from flctool.errors import ExportError
+from flctool.errors import ExportError, ImportRefusals
 from flctool.export.fcl import FclImporter
 from flctool.export.fis import FisImporter, _FisReader
 from flctool.export.fll import FllImporter
@@ -438,3 +439,16 @@ def test_fll_and_fcl_rewrite_and_measure_as_fis_does(tmp_path: Path) -> None:
                         [(r.if_, r.then) for r in behaviour.rules],
                         converting.report.split(") is ")[-1].split()[0]))
     assert results[0] == results[1] == results[2]
+
+
+def test_every_setting_the_measurement_does_not_compute_is_listed() -> None:
+    """ImpMethod, AggMethod and DefuzzMethod are each reported, with the file's other
+    refusals, not only the first."""
+    text = (MAMDANI.replace("ImpMethod='min'", "ImpMethod='custom'")
+            .replace("AggMethod='max'", "AggMethod='sum'")
+            .replace("DefuzzMethod='centroid'", "DefuzzMethod='bisector'"))
+    with pytest.raises(ImportRefusals) as caught:
+        FisImporter(mamdani_singletons=True).from_string(text, "mam.fis")
+    message = str(caught.value)
+    for key in ("ImpMethod='custom'", "AggMethod='sum'", "DefuzzMethod='bisector'"):
+        assert re.search(rf"mam.fis:\d+: {key}: .*\(fix: use ", message), message
