@@ -120,13 +120,6 @@ class Extension(RunCallback[ExtendedRun]):
         self.improved_at = int(record["improved_at"])
         self.starts = list(record["starts"])
 
-    def describe(self) -> str:
-        """How the run's length is decided, for its budget statement."""
-        if self.config is None:
-            return f"{self.least} generations"
-        return (f"{self.least} generations, then on while the selected controller improves "
-                f"(until {self.config.patience} without), at most {self.most}")
-
     def record(self) -> dict[str, Any] | None:
         """What run.json shows: the generation each attempt began at, and the bound."""
         if self.config is None:

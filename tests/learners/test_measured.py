@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from flctool import load_behaviour
+from flctool.learners.extension import most_generations
 from flctool.learners.measured import MEASURED, similar_tasks
 from tests.conftest import BEHAVIOURS, ROOT
 
@@ -22,7 +23,13 @@ def test_a_row_has_its_file_s_size_learner_and_training_budget(task: object) -> 
     assert task.rules == len(behaviour.missing_rules())
     assert task.commands == len(behaviour.output.commands)
     assert task.learner == learning.learner
-    assert task.training == learning.generations * learning.population * learning.trials
+    per_generation = learning.population * learning.trials
+    if learning.extend is None:
+        assert task.training == learning.generations * per_generation
+    else:  # the median of what the runs used, between the run's least and most
+        most = learning.extend.most or most_generations(task.rules, task.commands,
+                                                        learning.generations)
+        assert learning.generations * per_generation <= task.training <= most * per_generation
 
 
 def test_similar_tasks_are_the_nearest_in_size() -> None:
