@@ -547,8 +547,12 @@ class Run:
             raise RunDirError(f"{self.path} already has {done[-1] + 1} generations; "
                               f"--generations {generations} would not add any",
                               hint=f"give more than {done[-1] + 1}")
-        behaviour = resolve_behaviour(self.behaviour, [Override(
-            "generations", generations, "the new generation budget")])
+        budget = [Override("generations", generations, "the new generation budget")]
+        extend = self.behaviour.learning.extend
+        if extend is not None:  # a run that extends itself goes on doing so
+            budget.append(Override("extend", extend.model_dump(exclude_none=True),
+                                   "the run's own"))
+        behaviour = resolve_behaviour(self.behaviour, budget)
         with self.lock():
             _write(self.path, self.path / BEHAVIOUR_FILE, _behaviour_text(behaviour))
         self.behaviour = behaviour

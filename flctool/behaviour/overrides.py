@@ -78,7 +78,8 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
         data["learning"] = keep_keys_read_by(data["learning"], learner)
     if _gives_the_budget(given) and _extended_by_default(behaviour):
-        # `extend` came only because the file gave no budget; one given now is exact
+        # a budget given now is exact: `extend` came because the file gave none (or is the
+        # default a written-out file carries); an `extend` of the file's own is kept
         data["learning"].pop("extend", None)
     places = apply_overrides(data, given)
     return behaviour_from_data(data, source_of(behaviour).with_overrides(places))
@@ -92,12 +93,11 @@ def _gives_the_budget(overrides: list[Override]) -> bool:
 
 
 def _extended_by_default(behaviour: Behaviour) -> bool:
-    """Whether the behaviour's ``extend`` is the one a file without a budget gets (not
-    written in its file, nor given)."""
+    """Whether the behaviour's ``extend`` is the one a file without a budget gets (all its
+    keys the defaults; a file flctool wrote out carries it so)."""
     from flctool.behaviour.learning import ExtendConfig
 
-    return behaviour.learning.extend == ExtendConfig() and "extend" not in written_keys(
-        behaviour)
+    return behaviour.learning.extend == ExtendConfig()
 
 
 def written_keys(behaviour: Behaviour) -> set[str]:

@@ -96,9 +96,11 @@ def test_one_file_carries_the_settings_of_every_compared_learner(tmp_path: Path)
             path = out / "runs" / f"{learner}-seed{seed}" / "behaviour.yaml"
             written = yaml.safe_load(path.read_text())["learning"]
             # every key of its learner but the unset ones, which are not written: 'sets' (no
-            # sets learned) and 'restart_after' (the learner's default)
+            # sets learned), 'restart_after' (the learner's default) and 'extend' (the file
+            # gives its generations)
             assert tuple(written) == tuple(k for k in learner_keys(model)
-                                           if k not in ("sets", "restart_after")), learner
+                                           if k not in ("sets", "restart_after", "extend")), \
+                learner
             learning = load_behaviour(path).learning  # a valid file of its learner
             assert (learning.learner, learning.seed, learning.generations) == (learner, seed, 2)
             assert len(open_run(path.parent).metrics()) == 2

@@ -159,3 +159,29 @@ def test_resuming_a_run_directory_keeps_its_extension(tmp_path: Path) -> None:
         assert resumed.run.behaviour.learning.extend == recorded
     finally:
         resumed.close()
+
+
+def test_a_budget_given_is_exact_even_on_a_file_flctool_wrote_out(tmp_path: Path) -> None:
+    from flctool.behaviour import behaviour_to_yaml
+
+    written = tmp_path / "copy.yaml"  # every key written out, extend's defaults included
+    written.write_text(behaviour_to_yaml(load_behaviour(BEHAVIOURS / "ballchase.yaml")))
+    assert load_behaviour(written).learning.extend == ExtendConfig()
+    assert resolve_behaviour(load_behaviour(written), {"generations": 2}).learning.extend \
+        is None
+    # an extend of the file's own stays
+    own = resolve_behaviour(load_behaviour(written), {"extend.most": 90})
+    assert resolve_behaviour(own, {"generations": 40}).learning.extend == ExtendConfig(most=90)
+
+
+def test_resuming_with_more_generations_keeps_the_run_extending(tmp_path: Path) -> None:
+    tiny = {"population": 4, "selection.candidates": 2, "selection.episodes": 3,
+            "selection.confirmation": 0, "extend.patience": 1}
+    start_run(BEHAVIOURS / "ballchase.yaml", tiny, tmp_path / "run").train()
+    resumed = resume_run(tmp_path / "run", generations=70)
+    try:
+        learning = resumed.run.behaviour.learning
+        assert learning.generations == 70 and learning.extend is not None
+        assert learning.extend.patience == 1
+    finally:
+        resumed.close()
