@@ -28,8 +28,8 @@ from flctool.behaviour.overrides import (
     Override,
     Overrides,
     as_overrides,
+    gives_extend,
     resolve_behaviour,
-    written_keys,
 )
 from flctool.compile import compile_behaviour
 from flctool.errors import Problem, RunDirError, SpecError
@@ -168,8 +168,7 @@ def check_same_run(run: Run, requested: Behaviour) -> None:
     recorded = behaviour_to_data(run.behaviour)
     wanted = behaviour_to_data(requested)
     # the budget is the run's: its generations, and its extend unless the file writes one
-    budget = ("generations",) if "extend" in written_keys(requested) else ("generations",
-                                                                           "extend")
+    budget = ("generations",) if gives_extend(requested) else ("generations", "extend")
     for data in (recorded, wanted):
         for key in budget:
             data.get("learning", {}).pop(key, None)

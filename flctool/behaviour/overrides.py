@@ -100,13 +100,11 @@ def _extended_by_default(behaviour: Behaviour) -> bool:
     return behaviour.learning.extend == ExtendConfig()
 
 
-def written_keys(behaviour: Behaviour) -> set[str]:
-    """The keys of ``learning`` that the behaviour's file writes or an override gave."""
+def gives_extend(behaviour: Behaviour) -> bool:
+    """Whether the behaviour's file writes ``learning.extend``, or an override gave it."""
     source = source_of(behaviour)
-    given = {str(path[1]) for path in source.overrides
-             if len(path) > 1 and path[0] == "learning"}
-    return given | {key for key in ("generations", "extend", "protocol")
-                    if source.mark(("learning", key)) is not None}
+    return source.mark(("learning", "extend")) is not None or any(
+        tuple(path[:2]) == ("learning", "extend") for path in source.overrides)
 
 
 def apply_overrides(data: dict[str, Any], overrides: Overrides,
