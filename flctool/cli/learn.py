@@ -120,17 +120,12 @@ def learn(
     else:
         _report(summary)
     if summary.status == "not_learned":  # flctool.runs.NOT_LEARNED (kept lazy)
-        from flctool.learners.baselines import NOT_LEARNED_HINT
+        from flctool.learners.baselines import not_learned_message
 
         verdict = (summary.selection or {}).get("baseline") or {}
-        difference = verdict.get("difference") or {}
-        err_console.print(
-            f"[yellow]not learned:[/] the learned controller is not clearly better than the "
-            f"baseline '{escape(str(verdict.get('baseline')))}' (mean fitness "
-            f"{verdict.get('baseline_fitness', float('nan')):.3f}; difference "
-            f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
-            f"{_number(difference.get('high'))}] over the same {difference.get('n')} "
-            f"episodes)\n  try: {NOT_LEARNED_HINT}", highlight=False)
+        commands = list(behaviour.output.commands)
+        err_console.print(f"[yellow]not learned:[/] "
+                          f"{escape(not_learned_message(verdict, commands))}", highlight=False)
         raise typer.Exit(NOT_LEARNED_EXIT)
 
 

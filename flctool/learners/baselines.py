@@ -17,6 +17,7 @@ what to try. Every baseline episode counts in the run's usage (``baseline_episod
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -69,19 +70,50 @@ class Verdict:
                    float(data["baseline_fitness"]),
                    {str(k): float(v) for k, v in dict(data["screened"]).items()})
 
-    def message(self) -> str:
-        """What a user reads when the run did not learn."""
-        d = self.difference
-        return (f"the learned controller is not clearly better than the baseline "
-                f"'{self.baseline}' (mean fitness {self.baseline_fitness:.3f}): the "
-                f"difference is {d.value:.3f} [{d.low:.3f}, {d.high:.3f}] over the same "
-                f"{d.n} episodes")
+
+#: What to try when a run did not learn: more budget, another learner, fewer rules.
+_BUDGET = "give it more budget (--generations, --set trials=2, --set population=20)"
+_OTHERS = ("try another learner (--learner fuzzy_q or pitt), or use coarser sets (fewer "
+           "rules to learn)")
+NOT_LEARNED_HINT = f"{_BUDGET}, {_OTHERS}"
 
 
-#: What to try when a run did not learn.
-NOT_LEARNED_HINT = ("give it more budget (--generations, --set trials=2, --set "
-                    "population=20), try another learner (--learner fuzzy_q or pitt), or "
-                    "use coarser sets (fewer rules to learn)")
+def not_learned_message(verdict: Mapping[str, Any], commands: Sequence[str]) -> str:
+    """What a user reads when a run did not learn: the verdict (``Verdict.record()``, as
+    run.json holds it) and what to try, which depends on the baseline that was as good.
+
+    - A **constant command** as good as the learned controller often means the task as
+      written does not need its rules (docs/environments.md: the striker's ``always
+      approach`` scores 0.950 held out, its hand-made arbiter 0.936), so that is said first.
+    - A **random table** as good means the trials did not tell controllers apart: a success
+      or failure per trial is a noisy measure (shoot: 0.25 against 0.37 success is not
+      resolved by 40 validation episodes), so measuring each on more episodes comes first.
+    - A **hand-made controller** (``--baseline``) as good: start from it (``--init``).
+    """
+    name = str(verdict.get("baseline"))
+    difference = verdict.get("difference") or {}
+    high = difference.get("high")
+    does = "does better" if isinstance(high, (int, float)) and high < 0 else "does as well"
+    head = (f"the learned controller is not clearly better than the baseline '{name}' (mean "
+            f"fitness {_number(verdict.get('baseline_fitness'))}; difference "
+            f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
+            f"{_number(high)}] over the same {difference.get('n')} episodes)")
+    if name in {f"always {command}" for command in commands}:
+        advice = (f"a controller that always commands '{name.removeprefix('always ')}' "
+                  f"{does}: if that is good enough, the task as written may not need these "
+                  f"rules (check its outcomes and starts); to learn more, {NOT_LEARNED_HINT}")
+    elif name.startswith("random table "):
+        advice = (f"a random rule table {does}, so the trials did not tell controllers apart: "
+                  "measure each on more episodes (--set trials=3, --set "
+                  f"selection.episodes=100), {_OTHERS}")
+    else:
+        advice = (f"your controller '{name}' {does}: start from it (--init with that file) "
+                  f"and {NOT_LEARNED_HINT}")
+    return f"{head}\n  try: {advice}"
+
+
+def _number(value: object) -> str:
+    return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
 
 
 def baseline_episodes(n_commands: int, given: int, confirmed: int) -> int:

@@ -16,6 +16,7 @@ from flctool.behaviour.learning import StopConfig
 from flctool.cli import app
 from flctool.errors import SpecError
 from flctool.learners import make_learner, train
+from flctool.learners.baselines import not_learned_message
 from flctool.learners.confirmation import confirmation_seeds
 from flctool.rollout import CONFIRMATION_SEED_LOW, TRAIN_SEED_LOW
 from flctool.runs import create_run, open_run, resolve_behaviour
@@ -109,10 +110,43 @@ def test_a_run_that_cannot_learn_ends_not_learned_with_its_exit_code(tmp_path: P
     result = runner.invoke(app, ["learn", str(unlearnable(tmp_path)), "--out", str(out)])
     assert result.exit_code == 3, result.output
     assert "not learned" in result.stderr and "try:" in result.stderr
+    baseline = json.loads((out / "run.json").read_text())["selection"]["baseline"]["baseline"]
+    assert f"'{baseline}'" in result.stderr
     info = json.loads((out / "run.json").read_text())
     assert info["status"] == "not_learned"
     assert info["selection"]["baseline"]["learned"] is False
     assert open_run(out).summary().status == "not_learned"
+
+
+def verdict(baseline: str, low: float, high: float) -> dict[str, object]:
+    return {"learned": False, "baseline": baseline, "baseline_fitness": 1.6,
+            "difference": {"value": (low + high) / 2, "low": low, "high": high, "n": 50}}
+
+
+@pytest.mark.parametrize(("baseline", "advice"), [
+    ("always approach", "a controller that always commands 'approach' does better: if that is "
+                        "good enough, the task as written may not need these rules"),
+    ("random table 2", "a random rule table does better, so the trials did not tell "
+                       "controllers apart: measure each on more episodes (--set trials=3"),
+    ("handmade.yaml", "your controller 'handmade.yaml' does better: start from it (--init"),
+])
+def test_not_learned_advice_follows_the_baseline_that_was_as_good(baseline: str,
+                                                                  advice: str) -> None:
+    message = not_learned_message(verdict(baseline, -0.4, -0.1), ["approach", "dribble"])
+    head, tried = message.split("\n")
+    assert head == (f"the learned controller is not clearly better than the baseline "
+                    f"'{baseline}' (mean fitness 1.600; difference -0.250 [-0.400, -0.100] "
+                    f"over the same 50 episodes)")
+    assert tried.startswith(f"  try: {advice}"), tried
+    # an interval that holds zero: as good, not better
+    assert " does as well" in not_learned_message(verdict(baseline, -0.1, 0.2),
+                                                  ["approach", "dribble"])
+
+
+def test_a_given_baseline_named_like_a_constant_of_other_commands_is_a_given_one() -> None:
+    # "always kick" is not a constant here: the behaviour has no command "kick"
+    message = not_learned_message(verdict("always kick", -0.1, 0.2), ["approach"])
+    assert "your controller 'always kick' does as well" in message
 
 
 @pytest.mark.slow
