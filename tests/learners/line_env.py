@@ -7,7 +7,8 @@ is drawn from the episode's seed. The best controller says ``up`` in every rule.
 
 from __future__ import annotations
 
-from typing import Any
+import json
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,6 +17,9 @@ from flctool import parse_behaviour
 from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.runs import resolve_behaviour
+
+if TYPE_CHECKING:
+    from flctool.learners import GenerationMetrics, Learner
 
 LINE_BEHAVIOUR = """\
 flctool: 1
@@ -81,3 +85,20 @@ class LineEnv(BatchEnv):
 
     def success(self) -> BoolArray:
         return self.reached.copy()
+
+
+def cut_and_resumed(behaviour: Behaviour, after: int) -> tuple[Learner, list[GenerationMetrics]]:
+    """A run of ``behaviour`` on :class:`LineEnv` cut after generation ``after``, its
+    checkpoint passed through JSON as a file would hold it, and resumed to its end: the
+    resumed learner and the generations it ran."""
+    from flctool.learners import Callback, make_learner, train
+
+    class StopAfter(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            return metrics.generation < after
+
+    first = make_learner(behaviour, LineEnv())
+    train(first, [StopAfter()])
+    second = make_learner(behaviour, LineEnv())
+    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
+    return second, train(second)

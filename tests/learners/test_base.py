@@ -20,7 +20,7 @@ from flctool.learners import (
 )
 from flctool.plugins import names, plugins
 from flctool.registry import UnknownNameError
-from tests.learners.line_env import LineEnv, line_behaviour
+from tests.learners.line_env import LineEnv, cut_and_resumed, line_behaviour
 
 
 class Recorder(Callback):
@@ -93,17 +93,7 @@ def test_resuming_from_a_json_checkpoint_ends_where_an_uninterrupted_run_ends(
     behaviour = line_behaviour(learner=name, generations=7)
     whole = make_learner(behaviour, LineEnv())
     whole_history = train(whole)
-
-    class StopAt(Callback):
-        def on_generation(self, metrics: GenerationMetrics) -> bool:
-            return metrics.generation < 3
-
-    first = make_learner(behaviour, LineEnv())
-    train(first, [StopAt()])
-    checkpoint = json.loads(json.dumps(first.state_dict()))
-    second = make_learner(behaviour, LineEnv())
-    second.load_state_dict(checkpoint)
-    rest = train(second)
+    second, rest = cut_and_resumed(behaviour, after=3)
     assert [m.generation for m in rest] == [4, 5, 6]
     strip = lambda ms: [(m.mean, m.std, m.best, m.min, m.steps) for m in ms]  # noqa: E731
     assert strip(rest) == strip(whole_history[4:])

@@ -18,7 +18,7 @@ from flctool.learners.extension import Extension, most_generations
 from flctool.runs import resolve_behaviour
 from flctool.training import resume_run, start_run
 from tests.conftest import BEHAVIOURS
-from tests.learners.line_env import LineEnv, line_behaviour
+from tests.learners.line_env import LineEnv, cut_and_resumed, line_behaviour
 
 
 def extended(**learning: object) -> object:
@@ -90,16 +90,7 @@ def test_an_extended_run_resumes_bit_for_bit() -> None:
     whole = make_learner(behaviour, LineEnv())
     train(whole)
     state = json.loads(json.dumps(whole.state_dict()))
-
-    class StopAt(Callback):
-        def on_generation(self, metrics: GenerationMetrics) -> bool:
-            return metrics.generation < 3
-
-    first = make_learner(behaviour, LineEnv())
-    train(first, [StopAt()])
-    second = make_learner(behaviour, LineEnv())
-    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
-    train(second)
+    second, _ = cut_and_resumed(behaviour, after=3)
     assert second.state_dict() == {**state, "elapsed": second.state_dict()["elapsed"]}
 
 

@@ -14,7 +14,7 @@ from flctool.learners import make_learner, train
 from flctool.learners.ga import greedy_controller
 from flctool.learners.genetic import HYBRID, PITT, GeneticLearner
 from flctool.runs import open_run
-from tests.learners.line_env import LineEnv, line_behaviour
+from tests.learners.line_env import LineEnv, cut_and_resumed, line_behaviour
 
 EARLIER_RUNS = Path(__file__).parent / "earlier_runs"
 
@@ -103,17 +103,7 @@ def test_a_stalled_run_restarts_all_but_its_elites_and_resumes_bit_for_bit() -> 
     state = json.loads(json.dumps(learner.state_dict()))
     assert state["restarts"]["restarts"] == learner.restarts
     # cut after generation 4, resumed from the checkpoint: the same run
-    first = make_learner(behaviour, LineEnv())
-    from flctool.learners import Callback, GenerationMetrics
-
-    class StopAt(Callback):
-        def on_generation(self, metrics: GenerationMetrics) -> bool:
-            return metrics.generation < 4
-
-    train(first, [StopAt()])
-    second = make_learner(behaviour, LineEnv())
-    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
-    train(second)
+    second, _ = cut_and_resumed(behaviour, after=4)
     assert second.state_dict()["population"] == state["population"]
     assert second.state_dict()["restarts"] == state["restarts"]
 
@@ -161,16 +151,6 @@ def test_a_run_with_the_greedy_individual_resumes_bit_for_bit() -> None:
     behaviour = line_behaviour(learner="hybrid", generations=8)
     whole = make_learner(behaviour, LineEnv())
     train(whole)
-    from flctool.learners import Callback, GenerationMetrics
-
-    class StopAt(Callback):
-        def on_generation(self, metrics: GenerationMetrics) -> bool:
-            return metrics.generation < 3
-
-    first = make_learner(behaviour, LineEnv())
-    train(first, [StopAt()])
-    second = make_learner(behaviour, LineEnv())
-    second.load_state_dict(json.loads(json.dumps(first.state_dict())))
-    train(second)
+    second, _ = cut_and_resumed(behaviour, after=3)
     assert second.state_dict()["population"] == whole.state_dict()["population"]
     assert second.state_dict()["q"] == whole.state_dict()["q"]
