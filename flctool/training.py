@@ -28,7 +28,7 @@ from flctool.behaviour.overrides import (
     Override,
     Overrides,
     as_overrides,
-    gives_extend,
+    gives,
     resolve_behaviour,
 )
 from flctool.compile import compile_behaviour
@@ -167,8 +167,9 @@ def check_same_run(run: Run, requested: Behaviour) -> None:
     generation budget; the error lists the fields that differ."""
     recorded = behaviour_to_data(run.behaviour)
     wanted = behaviour_to_data(requested)
-    # the budget is the run's: its generations, and its extend unless the file writes one
-    budget = ("generations",) if gives_extend(requested) else ("generations", "extend")
+    # the budget is the run's: its generations, and its extend and trials unless the file
+    # writes them (a file without a budget gets them sized, docs/learning.md)
+    budget = ["generations", *(key for key in ("extend", "trials") if not gives(requested, key))]
     for data in (recorded, wanted):
         for key in budget:
             data.get("learning", {}).pop(key, None)

@@ -19,7 +19,7 @@ from flctool.behaviour.dump import behaviour_to_data
 from flctool.behaviour.load import behaviour_from_data
 from flctool.behaviour.located import source_of
 from flctool.behaviour.models import Behaviour
-from flctool.behaviour.sections import keep_keys_read_by
+from flctool.behaviour.sections import keep_keys_read_by, section_model
 from flctool.errors import PathPart, Problem, SpecError
 
 
@@ -74,13 +74,22 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
     """
     given = as_overrides(overrides)
     data = behaviour_to_data(behaviour)
+    learning = data["learning"]
+    # trials that came with the budget a file without one gets (extend), not from the file
+    sized_trials = _extended_by_default(behaviour) and not gives(behaviour, "trials")
     learner = next((o.value for o in given if o.path == ("learning", "learner")), None)
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
-        data["learning"] = keep_keys_read_by(data["learning"], learner)
+        learning = data["learning"] = keep_keys_read_by(learning, learner)
+        model = section_model("learning", {"learner": learner})
+        if sized_trials and "trials" in learning:  # the new learner's sized trials
+            learning["trials"] = getattr(model, "sized_trials", 1)
     if _gives_the_budget(given) and _extended_by_default(behaviour):
         # a budget given now is exact: `extend` came because the file gave none (or is the
-        # default a written-out file carries); an `extend` of the file's own is kept
-        data["learning"].pop("extend", None)
+        # default a written-out file carries), and so did sized trials; an `extend` of the
+        # file's own is kept
+        learning.pop("extend", None)
+        if sized_trials:
+            learning.pop("trials", None)
     places = apply_overrides(data, given)
     return behaviour_from_data(data, source_of(behaviour).with_overrides(places))
 
@@ -100,11 +109,12 @@ def _extended_by_default(behaviour: Behaviour) -> bool:
     return behaviour.learning.extend == ExtendConfig()
 
 
-def gives_extend(behaviour: Behaviour) -> bool:
-    """Whether the behaviour's file writes ``learning.extend``, or an override gave it."""
+def gives(behaviour: Behaviour, key: str) -> bool:
+    """Whether the behaviour's file writes ``learning.<key>``, or an override gave it (not
+    a default, nor what the sized budget of a file without one set)."""
     source = source_of(behaviour)
-    return source.mark(("learning", "extend")) is not None or any(
-        tuple(path[:2]) == ("learning", "extend") for path in source.overrides)
+    return source.mark(("learning", key)) is not None or any(
+        tuple(path[:2]) == ("learning", key) for path in source.overrides)
 
 
 def apply_overrides(data: dict[str, Any], overrides: Overrides,

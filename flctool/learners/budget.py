@@ -204,6 +204,7 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     elites validated (a run usually meets fewer distinct leaders), and the race
     (:func:`~flctool.learners.selection.race_cost`) over all of them."""
     from flctool.behaviour.located import source_of
+    from flctool.behaviour.overrides import gives
     from flctool.learners.baselines import baseline_episodes
     from flctool.learners.extension import most_generations
     from flctool.learners.selection import race_cost
@@ -222,6 +223,8 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
         mark = source_map.mark(full)
         default = (config.default_race if path == ("selection", "race")
                    else type(section).model_fields[path[-1]].default)
+        if path == ("trials",) and config.extend is not None and not gives(behaviour, "extend"):
+            default = config.sized_trials  # what a file without a budget gets
         given = next((where for given, where in source_map.overrides.items()
                       if full[:len(given)] == given), None)
         if given is not None:  # "command line (--set trials)": the option says it

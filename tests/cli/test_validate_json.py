@@ -35,11 +35,12 @@ def test_problems_are_data_with_file_line_column_field_message_and_fix(
         "rules": 15, "rules_to_learn": 15, "budget": None, "problems": None, "warnings": [],
         "notes": []}
     budget = files[0]["budget"]
-    # no budget in the file: 30 generations, on while improving, to at most 60
-    assert budget["training_episodes"] == 600
+    # no budget in the file: 30 generations, on while improving, to at most 60; 2 trials
+    assert budget["training_episodes"] == 60 * 10 * 2
     assert budget["extend"] == {"most_generations": 60, "patience": 10}
     assert budget["settings"]["generations"] == {"value": 30, "from": "default"}
-    assert budget["most_episodes"] == 600 + budget["selection_episodes_at_most"] + 50 + 120
+    assert budget["settings"]["trials"] == {"value": 2, "from": "default"}
+    assert budget["most_episodes"] == 1200 + budget["selection_episodes_at_most"] + 50 + 120
     assert budget["statement"][0].startswith("budget: at most")
     assert files[1]["budget"] is None  # invalid: nothing to state
     problems = files[1]["problems"]

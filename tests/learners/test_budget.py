@@ -42,18 +42,38 @@ def test_a_file_without_a_budget_is_extended_up_to_a_bound_from_its_size() -> No
     plan = plan_budget(behaviour)
     # 15 rules x log2 5 = 34.8 units: 30 x ceil(34.8 / 30) = 60, and at least 2 x 30
     assert most_generations(15, 5, 30) == 60 and plan.extension == (60, 10)
-    assert plan.training == 60 * 10
+    assert behaviour.learning.trials == 2  # sized: two trials under the GAs
+    assert plan.training == 60 * 10 * 2
     validated = 60 + behaviour.learning.selection.candidates + 1
     assert plan.selection == validated * 20 + race_cost(validated, 20, 60)
     assert all(s.source == "default" for s in plan.settings.values())
     assert "30 to 60 generations (on past 30 until 10 pass without a better selected " \
         "controller" in plan.lines()[1]
+    assert "x 10 individuals x 2 trials (the file gives none of them)" in plan.lines()[1]
     assert most_generations(54, 5, 30) == 150 and most_generations(40, 5, 50) == 120
     # a budget given is exact: on the command line, in the file, or extend's own bound
     given = resolve_behaviour(behaviour, {"generations": 12})
     assert given.learning.extend is None and plan_budget(given).training == 120
+    paper = resolve_behaviour(behaviour, {"protocol": "paper"})
+    assert paper.learning.trials == 1 and plan_budget(paper).training == 300
     bounded = resolve_behaviour(behaviour, {"extend.most": 45})
-    assert plan_budget(bounded).extension == (45, 10)
+    assert plan_budget(bounded).extension == (45, 10) and bounded.learning.trials == 2
+
+
+def test_sized_trials_are_the_learner_s_and_a_file_s_trials_stay() -> None:
+    behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
+    # fuzzy_q's sized budget keeps one trial: its generation is population x trials episodes
+    assert resolve_behaviour(behaviour, {"learner": "fuzzy_q"}).learning.trials == 1
+    assert resolve_behaviour(behaviour, {"learner": "pitt"}).learning.trials == 2
+    cartpole = load_behaviour(BEHAVIOURS / "cartpole.yaml")  # fuzzy_q, no budget
+    assert cartpole.learning.extend is not None and cartpole.learning.trials == 1
+    assert resolve_behaviour(cartpole, {"learner": "hybrid"}).learning.trials == 2
+    # trials the file or an override gives stay, whatever the budget
+    written = resolve_behaviour(behaviour, {"trials": 3})
+    assert written.learning.trials == 3
+    assert resolve_behaviour(written, {"generations": 40}).learning.trials == 3
+    # one trial with the extension: given trials are not the sized default
+    assert resolve_behaviour(behaviour, {"trials": 1}).learning.extend is not None
 
 
 def test_each_setting_says_where_it_came_from() -> None:
