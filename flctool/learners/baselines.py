@@ -72,7 +72,8 @@ class Verdict:
 
 
 #: What to try when a run did not learn: more budget, another learner, fewer rules.
-_BUDGET = "give it more budget (--generations, --set trials=2, --set population=20)"
+# (extend.most keeps a sized budget's extension and trials; --generations would replace them)
+_BUDGET = "give it more budget (--set extend.most=200, --set trials=3, --set population=20)"
 _OTHERS = ("try another learner (--learner fuzzy_q or pitt), or use coarser sets (fewer "
            "rules to learn)")
 NOT_LEARNED_HINT = f"{_BUDGET}, {_OTHERS}"

@@ -161,8 +161,10 @@ class BudgetPlan:
             generations = (f"{least} to {most} generations (on past {least} until {patience} "
                            f"pass without a better selected controller{fresh}; {most} from "
                            f"the problem's size unless extend.most is given)")
+            # a sized budget's trials are not the paper's one
             source = source.replace("the paper's protocol: the file gives none of them",
-                                    "the file gives none of them")
+                                    "the file gives none of them").replace(
+                "the rest the paper's protocol", "the rest the defaults")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
@@ -204,7 +206,6 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     elites validated (a run usually meets fewer distinct leaders), and the race
     (:func:`~flctool.learners.selection.race_cost`) over all of them."""
     from flctool.behaviour.located import source_of
-    from flctool.behaviour.overrides import gives
     from flctool.learners.baselines import baseline_episodes
     from flctool.learners.extension import most_generations
     from flctool.learners.selection import race_cost
@@ -223,8 +224,8 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
         mark = source_map.mark(full)
         default = (config.default_race if path == ("selection", "race")
                    else type(section).model_fields[path[-1]].default)
-        if path == ("trials",) and config.extend is not None and not gives(behaviour, "extend"):
-            default = config.sized_trials  # what a file without a budget gets
+        if path == ("trials",) and value == config.sized_trials:
+            default = value  # what a file without a budget gets
         given = next((where for given, where in source_map.overrides.items()
                       if full[:len(given)] == given), None)
         if given is not None:  # "command line (--set trials)": the option says it
