@@ -43,8 +43,9 @@ def learn(
     = None,
     seed: Annotated[int | None, typer.Option("--seed", "-s", help="Random seed.")] = None,
     generations: Annotated[int | None, typer.Option(
-        "--generations", "-g", help="Generations to run (with --resume: the new total).")]
-    = None,
+        "--generations", "-g", help=(
+            "Generations to run, exactly: a file without a budget then has no extension and "
+            "one trial (with --resume: the new total)."))] = None,
     population: Annotated[int | None, typer.Option(
         "--population", "-p", help="Individuals per generation.")] = None,
     out: Annotated[Path | None, typer.Option(
