@@ -75,8 +75,10 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
     given = as_overrides(overrides)
     data = behaviour_to_data(behaviour)
     learning = data["learning"]
-    # trials that came with the budget a file without one gets (extend), not from the file
-    sized_trials = _extended_by_default(behaviour) and not gives(behaviour, "trials")
+    # the trials of the budget a file without one gets (with the default extend; a file
+    # flctool wrote out carries both, so they are read by value, as extend is)
+    config = behaviour.learning
+    sized_trials = _extended_by_default(behaviour) and config.trials == config.sized_trials
     learner = next((o.value for o in given if o.path == ("learning", "learner")), None)
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
         learning = data["learning"] = keep_keys_read_by(learning, learner)

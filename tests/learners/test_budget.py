@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from flctool import load_behaviour
+from flctool.behaviour import behaviour_to_yaml
 from flctool.behaviour.learning import ExtendConfig, SelectionConfig
 from flctool.learners import make_learner, train
 from flctool.learners.budget import plan_budget
@@ -74,6 +77,21 @@ def test_sized_trials_are_the_learner_s_and_a_file_s_trials_stay() -> None:
     assert resolve_behaviour(written, {"generations": 40}).learning.trials == 3
     # one trial with the extension: given trials are not the sized default
     assert resolve_behaviour(behaviour, {"trials": 1}).learning.extend is not None
+    # a budget with trials given keeps them
+    kept = resolve_behaviour(behaviour, {"generations": 40, "trials": 2})
+    assert kept.learning.trials == 2 and kept.learning.extend is None
+
+
+def test_a_written_out_copy_gives_up_its_sized_budget_as_the_file_does(tmp_path: Path) -> None:
+    # a run directory's behaviour.yaml (or any copy flctool writes) writes extend and trials
+    behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
+    copy = tmp_path / "copy.yaml"
+    copy.write_text(behaviour_to_yaml(behaviour), encoding="utf-8")
+    written = load_behaviour(copy)
+    assert "trials: 2" in copy.read_text() and written.learning.trials == 2
+    for source in (behaviour, written):
+        exact = resolve_behaviour(source, {"generations": 12})
+        assert (exact.learning.extend, exact.learning.trials) == (None, 1)
 
 
 def test_each_setting_says_where_it_came_from() -> None:
