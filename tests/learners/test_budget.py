@@ -5,9 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from flctool import load_behaviour
-from flctool.behaviour import behaviour_to_yaml
+from flctool.behaviour import behaviour_from_data, behaviour_to_data, behaviour_to_yaml
 from flctool.behaviour.learning import ExtendConfig, SelectionConfig
 from flctool.learners import make_learner, train
 from flctool.learners.budget import plan_budget
@@ -139,3 +141,42 @@ def test_a_run_spends_no_more_than_its_budget_says(name: str, race: int) -> None
     assert usage.training_episodes == plan.training
     assert usage.selection_episodes <= plan.selection
     assert usage.episodes <= plan.most
+
+
+_LEARNING = st.fixed_dictionaries({}, optional={
+    "learner": st.sampled_from(["hybrid", "pitt", "fuzzy_q"]),
+    "generations": st.integers(1, 40),
+    "trials": st.integers(1, 3),
+    "extend": st.sampled_from([{}, {"patience": 5}]),
+    "protocol": st.sampled_from(["auto", "paper"]),
+})
+_OVERRIDES = st.fixed_dictionaries({}, optional={
+    "generations": st.integers(1, 40),
+    "protocol": st.just("paper"),
+    "trials": st.integers(1, 3),
+    "learner": st.sampled_from(["hybrid", "pitt", "fuzzy_q"]),
+})
+
+
+@settings(max_examples=150, deadline=None)
+@given(learning=_LEARNING, overrides=_OVERRIDES)
+def test_a_budget_reads_the_same_from_a_file_and_its_written_out_copy(
+        learning: dict[str, object], overrides: dict[str, object]) -> None:
+    assume(not (learning.get("protocol") == "paper" and "extend" in learning))
+    assume(not (overrides.get("protocol") == "paper" and "extend" in learning))
+    base = behaviour_to_data(load_behaviour(BEHAVIOURS / "ballchase.yaml"), defaults=False)
+    behaviour = behaviour_from_data({**base, "learning": {"seed": 1, **learning}})
+    copy = behaviour_from_data(behaviour_to_data(behaviour))  # every key written out
+    budget = [(b.learning.learner, b.learning.trials, b.learning.generations, b.learning.extend)
+              for b in (resolve_behaviour(behaviour, overrides),
+                        resolve_behaviour(copy, overrides))]
+    assert budget[0] == budget[1]
+    learner, trials, _, extend = budget[0]
+    if "trials" in overrides:  # trials given on the command line are exact
+        assert trials == overrides["trials"]
+    elif "protocol" in overrides or "generations" in overrides:
+        if "trials" not in learning and "extend" not in learning:
+            assert trials == 1 and extend is None  # a given budget replaces the sized one
+    elif not {"generations", "extend", "trials", "protocol"} & set(learning):
+        # a file that gives no budget: extended, and two trials under the GAs
+        assert extend == ExtendConfig() and trials == (1 if learner == "fuzzy_q" else 2)
