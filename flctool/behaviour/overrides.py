@@ -78,14 +78,15 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
     # the trials of the budget a file without one gets (with the default extend; a file
     # flctool wrote out carries both, so they are read by value, as extend is)
     config = behaviour.learning
-    sized_trials = _extended_by_default(behaviour) and config.trials == config.sized_trials
+    sized = _extended_by_default(behaviour)
+    sized_trials = sized and config.trials == config.sized_trials
     learner = next((o.value for o in given if o.path == ("learning", "learner")), None)
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
         learning = data["learning"] = keep_keys_read_by(learning, learner)
         model = section_model("learning", {"learner": learner})
         if sized_trials and "trials" in learning:  # the new learner's sized trials
             learning["trials"] = getattr(model, "sized_trials", 1)
-    if _gives_the_budget(given) and _extended_by_default(behaviour):
+    if _gives_the_budget(given) and sized:
         # a budget given now is exact: `extend` came because the file gave none (or is the
         # default a written-out file carries), and so did sized trials; an `extend` of the
         # file's own is kept

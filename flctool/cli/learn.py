@@ -134,10 +134,6 @@ def learn(
 NOT_LEARNED_EXIT = 3
 
 
-def _number(value: object) -> str:
-    return f"{value:.3f}" if isinstance(value, (int, float)) else "-"
-
-
 def _warm_start(training: Training, init: Path) -> None:
     from flctool.warm_start import warm_start_from_path
 
@@ -225,9 +221,10 @@ def _report(summary: RunSummary) -> None:
             console.print(f"  fitness {best.fitness:.3f} in training")
         verdict = (summary.selection or {}).get("baseline")
         if verdict and verdict.get("learned"):
-            difference = verdict["difference"]
+            from flctool.learners.baselines import difference_text
+
             console.print(f"  learned: better than the strongest baseline, "
                           f"'{escape(str(verdict['baseline']))}', by "
-                          f"{_number(difference['value'])} [{_number(difference['low'])}, "
-                          f"{_number(difference['high'])}] mean fitness on the same episodes")
+                          f"{difference_text(verdict['difference'])} mean fitness on the same "
+                          f"episodes")
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

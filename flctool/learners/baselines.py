@@ -97,8 +97,7 @@ def not_learned_message(verdict: Mapping[str, Any], commands: Sequence[str]) -> 
     does = "does better" if isinstance(high, (int, float)) and high < 0 else "does as well"
     head = (f"the learned controller is not clearly better than the baseline '{name}' (mean "
             f"fitness {_number(verdict.get('baseline_fitness'))}; difference "
-            f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
-            f"{_number(high)}] over the same {difference.get('n')} episodes)")
+            f"{difference_text(difference)} over the same {difference.get('n')} episodes)")
     if name in {f"always {command}" for command in commands}:
         advice = (f"a controller that always commands '{name.removeprefix('always ')}' "
                   f"{does}: if that is good enough, the task as written may not need these "
@@ -111,6 +110,12 @@ def not_learned_message(verdict: Mapping[str, Any], commands: Sequence[str]) -> 
         advice = (f"your controller '{name}' {does}: start from it (--init with that file) "
                   f"and {NOT_LEARNED_HINT}")
     return f"{head}\n  try: {advice}"
+
+
+def difference_text(difference: Mapping[str, Any]) -> str:
+    """A verdict's difference as run.json holds it: ``value [low, high]``."""
+    return (f"{_number(difference.get('value'))} [{_number(difference.get('low'))}, "
+            f"{_number(difference.get('high'))}]")
 
 
 def _number(value: object) -> str:

@@ -148,10 +148,13 @@ class BudgetPlan:
         it came from."""
         s = self.settings
         protocol = [s[key] for key in ("generations", "population", "trials")]
-        source = ("the paper's protocol: the file gives none of them"
+        # a sized budget's defaults (extend, two trials) are not the paper's protocol
+        defaults = "the paper's protocol" if self.extension is None else "the defaults"
+        source = (("the paper's protocol: " if self.extension is None else "")
+                  + "the file gives none of them"
                   if all(x.source == "default" for x in protocol) else
                   ", ".join(f"{x.key} from {x.source}" for x in protocol
-                            if x.source != "default") + ", the rest the paper's protocol")
+                            if x.source != "default") + f", the rest {defaults}")
         generations = _count(s["generations"].value, "generation")
         if self.extension is not None:
             most, patience = self.extension
@@ -161,10 +164,6 @@ class BudgetPlan:
             generations = (f"{least} to {most} generations (on past {least} until {patience} "
                            f"pass without a better selected controller{fresh}; {most} from "
                            f"the problem's size unless extend.most is given)")
-            # a sized budget's trials are not the paper's one
-            source = source.replace("the paper's protocol: the file gives none of them",
-                                    "the file gives none of them").replace(
-                "the rest the paper's protocol", "the rest the defaults")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
