@@ -220,6 +220,14 @@ class BallVelocity(Section):
             raise ValueError("spread applies to towards, not to direction")
         return self
 
+    @model_serializer(mode="wrap")
+    def _only_what_applies(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
+        # A file written out must read back: spread's default is not written with a direction.
+        data: dict[str, Any] = handler(self)
+        if self.direction is not None:
+            data.pop("spread", None)
+        return data
+
 
 def _ordered(bounds: tuple[float, float], floor: float) -> tuple[float, float]:
     low, high = bounds

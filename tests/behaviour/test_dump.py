@@ -74,3 +74,62 @@ def test_activation_is_written_only_when_it_is_the_product(minimal_text: str) ->
     text = behaviour_to_yaml(product)
     assert "activation: product\n" in text
     assert parse_behaviour(text) == product
+
+
+_PITCH_WORLD = """\
+flctool: 1
+name: intercept
+inputs:
+  pan:
+    range: [-90.0, 90.0]
+    sets:
+      right: [-90.0, -90.0, -20.0, 0.0]
+      ahead: [-20.0, 0.0, 0.0, 20.0]
+      left: [0.0, 20.0, 90.0, 90.0]
+  drift:
+    range: [-60.0, 60.0]
+    sets:
+      right: [-60.0, -60.0, -3.0, 3.0]
+      left: [-3.0, 3.0, 60.0, 60.0]
+output:
+  name: turn
+  commands: {turn_right: -1.0, forward: 0.0, turn_left: 1.0}
+rules: []
+environment:
+  adapter: pitch
+  max_steps: 300
+  ball: {friction: 0.02}
+  start:
+    robot: {x: [-1500, -1000], y: [-400, 400], heading: [-20, 20]}
+    ball: {distance: [900, 1300], bearing: 30}
+    ball_velocity: BALL_VELOCITY
+  opponents:
+    - {x: [1950, 1950], y: [-150, 150], behaviour: track, speed: 5, radius: 120}
+  points:
+    spot: {x: 2100, y: 300}
+  channels:
+    drift: {velocity: [ball, y], noise: 3}
+    aim: {bearing: [ball, spot]}
+    gap: {distance: [ball, opponent]}
+    side: {offset: [ball, goal, robot]}
+    behind: {angle: [robot, ball, goal]}
+  rewards:
+    - {channel: side, scale: -0.000001, abs: true}
+  outcomes:
+    - {when: ball_reached, reward: 1, success: true, held: 2}
+    - {all: [{when: threshold, channel: gap, max: 170}, {when: ball_off_pitch}], reward: -1}
+    - {any: [{when: ball_off_pitch}, {when: off_pitch}], reward: -1}
+"""
+
+
+@pytest.mark.parametrize("velocity", ["{speed: [20, 40], direction: [-120, 120]}",
+                                      "{speed: [70, 90], towards: own_goal, spread: 300}",
+                                      "{speed: [70, 90], towards: own_goal}"])
+def test_a_pitch_world_with_every_kind_of_option_reads_back_from_its_written_out_copy(
+        velocity: str) -> None:
+    """``flctool learn`` writes the behaviour out and reads it back: an optional key whose
+    default is written where it does not apply (a ball rolling in a ``direction`` with the
+    ``spread`` of ``towards``) made a valid file fail to learn."""
+    behaviour = parse_behaviour(_PITCH_WORLD.replace("BALL_VELOCITY", velocity))
+    assert parse_behaviour(behaviour_to_yaml(behaviour)) == behaviour
+    assert parse_behaviour(behaviour_to_yaml(behaviour, defaults=False)) == behaviour
