@@ -121,6 +121,20 @@ def even_partition(low: float, high: float, count: int) -> list[tuple[float, ...
     return sets
 
 
+def _pitch_things_read(channels: list[str]) -> list[str]:
+    """An obstacle or an opponent for inputs that read one (the pitch world has none unless
+    the file places them), so that the new file validates and says where to edit."""
+    lines = []
+    if any(c.startswith("obstacle_") for c in channels):
+        lines += ["  # a standing robot in the middle of the pitch: place the obstacles the "
+                  "task needs", "  obstacles:", "    - {x: [-200, 200], y: [-200, 200]}"]
+    if any(c.startswith("opponent_") for c in channels):
+        lines += ["  # a player that walks at the ball: place the opponents the task needs "
+                  "(behaviour: stand, track or chase)", "  opponents:",
+                  "    - {x: [500, 1000], y: [-500, 500], behaviour: chase, speed: 30}"]
+    return lines
+
+
 def _number_text(value: float) -> str:
     return repr(float(value))
 
@@ -147,6 +161,8 @@ def _environment_text(adapter: str | None, inputs: list[InputDeclaration],
         if sensors:
             lines.append("  sensors:")
             lines += [f"    {name}: {channel}" for name, channel in sensors.items()]
+        if adapter == "pitch":
+            lines += _pitch_things_read([sensors.get(i.name, i.name) for i in inputs])
         return "\n".join(lines) + "\n"
     kind, _, env_id = adapter.partition(":")
     if kind == "gymnasium" and env_id:

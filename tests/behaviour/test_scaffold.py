@@ -61,6 +61,24 @@ def test_sensor_maps_an_input_to_a_channel() -> None:
     assert behaviour.environment.sensors == {"target": "goal_bearing"}  # type: ignore[union-attr]
 
 
+@pytest.mark.parametrize(("inputs", "sensors", "placed"), [
+    (["obstacle_bearing:-180:180:3", "obstacle_distance:0:3000:2"], {}, "obstacles"),
+    (["opponent_bearing:-180:180:5"], {}, "opponents"),
+    (["threat:0:3000:3"], {"threat": "opponent_distance"}, "opponents"),
+])
+def test_inputs_that_read_an_obstacle_or_opponent_get_one_to_edit(
+        inputs: list[str], sensors: dict[str, str], placed: str) -> None:
+    """The pitch world has no obstacle or opponent unless the file places one, so a new
+    file whose inputs read them places one (it would not validate otherwise)."""
+    text = scaffold_behaviour("evade", [parse_input(i) for i in inputs], WALK,
+                              adapter="pitch", sensors=sensors)
+    environment = parse_behaviour(text).environment
+    assert len(getattr(environment, placed)) == 1
+    assert "# a " in text.split(f"  {placed}:")[0].splitlines()[-1]  # says to edit it
+    other = {"obstacles", "opponents"} - {placed}
+    assert not getattr(environment, other.pop())
+
+
 def test_gymnasium_and_no_environment() -> None:
     text = scaffold_behaviour("cart", [parse_input("angle:-0.2:0.2:3")],
                               [parse_command("left:0"), parse_command("right:1")],
