@@ -6,6 +6,7 @@ wrong and how to fix it.
 
 from __future__ import annotations
 
+import re
 import types
 import typing
 from pathlib import Path
@@ -80,7 +81,8 @@ def behaviour_from_data(data: Any, source: SourceMap | None = None,
         behaviour = Behaviour.model_validate(data, context={"problems": semantic})
     except ValidationError as exc:
         reported = {p.path for p in problems}
-        problems += [p for p in (_translate(error, source, data) for error in exc.errors())
+        problems += [p for p in (_translate(error, source, data)
+                                 for error in _in_written_form(exc.errors(), data))
                      if p.path not in reported]
         # Report the cross-field problems of the parts that did validate too, in one pass.
         semantic = [p for p in _partial_problems(data)
@@ -250,7 +252,7 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
     loc: list[PathPart] = list(error["loc"])
     kind = error["type"]
     message = error["msg"]
-    hint = ""
+    hint = error.get("hint", "")  # one _in_written_form gave
     # The plugin whose model read the section the error is in, if it is a chosen one.
     chosen = CHOSEN[loc[0]].chosen(data.get(loc[0])) if loc and loc[0] in CHOSEN else None
     if len(loc) >= 5 and loc[0] == "inputs" and loc[2] == "sets" and loc[4] in _SET_FORMS:
@@ -283,6 +285,12 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
     elif kind == "missing":
         message = f"required field '{loc[-1]}' is missing"
         hint = f"add '{loc[-1]}:' here"
+        environment = data.get("environment")
+        if (len(loc) == 3 and loc[0] == "inputs" and loc[2] == "range"
+                and isinstance(environment, dict) and environment.get("adapter") == "gymnasium"):
+            # default_gymnasium_ranges reads it from a valid environment with finite bounds
+            hint += (", or let the environment give it: fix the environment's problems, if "
+                     "any; an observation with infinite bounds needs a range")
     elif kind == "extra_forbidden" and len(loc) == 2 and loc[0] == "learning" and chosen \
             and (foreign := foreign_key_message(str(loc[1]), chosen)) is not None:
         message = foreign  # another learner's key: say whose
@@ -307,11 +315,98 @@ def _translate(error: Any, source: SourceMap, data: dict[str, Any]) -> Problem:
         hint = f"give at least {error['ctx']['min_length']} entry"
     elif kind == "value_error":
         message = message.removeprefix("Value error, ")
+    elif kind in _MAPPING_EXPECTED:  # pydantic would name the model class
+        message = f"a mapping is expected here, got {error.get('input')!r}"
+        keys = _allowed_keys(loc, data)
+        hint = hint or (f"write a mapping with one of: {', '.join(keys)}" if keys else "")
     else:
         got = error.get("input")
         if not isinstance(got, (dict, list)):
             message = f"{message[0].lower()}{message[1:]}, got {got!r}"
     return source.problem(tuple(loc), message, hint)
+
+
+#: pydantic's error types that say a mapping was expected.
+_MAPPING_EXPECTED = frozenset({"model_type", "model_attributes_type", "dict_type",
+                               "dataclass_type"})
+#: ... that a list was expected, or a list's length is wrong.
+_LIST_EXPECTED = frozenset({"list_type", "tuple_type", "too_short", "too_long"})
+#: ... and that a single value was expected.
+_SCALAR_EXPECTED = frozenset({"float_type", "float_parsing", "int_type", "int_parsing",
+                              "int_from_float", "string_type", "bool_type", "bool_parsing",
+                              "literal_error", "finite_number"})
+#: The names pydantic gives the forms of a union in an error's location: a type (float,
+#: constrained-int, list[...], function-after[...]) or a model class.
+_FORM_NAME = re.compile(r"(float|int|str|bool|constrained-[a-z]+|[a-z-]+\[.*\]|[A-Z]\w*)\Z")
+
+
+def _in_written_form(errors: list[Any], data: dict[str, Any]) -> list[Any]:
+    """The errors of a value that may be written in several forms (``stop.target``: a number
+    or a mapping) about the form it is written in, and without the form's name.
+
+    pydantic tries every form and reports each one's errors under the form's name (``float``,
+    ``function-after[...]``); a user who wrote a mapping wants to hear about its keys, one who
+    wrote a number about the number (and that a mapping would also do). An error whose form
+    cannot be told (a validator's own message) is kept."""
+    kept: list[Any] = []
+    for error in errors:
+        loc = list(error["loc"])
+        value: Any = data
+        for i, part in enumerate(loc):
+            if (isinstance(value, dict) and part in value) or (
+                    isinstance(value, list) and isinstance(part, int)):
+                value = _item(value, part)
+                continue
+            if isinstance(part, str) and _FORM_NAME.match(part):
+                shape = _shape_of_form(part, error["type"], loc[i + 1:])
+                if shape is not None and shape != _shape(value):
+                    break  # about a form the value is not written in
+                error = {**error, "loc": (*loc[:i], *loc[i + 1:]), "form": True}
+                if _shape(value) == "scalar" and (keys := _allowed_keys(loc[:i], data)):
+                    error["hint"] = f"a mapping with one of: {', '.join(keys)} would do too"
+            kept.append(error)
+            break
+        else:
+            kept.append(error)
+    return _one_per_place(kept)
+
+
+def _shape(value: Any) -> str:
+    return "mapping" if isinstance(value, dict) else "list" if isinstance(value, list) else (
+        "scalar")
+
+
+def _shape_of_form(name: str, kind: str, inner: list[PathPart]) -> str | None:
+    """The shape of value a form's error is about (None: cannot be told): what its location
+    goes on into, or what its type says was expected. A form that converts the value first
+    (``function-before[...]``) may be about any shape."""
+    if name.startswith(("function-before", "function-wrap", "function-plain")):
+        return None
+    if inner:
+        return "list" if isinstance(inner[0], int) else "mapping"
+    for shape, kinds in (("mapping", _MAPPING_EXPECTED), ("list", _LIST_EXPECTED),
+                         ("scalar", _SCALAR_EXPECTED)):
+        if kind in kinds:
+            return shape
+    return None
+
+
+def _one_per_place(errors: list[Any]) -> list[Any]:
+    """The errors of several forms at one place as one: "input should be 'all', or a valid
+    list"."""
+    merged: list[Any] = []
+    at: dict[tuple[Any, ...], Any] = {}
+    for error in errors:
+        place = tuple(error["loc"])
+        first = at.get(place) if error.get("form") else None
+        if first is None:
+            merged.append(error)
+            if error.get("form"):
+                at[place] = error
+            continue
+        other = error["msg"].removeprefix("Input should be ").removeprefix("input should be ")
+        first["msg"] = f"{first['msg']}, or {other}"
+    return merged
 
 
 #: The tags of models.FuzzySet's forms.

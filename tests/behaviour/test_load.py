@@ -141,6 +141,17 @@ BAD = [
      "flctool", "'1' is not a number"),
     ("elites fill the population", GOOD + "learning: {population: 4, elites: 4}\n", 23,
      "learning.elites", "4 elites in a population of 4 copy every individual unchanged"),
+    # a value of two forms (a number or a mapping) is reported in the form it is written in
+    ("a target out of its unit's range", GOOD + "learning: {stop: {target: {success: 1.5}}}\n",
+     23, "learning.stop.target.success", "input should be less than or equal to 1, got 1.5"),
+    ("a target's unit misspelt", GOOD + "learning: {stop: {target: {sucess: 0.9}}}\n", 23,
+     "learning.stop.target.sucess", "unknown key 'sucess'. Did you mean 'success'?"),
+    ("a target that is neither", GOOD + "learning: {stop: {target: high}}\n", 23,
+     "learning.stop.target", "input should be a valid number, unable to parse string"),
+    ("a list or a word", GOOD + "learning: {sets: {inputs: alll}}\n", 23,
+     "learning.sets.inputs", "input should be 'all'"),
+    ("a mapping expected", GOOD + "learning: {sets: {inputs: {size: 3}}}\n", 23,
+     "learning.sets.inputs.size", "a mapping is expected here, got 3"),
 ]
 
 
@@ -149,6 +160,7 @@ BAD = [
 def test_bad_file_is_reported_at_its_line(text: str, line: int | None, path: str,
                                           message: str) -> None:
     problems = _problems(text)
+    assert not any("function-" in p_path or "Config" in p_msg for _, p_path, p_msg in problems)
     assert any(p_line == line and p_path == path and message in p_msg
                for p_line, p_path, p_msg in problems), problems
 

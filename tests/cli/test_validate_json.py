@@ -46,7 +46,7 @@ def test_problems_are_data_with_file_line_column_field_message_and_fix(
     problems = files[1]["problems"]
     assert all(set(p) == PROBLEM_KEYS for p in problems)
     assert {"file": str(bad), "line": 3, "column": 1, "field": "inputs",
-            "message": "input should be a valid dictionary, got 3", "fix": None} in problems
+            "message": "a mapping is expected here, got 3", "fix": None} in problems
     assert files[2]["problems"] == [{
         "file": str(tmp_path / "none.yaml"), "line": None, "column": None, "field": None,
         "message": "no such file or directory",
