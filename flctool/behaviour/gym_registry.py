@@ -125,3 +125,20 @@ def observation_space_bounds(env_id: str, options: Mapping[str, Any],
         return ([float(str(v)) for v in space.low], [float(str(v)) for v in space.high])
     finally:
         env.close()
+
+
+def discrete_actions(env_id: str) -> int | None:
+    """The number of actions of ``env_id``'s Discrete action space, or None for a Box one
+    (the adapter checks the rest when it makes its environments). Makes the environment
+    once, with its default options, then closes it; raises :class:`SpecError` if it cannot."""
+    gym = import_gymnasium()
+    try:
+        env = gym.make(env_id, disable_env_checker=True)
+    except (gym.error.Error, TypeError) as error:
+        raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
+                                 f"'{env_id}': {error}")]) from None
+    try:
+        space = env.action_space
+        return int(space.n) if isinstance(space, gym.spaces.Discrete) else None
+    finally:
+        env.close()

@@ -16,8 +16,9 @@ import re
 from dataclasses import dataclass
 
 from flctool.behaviour.environment import DEFAULT_MOTION
+from flctool.behaviour.gym_registry import discrete_actions
 from flctool.behaviour.load import parse_behaviour
-from flctool.errors import FlcError, SpecError, format_path
+from flctool.errors import FlcError, MissingDependencyError, SpecError, format_path
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 #: Set names for a count of sets, from the low end of the range to the high end.
@@ -121,6 +122,21 @@ def even_partition(low: float, high: float, count: int) -> list[tuple[float, ...
     return sets
 
 
+def _gymnasium_actions(env_id: str) -> int | None:
+    """How many discrete actions ``env_id`` has, None for a Box action space, 0 when that
+    cannot be told here: gymnasium is not installed, or the id would import a module (a new
+    file never runs code) -- validation checks the file against the environment then."""
+    if ":" in env_id:
+        return 0
+    try:
+        return discrete_actions(env_id)
+    except MissingDependencyError:
+        return 0
+    except SpecError as error:
+        raise FlcError(error.problems[0].message,
+                       hint="check the id: flctool new --env gymnasium:ID") from None
+
+
 def _pitch_things_read(channels: list[str]) -> list[str]:
     """An obstacle or an opponent for inputs that read one (the pitch world has none unless
     the file places them), so that the new file validates and says where to edit."""
@@ -170,8 +186,17 @@ def _environment_text(adapter: str | None, inputs: list[InputDeclaration],
                  "  # the observation component each input reads",
                  "  observations:"]
         lines += [f"    {spec.name}: {i}" for i, spec in enumerate(inputs)]
-        lines += ["  # Discrete actions: the action index of each command (a Box action space:",
-                  "  # delete this mapping, the crisp output is the action)", "  actions:"]
+        actions = _gymnasium_actions(env_id)
+        if actions is None:
+            lines += ["  # a Box action space: the crisp output is the action, so the commands'",
+                      "  # values are actions"]
+            return "\n".join(lines) + "\n"
+        if actions and len(commands) > actions:
+            raise FlcError(f"'{env_id}' has {actions} actions, fewer than the {len(commands)} "
+                           "commands", hint=f"declare at most {actions} commands, one per action")
+        lines += ["  # the action index of each command" + (
+            "" if actions else " (a Box action space: delete this mapping, the crisp output "
+            "is the action)"), "  actions:"]
         lines += [f"    {name}: {i}" for i, (name, _) in enumerate(commands)]
         return "\n".join(lines) + "\n"
     raise FlcError(f"unknown environment '{adapter}'",

@@ -9,6 +9,7 @@ import pytest
 
 from flctool import compile_behaviour, parse_behaviour
 from flctool.behaviour.checks import uncovered_gap
+from flctool.behaviour.environment import GymnasiumConfig
 from flctool.behaviour.scaffold import (
     MAX_SETS,
     even_partition,
@@ -77,6 +78,23 @@ def test_inputs_that_read_an_obstacle_or_opponent_get_one_to_edit(
     assert "# a " in text.split(f"  {placed}:")[0].splitlines()[-1]  # says to edit it
     other = {"obstacles", "opponents"} - {placed}
     assert not getattr(environment, other.pop())
+
+
+def test_gymnasium_actions_follow_the_action_space() -> None:
+    """A Box action space takes the crisp output itself: no mapping to delete by hand."""
+    text = scaffold_behaviour("car", [parse_input("position:-1.2:0.6:3")],
+                              [parse_command("left:-1"), parse_command("right:1")],
+                              adapter="gymnasium:MountainCarContinuous-v0")
+    assert "actions:" not in text and "Box action space" in text
+    environment = parse_behaviour(text).environment
+    assert isinstance(environment, GymnasiumConfig) and not environment.actions
+    with pytest.raises(FlcError, match="'CartPole-v1' has 2 actions, fewer than the 3"):
+        scaffold_behaviour("cart", [parse_input("angle:-0.2:0.2:3")],
+                           [parse_command(c) for c in ("l:0", "m:1", "r:2")],
+                           adapter="gymnasium:CartPole-v1")
+    with pytest.raises(FlcError, match="Gymnasium cannot make 'CartPol-v1'"):
+        scaffold_behaviour("cart", [parse_input("angle:-0.2:0.2:3")], WALK,
+                           adapter="gymnasium:CartPol-v1")
 
 
 def test_gymnasium_and_no_environment() -> None:
