@@ -79,14 +79,15 @@ TASKS = (
     Task("cartpole-vote", "benchmarks/tasks/cartpole-vote.yaml", threshold=475.0, gym=True),
     Task("acrobot-fuzzy-q", "benchmarks/tasks/acrobot-fuzzy-q.yaml", threshold=-100.0,
          gym=True),
-    # written after the defaults were fixed, as a user would (one of them with `flctool new`
-    # in mind), and first learned on seeds nobody had run: nothing was tuned on them
+    # written after the defaults were fixed, as a user would, and first learned on seeds
+    # nobody had run: nothing was tuned on them
     Task("home-past-obstacle", "benchmarks/tasks/home-past-obstacle.yaml",
          handmade="benchmarks/tasks/home-past-obstacle-handmade.yaml"),
     Task("intercept", "benchmarks/tasks/intercept.yaml",
          handmade="benchmarks/tasks/intercept-handmade.yaml"),
     Task("dribble-past-obstacle", "benchmarks/tasks/dribble-past-obstacle.yaml",
          handmade="benchmarks/tasks/dribble-past-obstacle-handmade.yaml"),
+    Task("park", "benchmarks/tasks/park.yaml", handmade="benchmarks/tasks/park-handmade.yaml"),
     # its hand-made file (push along the velocity) returns 89.5, below the threshold
     Task("mountaincar-continuous", "benchmarks/tasks/mountaincar-continuous.yaml",
          threshold=90.0, gym=True),

@@ -78,6 +78,8 @@ MEASURED = (
                  "success median 0.961, worst 0.936 (hand-made 0.942)"),
     MeasuredTask("dribble-past-obstacle", 54, 5, "hybrid", 2820,
                  "success median 0.439, worst 0.397 (hand-made 0.394)"),
+    MeasuredTask("park", 15, 4, "hybrid", 680,
+                 "success median 1.000, worst 0.939 (hand-made 1.000)"),
     MeasuredTask("mountaincar-continuous", 9, 3, "hybrid", 1140,
                  "return median 96.2, worst 93.9; 10 of 10 seeds reach 90"),
 )
