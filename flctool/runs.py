@@ -18,6 +18,9 @@ A run directory holds::
                             generation's metrics row
     best.yaml               the run's best controller, deployable: the best validated
                             candidate (flctool.learners.selection)
+    baseline.yaml           a run that ended not_learned: the baseline that did as well or
+                            better (a constant command, a random table, the user's), to
+                            evaluate or deploy instead
 
 Every file is written atomically (write, then rename), checkpoints first: a run killed at any
 moment loses at most the generation in progress, and ``--resume`` rebuilds metrics.csv and
@@ -78,6 +81,7 @@ RUN_FILE = "run.json"
 METRICS_FILE = "metrics.csv"
 STRENGTHS_FILE = "strengths.csv"
 BEST_FILE = "best.yaml"
+BASELINE_FILE = "baseline.yaml"
 CHECKPOINT_DIR = "checkpoints"
 LOCK_FILE = "run.lock"
 #: A checkpoint larger than this is not read (the largest run flctool accepts, population x
@@ -680,7 +684,29 @@ class RunRecorder(Callback):
             status = "finished" if finished and written else "stopped"
             if status == "finished" and learner is not None and learner.learned is False:
                 status = NOT_LEARNED  # no better than a baseline (flctool.learners.baselines)
+            if learner is not None and status in ENDED:
+                self._write_baseline(learner, status == NOT_LEARNED)
             self.run.write_info(status, self.best or self.run.info().get("best"), selection)
+
+    def _write_baseline(self, learner: Learner, not_learned: bool) -> None:
+        """baseline.yaml: the baseline a run that did not learn was no better than, as a
+        deployable file; a run that (resumed) learned after all has none."""
+        path = self.run.path / BASELINE_FILE
+        verdict = learner.baseline_check.verdict
+        if not not_learned or verdict is None:
+            if path.is_file() and not path.is_symlink():
+                path.unlink()
+            return
+        genes = dict(learner.baseline_check.baselines(learner))[verdict.baseline]
+        d = verdict.difference
+        header = (f"The baseline '{verdict.baseline}' of run {self.run.path.name} (flctool "
+                  f"{__version__}): on its {d.n} confirmation episodes it scored mean fitness "
+                  f"{verdict.baseline_fitness!r}, and the learned controller (best.yaml) "
+                  f"{d.value:+.4f} [{d.low:+.4f}, {d.high:+.4f}] against it, so the run "
+                  "ended not_learned.\nDeployable: flctool validate / evaluate / export take "
+                  "it as it is.")
+        _write(self.run.path, path, behaviour_to_yaml(with_rules(self.run.behaviour, genes),
+                                                      header))
 
 
 # -- creating and opening runs ------------------------------------------------------------

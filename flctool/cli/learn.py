@@ -127,6 +127,10 @@ def learn(
         commands = list(behaviour.output.commands)
         err_console.print(f"[yellow]not learned:[/] "
                           f"{escape(not_learned_message(verdict, commands))}", highlight=False)
+        baseline_file = run.path / "baseline.yaml"  # flctool.runs.BASELINE_FILE (kept lazy)
+        if baseline_file.is_file():
+            err_console.print(f"  the baseline, to evaluate or deploy instead: "
+                              f"{escape(str(baseline_file))}", highlight=False)
         raise typer.Exit(NOT_LEARNED_EXIT)
 
 

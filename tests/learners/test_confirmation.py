@@ -116,6 +116,15 @@ def test_a_run_that_cannot_learn_ends_not_learned_with_its_exit_code(tmp_path: P
     assert info["status"] == "not_learned"
     assert info["selection"]["baseline"]["learned"] is False
     assert open_run(out).summary().status == "not_learned"
+    # the baseline it was no better than is there to use instead: its table, deployable
+    assert "baseline.yaml" in result.stderr
+    written = load_behaviour(out / "baseline.yaml")
+    assert written.is_deployable and written.inputs == load_behaviour(out / "best.yaml").inputs
+    names = list(written.output.commands)
+    learner = make_learner(open_run(out).behaviour)
+    expected = dict(learner.baseline_check.baselines(learner))[baseline]
+    assert [names.index(rule.then) for rule in written.rules] == expected.tolist()
+    assert f"'{baseline}'" in (out / "baseline.yaml").read_text().splitlines()[0]
 
 
 def verdict(baseline: str, low: float, high: float) -> dict[str, object]:
