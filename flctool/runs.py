@@ -700,9 +700,9 @@ class RunRecorder(Callback):
         genes = dict(learner.baseline_check.baselines(learner))[verdict.baseline]
         d = verdict.difference
         header = (f"The baseline '{verdict.baseline}' of run {self.run.path.name} (flctool "
-                  f"{__version__}): on its {d.n} confirmation episodes it scored mean fitness "
-                  f"{verdict.baseline_fitness!r}, and the learned controller (best.yaml) "
-                  f"{d.value:+.4f} [{d.low:+.4f}, {d.high:+.4f}] against it, so the run "
+                  f"{__version__}):\nmean fitness {verdict.baseline_fitness!r} on the run's "
+                  f"{d.n} confirmation episodes; the learned controller (best.yaml) scored "
+                  f"{d.value:+.4f} [{d.low:+.4f}, {d.high:+.4f}]\nagainst it, so the run "
                   "ended not_learned.\nDeployable: flctool validate / evaluate / export take "
                   "it as it is.")
         _write(self.run.path, path, behaviour_to_yaml(with_rules(self.run.behaviour, genes),
