@@ -349,6 +349,7 @@ def _in_written_form(errors: list[Any], data: dict[str, Any]) -> list[Any]:
     wrote a number about the number (and that a mapping would also do). An error whose form
     cannot be told (a validator's own message) is kept."""
     kept: list[Any] = []
+    dropped: list[Any] = []  # about another form: said only if nothing else is at the place
     for error in errors:
         loc = list(error["loc"])
         value: Any = data
@@ -359,15 +360,18 @@ def _in_written_form(errors: list[Any], data: dict[str, Any]) -> list[Any]:
                 continue
             if isinstance(part, str) and _FORM_NAME.match(part):
                 shape = _shape_of_form(part, error["type"], loc[i + 1:])
-                if shape is not None and shape != _shape(value):
-                    break  # about a form the value is not written in
                 error = {**error, "loc": (*loc[:i], *loc[i + 1:]), "form": True}
+                if shape is not None and shape != _shape(value):
+                    dropped.append((tuple(loc[:i]), error))
+                    break
                 if _shape(value) == "scalar" and (keys := _allowed_keys(loc[:i], data)):
                     error["hint"] = f"a mapping with one of: {', '.join(keys)} would do too"
             kept.append(error)
             break
         else:
             kept.append(error)
+    kept += [error for place, error in dropped
+             if not any(tuple(e["loc"][:len(place)]) == place for e in kept)]
     return _one_per_place(kept)
 
 
