@@ -68,6 +68,12 @@ def export_controller(
             raise FlcError("--dialect applies to the fcl format only",
                            hint="leave it out, or write FCL (--format fcl, or -o NAME.fcl)")
         behaviour, provenance = load_source(source, generation, individual)
+        if name in ("fll", "fcl", "fis") and getattr(behaviour.environment, "action",
+                                                       "crisp") == "vote":
+            say(f"'{behaviour.name}' acts by vote, which {name.upper()} cannot say: the "
+                "engine computes eq. 3's output; deploy the command whose rules' activations "
+                "sum highest (--format c exports it as <prefix>command)", "warning:",
+                "yellow", err=True)
         exporter = exporter_class(ExportOptions(provenance=provenance,
                                                 prefix="flc_" if prefix is None else prefix,
                                                 single=single, dialect=dialect or "iec"))

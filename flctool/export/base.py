@@ -203,6 +203,15 @@ def header_lines(behaviour: Behaviour, provenance: Mapping[str, object]) -> list
     return lines
 
 
+def vote_note(behaviour: Behaviour) -> list[str]:
+    """What an engine file (FLL, FCL: eq. 3's output only) says of a behaviour that acts by
+    vote, as comment lines; none for one that does not."""
+    if getattr(behaviour.environment, "action", "crisp") != "vote":
+        return []
+    return ["It acts by vote (environment.action: vote): the command whose firing rules'",
+            "activations sum highest runs, not the one nearest the output computed here."]
+
+
 def number(value: float) -> str:
     """The shortest text that reads back to the same double (never rounded)."""
     return repr(float(value))

@@ -42,8 +42,8 @@ def wiring(behaviour: Behaviour) -> dict[str, Any]:
         raise ExportError("the behaviour's environment.action is vote, which the bundle's "
                           "harnesses do not compute (they execute the crisp output or the "
                           "nearest command)",
-                          hint="set environment.action to nearest (or crisp), or export "
-                          "--format c and add the vote yourself")
+                          hint="export --format c (its <prefix>command is the vote), or "
+                          "set environment.action to nearest (or crisp)")
     inputs = []
     observations = getattr(environment, "observations", {}) or {}
     for i, (name, variable) in enumerate(behaviour.inputs.items()):

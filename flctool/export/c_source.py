@@ -3,7 +3,8 @@
 ``-o NAME`` (or ``NAME.c`` / ``NAME.h``) writes ``NAME.h`` and ``NAME.c``; the source includes
 the header by its file name. Without a file the export is one self-contained translation
 unit (header, then source) on stdout. The tables are ``static const`` data; the one public
-function is ``<prefix>output(const double state[N])`` (``float`` with ``single``). No heap, no
+function is ``<prefix>output(const double state[N])`` (``float`` with ``single``); a behaviour
+that acts by vote (``environment.action: vote``) gets the vote as ``<prefix>command``. No heap, no
 libm: clipping is two comparisons, and the arithmetic is exactly flctool's (membership as in
 flctool/membership.py, minimum activation (or the product, in input order, with
 ``activation: product``), sums over the rules in rule order).
@@ -142,13 +143,21 @@ class CExporter(Exporter):
                   "#ifdef __cplusplus", 'extern "C" {', "#endif", "",
                   "/* The controller's output for one state (paper eq. 1-3). */",
                   f"{real} {prefix}output(const {real} state[{macro}N_INPUTS]);", "",
-                  "/* The index of the command whose singleton is nearest that output (of "
-                  "two equally",
-                  "   near ones, the smaller singleton), as flctool's 'nearest' action picks "
-                  "it; -1 for a NaN output. */",
+                  *(["/* The command this behaviour acts by (environment.action: vote): "
+                     "each command's firing",
+                     "   rules sum their activations, the largest sum wins (of equal ones, "
+                     "the command",
+                     "   listed first), as flctool acts; -1 for a NaN input. It is not the "
+                     "command nearest",
+                     "   <prefix>output. */"] if _votes(behaviour) else
+                   ["/* The index of the command whose singleton is nearest that output (of "
+                    "two equally",
+                    "   near ones, the smaller singleton), as flctool's 'nearest' action picks "
+                    "it; -1 for a NaN output. */"]),
                   f"int {prefix}command(const {real} state[{macro}N_INPUTS]);", "",
-                  "/* Both from one inference: writes the output (as <prefix>output gives "
-                  "it) to *output",
+                  "/* Both from one inference: writes " + (
+                      "the command's singleton (NaN for a NaN input)" if _votes(behaviour)
+                      else "the output (as <prefix>output gives it)") + " to *output",
                   "   and returns the command (as <prefix>command does). */",
                   f"int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output);",
                   "",
@@ -213,9 +222,15 @@ class CExporter(Exporter):
             f"static const {ctype} {prefix}consequents[{macro}N_RULES] = {{",
             *_wrapped([str(c) for c in consequents]), "};", "",
             *(_shape_functions(prefix, real) if shaped else []),
-            *_functions(prefix, macro, real, shaped, behaviour.activation == "product"),
+            *_functions(prefix, macro, real, shaped, behaviour.activation == "product",
+                        _votes(behaviour)),
         ]
         return "\n".join(lines) + "\n"
+
+
+def _votes(behaviour: Behaviour) -> bool:
+    """Whether the behaviour acts by vote (``environment.action: vote``)."""
+    return getattr(behaviour.environment, "action", "crisp") == "vote"
 
 
 def _single(value: float) -> float:
@@ -329,7 +344,7 @@ static {real} {prefix}shaped(int kind, {real} x, const {real} p[4])
 
 
 def _functions(prefix: str, macro: str, real: str, shaped: bool = False,
-               product: bool = False) -> list[str]:
+               product: bool = False, vote: bool = False) -> list[str]:
     zero, one = ("0.0f", "1.0f") if real == "float" else ("0.0", "1.0")
     # eq. 2, input after input from alpha = 1: the minimum, or (activation: product) the
     # product multiplied in input order, as flctool's inference folds it
@@ -357,7 +372,9 @@ static {real} {prefix}membership({real} s, const {real} q[4])
     return {one};
 }}
 
-{real} {prefix}output(const {real} state[{macro}N_INPUTS])
+/* eq. 1-3 for one state; with votes (zeroed, one per command), each firing rule's
+   activation is added to its command's, in rule order. */
+static {real} {prefix}infer(const {real} state[{macro}N_INPUTS], {real} *votes)
 {{
     {real} mu[{macro}N_SETS];
     long active[{macro}N_SETS]; /* input i's sets with mu > 0 start at active[first_set[i]] */
@@ -396,6 +413,7 @@ static {real} {prefix}membership({real} s, const {real} q[4])
         }}
         weighted += alpha * {prefix}singletons[{prefix}consequents[m]]; /* eq. 3 */
         total += alpha;
+        if (votes) votes[{prefix}consequents[m]] += alpha;
         for (i = {macro}N_INPUTS - 1; i >= 0; --i) {{
             if (++pick[i] < count[i]) break;
             pick[i] = 0;
@@ -409,6 +427,17 @@ static {real} {prefix}membership({real} s, const {real} q[4])
     return weighted;
 }}
 
+{real} {prefix}output(const {real} state[{macro}N_INPUTS])
+{{
+    return {prefix}infer(state, 0);
+}}
+""".splitlines() + (_vote_functions(prefix, macro, real, zero) if vote else
+                    _nearest_functions(prefix, macro, real, zero))
+
+
+def _nearest_functions(prefix: str, macro: str, real: str, zero: str) -> list[str]:
+    """``command`` and ``decide`` for the crisp and nearest actions."""
+    return f"""\
 /* The command nearest an output (see the header). */
 static int {prefix}nearest({real} out)
 {{
@@ -437,4 +466,34 @@ int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output)
 {{
     *output = {prefix}output(state);
     return {prefix}nearest(*output);
+}}""".splitlines()
+
+
+def _vote_functions(prefix: str, macro: str, real: str, zero: str) -> list[str]:
+    """``command`` and ``decide`` for a behaviour that acts by vote (see the header)."""
+    return f"""\
+/* The vote (see the header): the command, or -1 for a NaN input; *output is eq. 3's. */
+static int {prefix}vote(const {real} state[{macro}N_INPUTS], {real} *output)
+{{
+    {real} votes[{macro}N_COMMANDS];
+    int best = 0, k;
+    for (k = 0; k < {macro}N_COMMANDS; ++k) votes[k] = {zero};
+    *output = {prefix}infer(state, votes);
+    if (*output != *output) return -1;
+    for (k = 1; k < {macro}N_COMMANDS; ++k)
+        if (votes[k] > votes[best]) best = k; /* of equal sums, the command listed first */
+    return best;
+}}
+
+int {prefix}command(const {real} state[{macro}N_INPUTS])
+{{
+    {real} output;
+    return {prefix}vote(state, &output);
+}}
+
+int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output)
+{{
+    int command = {prefix}vote(state, output);
+    if (command >= 0) *output = {prefix}singletons[command];
+    return command;
 }}""".splitlines()

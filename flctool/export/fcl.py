@@ -32,6 +32,7 @@ from flctool.export.base import (
     Importer,
     header_lines,
     sloped_quad,
+    vote_note,
 )
 from flctool.export.imported import (
     QUAD0,
@@ -112,7 +113,7 @@ class FclExporter(Exporter):
         if not fuzzylite:
             _check_points_only(behaviour)
         output = behaviour.output
-        about = header_lines(behaviour, self.options.provenance)
+        about = header_lines(behaviour, self.options.provenance) + vote_note(behaviour)
         # fuzzylite 6 skips lines starting with '//' (and refuses '(* ... *)')
         lines = [f"// {line}" if fuzzylite else f"(* {line} *)" for line in about]
         lines += [f"FUNCTION_BLOCK {identifier(behaviour.name)}", "", "VAR_INPUT"]

@@ -24,7 +24,7 @@ from flctool.behaviour.fuzzy import FuzzySet
 from flctool.behaviour.shapes import ShapedSet, set_row
 from flctool.errors import ExportError
 from flctool.export import shapes
-from flctool.export.base import Exporter, Importer, header_lines, number
+from flctool.export.base import Exporter, Importer, header_lines, number, vote_note
 from flctool.export.imported import (
     QUAD0,
     ImportedCommand,
@@ -61,7 +61,8 @@ class FllExporter(Exporter):
     def to_string(self, behaviour: Behaviour) -> str:
         require_deployable(behaviour)
         _check_names(behaviour)
-        lines = [f"# {line}" for line in header_lines(behaviour, self.options.provenance)]
+        lines = [f"# {line}" for line in (header_lines(behaviour, self.options.provenance)
+                                          + vote_note(behaviour))]
         lines.append(f"Engine: {identifier(behaviour.name)}")
         if behaviour.description:
             # FLL values are one line long and '#' starts a comment.

@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 from flctool import compile_behaviour, load_behaviour, parse_behaviour
 from flctool.cli import app
 
-from ..conftest import BEHAVIOURS
+from ..conftest import BEHAVIOURS, ROOT
 
 runner = CliRunner()
 HANDMADE = BEHAVIOURS / "ballchase-handmade.yaml"
@@ -55,6 +55,28 @@ def test_c_writes_header_and_source(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ballchase.c", "ballchase.h"]
     assert "float ballchase_output(" in (tmp_path / "ballchase.h").read_text()
+
+
+def test_a_behaviour_that_acts_by_vote_says_so_where_the_format_cannot(tmp_path: Path
+                                                                      ) -> None:
+    """FLL, FCL and FIS compute eq. 3's output only: exporting a vote behaviour warns, and the
+    engine files say it in a comment; C exports the vote (tests/export/test_c_source.py)."""
+    park = ROOT / "benchmarks" / "tasks" / "park-handmade.yaml"
+    for format in ("fll", "fcl", "fis"):
+        exported = tmp_path / f"park.{format}"
+        result = runner.invoke(app, ["export", str(park), "-o", str(exported)])
+        assert result.exit_code == 0, result.output
+        assert "warning: 'park_handmade' acts by vote" in result.stderr
+        if format != "fis":  # FIS has no comments
+            assert "It acts by vote (environment.action: vote)" in exported.read_text()
+    result = runner.invoke(app, ["export", str(park), "-o", str(tmp_path / "park.c")])
+    assert result.exit_code == 0 and "warning" not in result.stderr
+    result = runner.invoke(app, ["export", str(HANDMADE), "-o", str(tmp_path / "ball.fll")])
+    assert "warning" not in result.stderr and "vote" not in (tmp_path / "ball.fll").read_text()
+    result = runner.invoke(app, ["export", str(park), "-f", "bundle", "-o",
+                                 str(tmp_path / "bundle")])
+    assert result.exit_code == 1 and "--format c (its <prefix>command is the vote)" in (
+        result.stderr)
 
 
 def test_errors_are_messages_not_tracebacks(tmp_path: Path) -> None:

@@ -16,7 +16,9 @@ from flctool.errors import ExportError
 from flctool.export import ExportOptions
 from flctool.export.c_source import CExporter
 from flctool.export.float_error import check_float_error
+from flctool.rollout import vote_output
 
+from ..conftest import BEHAVIOURS, ROOT
 from .controllers import random_behaviour, random_states, with_product
 from .roundtrip import SHIPPED
 
@@ -270,3 +272,53 @@ def test_c_evaluates_an_end_no_set_fires_as_flctool_does(tmp_path: Path) -> None
     # both rise from 0, low twice as steeply: the limit is (2 * 1 + 1 * -1) / 3
     assert want[0] == want[1] == pytest.approx(1 / 3)
     assert run(program, 0, states).tolist() == want.tolist()
+
+
+@needs_cc
+def test_a_behaviour_that_acts_by_vote_exports_its_vote_as_the_command(tmp_path: Path) -> None:
+    """environment.action: vote -- the command a deployed controller runs is the vote, as
+    flctool acts in learning and evaluation, not the command nearest eq. 3's output."""
+    mountaincar = load_behaviour(BEHAVIOURS / "mountaincar.yaml")
+    table = np.random.default_rng(3).integers(3, size=mountaincar.rule_count)
+    behaviours = [load_behaviour(ROOT / "benchmarks" / "tasks" / "park-handmade.yaml"),
+                  with_rules(mountaincar, table)]
+    for index, behaviour in enumerate(behaviours):
+        files = CExporter(ExportOptions(prefix="v_")).to_file(behaviour, tmp_path / f"v{index}")
+        assert "action: vote" in files[0].read_text()
+        n = len(behaviour.inputs)
+        driver = tmp_path / f"main{index}.c"
+        driver.write_text(f"""#include <stdio.h>
+#include "v{index}.h"
+int main(void)
+{{
+    double s[{n}], out;
+    int i, command;
+    for (;;) {{
+        for (i = 0; i < {n}; ++i) if (scanf("%lf", &s[i]) != 1) return 0;
+        command = v_decide(s, &out);
+        if (command != v_command(s)) return 9;
+        printf("%d %.17g %.17g\\n", command, out, v_output(s));
+    }}
+}}
+""")
+        assert CC is not None
+        program = tmp_path / f"main{index}"
+        subprocess.run([CC, *FLAGS, *SANITIZE, "-o", str(program), str(driver), str(files[1])],
+                       check=True, capture_output=True, text=True)
+        states = random_states(behaviour, 3_000, seed=index)
+        states[0, 0] = np.nan
+        result = subprocess.run([str(program)], check=True, capture_output=True, text=True,
+                                input="\n".join(" ".join(map(repr, row))
+                                                for row in states.tolist()))
+        rows = [line.split() for line in result.stdout.splitlines()]
+        assert len(rows) == len(states)
+        controller = compile_behaviour(behaviour)
+        acted = vote_output(controller, states[1:])
+        singletons = list(behaviour.output.commands.values())
+        assert rows[0][0] == "-1"  # a NaN input: no command
+        assert [int(r[0]) for r in rows[1:]] == [singletons.index(a) for a in acted]
+        assert np.array_equal([float(r[1]) for r in rows[1:]], acted)
+        assert np.array_equal([float(r[2]) for r in rows[1:]], controller.output(states[1:]))
+        nearest = np.argmin(np.abs(np.array(singletons)[None, :]
+                                   - controller.output(states[1:])[:, None]), axis=1)
+        assert (nearest != [int(r[0]) for r in rows[1:]]).any()  # the vote is not the nearest
