@@ -207,6 +207,19 @@ class LearningConfig(Section):
             return sized
         return data
 
+    @field_validator("stop")
+    @classmethod
+    def _room_for_a_generation(cls, stop: StopConfig, info: ValidationInfo) -> StopConfig:
+        # the budget is checked between generations, so a limit below one generation's
+        # episodes would be broken by the first
+        population, trials = info.data.get("population"), info.data.get("trials")
+        if stop.episodes is not None and population is not None and trials is not None \
+                and stop.episodes < population * trials:
+            raise ValueError(f"episodes: {stop.episodes} cannot pay for one generation, which "
+                             f"takes {population * trials} (population {population} x trials "
+                             f"{trials}); raise it, or lower the population or the trials")
+        return stop
+
     @property
     def race_episodes(self) -> int:
         """``selection.race`` as the run reads it: the file's, or the learner's default."""

@@ -136,6 +136,8 @@ class BudgetPlan:
     extension: tuple[int, int] | None = None
     #: Whether an extended run's room goes to fresh attempts (the genetic learners).
     attempts: bool = False
+    #: ``extend.most`` as given (None: it follows from the problem's size).
+    most_given: int | None = None
 
     @property
     def most(self) -> int:
@@ -162,8 +164,11 @@ class BudgetPlan:
             fresh = (f", then fresh attempts of {least} while they fit" if self.attempts
                      else "")
             generations = (f"{least} to {most} generations (on past {least} until {patience} "
-                           f"pass without a better selected controller{fresh}; {most} from "
-                           f"the problem's size unless extend.most is given)")
+                           f"pass without a better selected controller{fresh}; {most} "
+                           + ("from the problem's size unless extend.most is given)"
+                              if self.most_given is None else "from extend.most)"
+                              if self.most_given == most else
+                              f"since extend.most {self.most_given} is below generations)"))
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
@@ -256,7 +261,8 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
                       confirming,
                       baseline_episodes(commands, baselines, confirming) if confirming >= 2
                       else 0, config.stop.episodes, extension,
-                      isinstance(config, GeneticConfig))
+                      isinstance(config, GeneticConfig),
+                      None if config.extend is None else config.extend.most)
 
 
 def describe_budget(behaviour: Behaviour, baselines: int = 0) -> str:

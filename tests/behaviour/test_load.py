@@ -152,6 +152,10 @@ BAD = [
      "learning.sets.inputs", "input should be 'all'"),
     ("a mapping expected", GOOD + "learning: {sets: {inputs: {size: 3}}}\n", 23,
      "learning.sets.inputs.size", "a mapping is expected here, got 3"),
+    # a limit the first generation would break (the budget is checked between generations)
+    ("a limit below one generation", GOOD + "learning: {stop: {episodes: 10}}\n", 23,
+     "learning.stop", "episodes: 10 cannot pay for one generation, which takes 20 "
+     "(population 10 x trials 2)"),
 ]
 
 

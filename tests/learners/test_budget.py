@@ -63,6 +63,11 @@ def test_a_file_without_a_budget_is_extended_up_to_a_bound_from_its_size() -> No
     assert paper.learning.trials == 1 and plan_budget(paper).training == 300
     bounded = resolve_behaviour(behaviour, {"extend.most": 45})
     assert plan_budget(bounded).extension == (45, 10) and bounded.learning.trials == 2
+    assert "45 from extend.most)" in plan_budget(bounded).lines()[1]
+    short = resolve_behaviour(behaviour, {"extend.most": 4})  # a run has its generations
+    assert "30 to 30 generations" in plan_budget(short).lines()[1]
+    assert "30 since extend.most 4 is below generations)" in plan_budget(short).lines()[1]
+    assert "60 from the problem's size unless extend.most is given" in plan.lines()[1]
 
 
 def test_sized_trials_are_the_learner_s_and_a_file_s_trials_stay() -> None:
