@@ -208,10 +208,10 @@ def show(
 
 def _similar(rules: int, commands: int) -> str:
     """What the measured tasks nearest in size needed (flctool.learners.measured)."""
-    from flctool.learners.measured import similar_tasks
+    from flctool.learners.measured import SEEDS, similar_tasks
 
     return "\n".join([
-        "similar problems measured (docs/learning.md, seeds 100-109, each file's defaults; "
+        f"similar problems measured (docs/learning.md, seeds {SEEDS}, each file's defaults; "
         "selection, confirmation and baselines on top of the training episodes):",
         *(f"  {task.line()}" for task in similar_tasks(rules, commands))])
 

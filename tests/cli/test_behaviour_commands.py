@@ -151,7 +151,7 @@ def test_show_behaviour_to_learn() -> None:
     assert result.exit_code == 0
     assert "15 rules still to learn" in result.output
     # what the measured tasks of about its size needed, the nearest first
-    assert "similar problems measured (docs/learning.md" in result.output
+    assert "similar problems measured (docs/learning.md, seeds 900-909," in result.output
     assert "  ballchase: 15 rules x 5 commands, hybrid, 1,200 training episodes: success " \
         "median 0.994, worst 0.970 (hand-made 1.000)" in result.output
     handmade = runner.invoke(app, ["show", str(BEHAVIOURS / "ballchase-handmade.yaml")])

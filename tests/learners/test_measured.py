@@ -6,7 +6,7 @@ import pytest
 
 from flctool import load_behaviour
 from flctool.learners.extension import most_generations
-from flctool.learners.measured import MEASURED, similar_tasks
+from flctool.learners.measured import MEASURED, SEEDS, similar_tasks
 from tests.conftest import BEHAVIOURS, ROOT
 
 
@@ -36,3 +36,10 @@ def test_similar_tasks_are_the_nearest_in_size() -> None:
     assert [t.name for t in similar_tasks(25, 5)][:1] == ["dribble"]
     assert {t.name for t in similar_tasks(5, 3, count=2)} == {"face-goal", "face-goal-fine"}
     assert len(similar_tasks(1000, 9)) == 3
+
+
+def test_the_rows_seeds_are_the_suite_s_in_the_docs() -> None:
+    """flctool show names the seeds the rows were measured on: those of the docs' table."""
+    text = (ROOT / "docs" / "learning.md").read_text(encoding="utf-8")
+    assert f"on training seeds {SEEDS}, which took no part in any choice" in " ".join(
+        text.split())
