@@ -684,9 +684,9 @@ class RunRecorder(Callback):
             status = "finished" if finished and written else "stopped"
             if status == "finished" and learner is not None and learner.learned is False:
                 status = NOT_LEARNED  # no better than a baseline (flctool.learners.baselines)
-            if learner is not None and status in ENDED:
-                self._write_baseline(learner, status == NOT_LEARNED)
             self.run.write_info(status, self.best or self.run.info().get("best"), selection)
+            if learner is not None and status in ENDED:  # after the status: it is the record
+                self._write_baseline(learner, status == NOT_LEARNED)
 
     def _write_baseline(self, learner: Learner, not_learned: bool) -> None:
         """baseline.yaml: the baseline a run that did not learn was no better than, as a
