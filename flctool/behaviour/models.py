@@ -139,6 +139,12 @@ class Behaviour(Section):
     def is_deployable(self) -> bool:
         return len(self.rules) == self.rule_count and not self.missing_rules()
 
+    @property
+    def acts_by_vote(self) -> bool:
+        """Whether the behaviour acts by vote (``environment.action: vote``): the command
+        whose firing rules' activations sum highest runs, not eq. 3's output."""
+        return getattr(self.environment, "action", "crisp") == "vote"
+
 
 def find_problems(behaviour: Behaviour) -> list[Problem]:
     """What relates the fields of ``behaviour`` badly (the checks of

@@ -57,7 +57,6 @@ def export_controller(
 ) -> None:
     """Export a controller so that it runs elsewhere, with the same outputs."""
     from flctool.export import EXPORTERS, ExportOptions, load_source
-    from flctool.export.base import acts_by_vote
 
     with user_errors():
         name = output_format(output, format, export_suffixes(), "yaml")
@@ -69,7 +68,7 @@ def export_controller(
             raise FlcError("--dialect applies to the fcl format only",
                            hint="leave it out, or write FCL (--format fcl, or -o NAME.fcl)")
         behaviour, provenance = load_source(source, generation, individual)
-        if name in ("fll", "fcl", "fis") and acts_by_vote(behaviour):
+        if name in ("fll", "fcl", "fis") and behaviour.acts_by_vote:
             say(f"'{behaviour.name}' acts by vote, which {name.upper()} cannot say: the "
                 "engine computes eq. 3's output; deploy the command whose rules' activations "
                 "sum highest (--format c exports it as <prefix>command)", "warning:",

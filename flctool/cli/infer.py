@@ -53,6 +53,9 @@ def infer(
 ) -> None:
     """Run a deployable controller on states from CSV; adds the output column.
 
+    The output is eq. 3's, or, for a behaviour that acts by vote (environment.action: vote),
+    the singleton of the command the vote picks, as the behaviour acts.
+
     Rows are read, inferred and written in chunks, so a table of any length runs in bounded
     memory. Writing to stdout, rows before a bad one have already been printed when it is
     reported; with -o the file is written only if every row is good.
@@ -74,9 +77,11 @@ def infer(
             consequents = rule_consequents(behaviour)
             assert consequents is not None  # load_controller refused rules still to learn
             controller: Controller | None = None  # compiled once a chunk is too large
+            votes = behaviour.acts_by_vote  # the voted command's singleton, as it acts
             for lines in reader.row_chunks():
                 if controller is None and len(lines) <= SMALL_TABLE:
-                    values = outputs_in_python(rules, consequents, reader.parse_in_python(lines))
+                    values = outputs_in_python(rules, consequents, reader.parse_in_python(lines),
+                                               votes)
                 else:
                     if controller is None:
                         from flctool.compile import compile_behaviour
@@ -87,18 +92,25 @@ def infer(
                     states = reader.parse(lines)
                     # numpy first; the kernels once the table is large enough to pay for them
                     with _numba_without_scipy_blas():
-                        values = controller.output(states).tolist()
+                        if votes:
+                            from flctool.rollout import vote_output
+
+                            values = vote_output(controller, states).tolist()
+                        else:
+                            values = controller.output(states).tolist()
                 target.write(format_rows(lines, values))
 
 
 def outputs_in_python(rules: SparseRules, consequents: list[int],
-                      states: list[list[float]]) -> list[float]:
+                      states: list[list[float]], votes: bool = False) -> list[float]:
     """``controller.output(states)`` computed in plain Python over the rules that fire:
-    B states of N values -> B outputs, the same bits, without numpy or the kernels."""
+    B states of N values -> B outputs, the same bits, without numpy or the kernels; with
+    ``votes``, the singleton of the command the vote picks (``environment.action: vote``)."""
+    act = rules.vote if votes else rules.output
     values = []
     for state in states:
         fired, alphas, _ = rules.activations(state)
-        values.append(rules.output(alphas, [consequents[m] for m in fired]))
+        values.append(act(alphas, [consequents[m] for m in fired]))
     return values
 
 

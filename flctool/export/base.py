@@ -203,16 +203,10 @@ def header_lines(behaviour: Behaviour, provenance: Mapping[str, object]) -> list
     return lines
 
 
-def acts_by_vote(behaviour: Behaviour) -> bool:
-    """Whether the behaviour acts by vote (``environment.action: vote``), which of the
-    formats only C computes."""
-    return getattr(behaviour.environment, "action", "crisp") == "vote"
-
-
 def vote_note(behaviour: Behaviour) -> list[str]:
     """What an engine file (FLL, FCL: eq. 3's output only) says of a behaviour that acts by
     vote, as comment lines; none for one that does not."""
-    if not acts_by_vote(behaviour):
+    if not behaviour.acts_by_vote:
         return []
     return ["It acts by vote (environment.action: vote): the command whose firing rules'",
             "activations sum highest runs, not the one nearest the output computed here."]

@@ -25,7 +25,7 @@ from typing import Any
 from flctool.behaviour import Behaviour, require_deployable
 from flctool.behaviour.base import identifier
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, ExportOptions, acts_by_vote, write_files
+from flctool.export.base import Exporter, ExportOptions, write_files
 from flctool.export.c_source import CExporter
 from flctool.export.yaml_format import YamlExporter
 from flctool.version import __version__
@@ -38,7 +38,7 @@ def wiring(behaviour: Behaviour) -> dict[str, Any]:
     """The controller's connections to the world, as ``wiring.json`` holds them."""
     environment = behaviour.environment
     adapter = environment.adapter if environment is not None else None
-    if adapter is not None and acts_by_vote(behaviour):
+    if adapter is not None and behaviour.acts_by_vote:
         raise ExportError("the behaviour's environment.action is vote, which the bundle's "
                           "harnesses do not compute (they execute the crisp output or the "
                           "nearest command)",

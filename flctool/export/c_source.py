@@ -22,7 +22,7 @@ from flctool.behaviour.base import identifier
 from flctool.behaviour.checks import uncovered_gap
 from flctool.behaviour.shapes import evaluated_range, is_trapezoid, set_row, trapezoids
 from flctool.errors import ExportError
-from flctool.export.base import Exporter, acts_by_vote, header_lines, number
+from flctool.export.base import Exporter, header_lines, number
 from flctool.export.float_error import check_float_error
 
 _PREFIX = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -149,14 +149,14 @@ class CExporter(Exporter):
                      "the command",
                      "   listed first), as flctool acts; -1 for a NaN input. It is not the "
                      "command nearest",
-                     "   <prefix>output. */"] if acts_by_vote(behaviour) else
+                     "   <prefix>output. */"] if behaviour.acts_by_vote else
                    ["/* The index of the command whose singleton is nearest that output (of "
                     "two equally",
                     "   near ones, the smaller singleton), as flctool's 'nearest' action picks "
                     "it; -1 for a NaN output. */"]),
                   f"int {prefix}command(const {real} state[{macro}N_INPUTS]);", "",
                   "/* Both from one inference: writes " + (
-                      "the command's singleton (NaN for a NaN input)" if acts_by_vote(behaviour)
+                      "the command's singleton (NaN for a NaN input)" if behaviour.acts_by_vote
                       else "the output (as <prefix>output gives it)") + " to *output",
                   "   and returns the command (as <prefix>command does). */",
                   f"int {prefix}decide(const {real} state[{macro}N_INPUTS], {real} *output);",
@@ -223,7 +223,7 @@ class CExporter(Exporter):
             *_wrapped([str(c) for c in consequents]), "};", "",
             *(_shape_functions(prefix, real) if shaped else []),
             *_functions(prefix, macro, real, shaped, behaviour.activation == "product",
-                        acts_by_vote(behaviour)),
+                        behaviour.acts_by_vote),
         ]
         return "\n".join(lines) + "\n"
 

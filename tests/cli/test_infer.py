@@ -19,7 +19,7 @@ from flctool.compile.rules import rule_consequents
 from flctool.compile.sparse import SparseRules
 from flctool.errors import InferenceError
 
-from ..conftest import BEHAVIOURS
+from ..conftest import BEHAVIOURS, ROOT
 from ..export.controllers import random_behaviour, random_states
 
 runner = CliRunner()
@@ -135,3 +135,26 @@ def test_loading_the_kernels_for_a_large_table_spares_scipy_blas() -> None:
                             timeout=600)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ["False", "True"]
+
+
+def test_a_behaviour_that_acts_by_vote_gives_the_voted_command_on_both_paths(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """infer says what the behaviour does: for environment.action: vote, the singleton of
+    the command the vote picks (as learning and evaluate act), not eq. 3's blend."""
+    from flctool.rollout import vote_output
+
+    park = ROOT / "benchmarks" / "tasks" / "park-handmade.yaml"
+    behaviour = load_behaviour(park)
+    states = random_states(behaviour, 300, seed=2)
+    text = "spot_bearing,spot_distance\n" + "\n".join(
+        ",".join(repr(float(v)) for v in row) for row in states.tolist()) + "\n"
+    small = runner.invoke(app, ["infer", str(park)], input=text)
+    monkeypatch.setattr(infer_module, "SMALL_TABLE", 10)
+    large = runner.invoke(app, ["infer", str(park)], input=text)
+    assert small.exit_code == 0 and small.stdout == large.stdout, small.output
+    got = np.array([float(line.rsplit(",", 1)[1]) for line in small.stdout.splitlines()[1:]])
+    controller = compile_behaviour(behaviour)
+    want = vote_output(controller, np.clip(states, controller.ranges[:, 0],
+                                           controller.ranges[:, 1]))
+    assert np.array_equal(got, want)
+    assert not np.array_equal(got, controller.output(states))  # eq. 3 blends: not the vote
