@@ -52,7 +52,7 @@ def deployable(behaviour: Behaviour) -> Deployable:
     from flctool.compile import compile_behaviour
 
     flc = compile_behaviour(behaviour)
-    votes = getattr(behaviour.environment, "action", None) == "vote"
+    votes = behaviour.acts_by_vote
     return Deployable(behaviour.name, behaviour.input_names, dict(behaviour.output.commands),
                       _controller_act(flc, votes))
 

@@ -83,7 +83,7 @@ def composed_wiring(behaviour: Behaviour, parts: dict[str, Behaviour]) -> dict[s
 def composed_texts(behaviour: Behaviour, path: Path, options: ExportOptions,
                    ) -> dict[Path, str]:
     require_deployable(behaviour)
-    if getattr(behaviour.environment, "action", "") == "vote":
+    if behaviour.acts_by_vote:
         raise ExportError("the composition's environment.action is vote, which the bundle "
                           "does not compute (its arbiter runs the nearest command's part)",
                           hint="set environment.action to nearest")
