@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import importlib
 import inspect
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from typing import Any
 
 from flctool.errors import EnvError, MissingDependencyError, Problem, SpecError
@@ -109,12 +110,7 @@ def observation_space_bounds(env_id: str, options: Mapping[str, Any],
     problems = option_problems(gym, env_id, options)
     if problems:
         raise SpecError(problems)
-    try:
-        env = gym.make(env_id, disable_env_checker=True, **dict(options))
-    except (gym.error.Error, TypeError) as error:  # make_env reports it in full
-        raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
-                                 f"'{env_id}': {error}")]) from None
-    try:
+    with _made(gym, env_id, options) as env:
         space = env.observation_space
         if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
             raise SpecError([Problem(("environment", "id"), f"'{env_id}' observes {space}; "
@@ -123,8 +119,6 @@ def observation_space_bounds(env_id: str, options: Mapping[str, Any],
         # Bounds as the space's dtype prints them: float32 4.8 is 4.800000190734863 as a
         # double, and sets written up to 4.8 would leave a sliver uncovered.
         return ([float(str(v)) for v in space.low], [float(str(v)) for v in space.high])
-    finally:
-        env.close()
 
 
 def discrete_actions(env_id: str) -> int | None:
@@ -132,13 +126,21 @@ def discrete_actions(env_id: str) -> int | None:
     (the adapter checks the rest when it makes its environments). Makes the environment
     once, with its default options, then closes it; raises :class:`SpecError` if it cannot."""
     gym = import_gymnasium()
+    with _made(gym, env_id, {}) as env:
+        space = env.action_space
+        return int(space.n) if isinstance(space, gym.spaces.Discrete) else None
+
+
+@contextmanager
+def _made(gym: Any, env_id: str, options: Mapping[str, Any]) -> Iterator[Any]:
+    """The environment ``env_id`` made with ``options`` (a :class:`SpecError` at
+    ``environment.id`` if Gymnasium cannot; make_env reports it in full), closed after."""
     try:
-        env = gym.make(env_id, disable_env_checker=True)
+        env = gym.make(env_id, disable_env_checker=True, **dict(options))
     except (gym.error.Error, TypeError) as error:
         raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
                                  f"'{env_id}': {error}")]) from None
     try:
-        space = env.action_space
-        return int(space.n) if isinstance(space, gym.spaces.Discrete) else None
+        yield env
     finally:
         env.close()
