@@ -64,6 +64,7 @@ from flctool.dirlock import DirectoryLock, is_locked
 from flctool.envs.base import BatchEnv
 from flctool.errors import FlcError, LearnError, RunDirError
 from flctool.learners import Callback, GenerationMetrics, Learner, make_learner, train
+from flctool.learners.baselines import difference_text
 from flctool.learners.checkpoint import Checkpoint, Expected, read_checkpoint
 from flctool.learners.confirmation import Confirmed
 from flctool.learners.metrics import Usage
@@ -698,13 +699,12 @@ class RunRecorder(Callback):
                 path.unlink()
             return
         genes = dict(learner.baseline_check.baselines(learner))[verdict.baseline]
-        d = verdict.difference
         header = (f"The baseline '{verdict.baseline}' of run {self.run.path.name} (flctool "
                   f"{__version__}):\nmean fitness {verdict.baseline_fitness!r} on the run's "
-                  f"{d.n} confirmation episodes; the learned controller (best.yaml) scored "
-                  f"{d.value:+.4f} [{d.low:+.4f}, {d.high:+.4f}]\nagainst it, so the run "
-                  "ended not_learned.\nDeployable: flctool validate / evaluate / export take "
-                  "it as it is.")
+                  f"{verdict.difference.n} confirmation episodes; the learned controller "
+                  f"(best.yaml) minus it: {difference_text(verdict.difference.to_dict())},\n"
+                  "so the run ended not_learned.\nDeployable: flctool validate / evaluate / "
+                  "export take it as it is.")
         _write(self.run.path, path, behaviour_to_yaml(with_rules(self.run.behaviour, genes),
                                                       header))
 

@@ -15,8 +15,9 @@ See docs/performance.md ("Whole commands").
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, TextIO
 
@@ -29,7 +30,10 @@ from flctool.errors import FlcError
 from flctool.inputs import open_error
 
 if TYPE_CHECKING:
-    from flctool.compile import Controller
+    import numpy as np
+    from numpy.typing import NDArray
+
+    from flctool.behaviour import Behaviour
     from flctool.compile.sparse import SparseRules
 
 #: Tables up to this many rows skip numpy and the compiled kernels: in plain Python a row costs
@@ -76,28 +80,19 @@ def infer(
             rules = SparseRules.from_behaviour(behaviour)
             consequents = rule_consequents(behaviour)
             assert consequents is not None  # load_controller refused rules still to learn
-            controller: Controller | None = None  # compiled once a chunk is too large
             votes = behaviour.acts_by_vote  # the voted command's singleton, as it acts
-            for lines in reader.row_chunks():
-                if controller is None and len(lines) <= SMALL_TABLE:
+            act: Callable[[NDArray[np.float64]], NDArray[np.float64]] | None = None
+            for lines in reader.row_chunks():  # the compiled controller once a chunk is large
+                if act is None and len(lines) <= SMALL_TABLE:
                     values = outputs_in_python(rules, consequents, reader.parse_in_python(lines),
                                                votes)
                 else:
-                    if controller is None:
-                        from flctool.compile import compile_behaviour
-                        from flctool.compile import controller as controller_module
-
-                        controller_module.kernel_loading = compiling  # announced if slow
-                        controller = compile_behaviour(behaviour)
+                    if act is None:
+                        act = _compiled(behaviour, votes)
                     states = reader.parse(lines)
                     # numpy first; the kernels once the table is large enough to pay for them
                     with _numba_without_scipy_blas():
-                        if votes:
-                            from flctool.rollout import vote_output
-
-                            values = vote_output(controller, states).tolist()
-                        else:
-                            values = controller.output(states).tolist()
+                        values = act(states).tolist()
                 target.write(format_rows(lines, values))
 
 
@@ -112,6 +107,18 @@ def outputs_in_python(rules: SparseRules, consequents: list[int],
         fired, alphas, _ = rules.activations(state)
         values.append(act(alphas, [consequents[m] for m in fired]))
     return values
+
+
+def _compiled(behaviour: Behaviour, votes: bool,
+              ) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    """The compiled controller's outputs for (B, N) states, or its vote's."""
+    from flctool.compile import compile_behaviour
+    from flctool.compile import controller as controller_module
+    from flctool.rollout import vote_output
+
+    controller_module.kernel_loading = compiling  # announced if slow
+    controller = compile_behaviour(behaviour)
+    return partial(vote_output, controller) if votes else controller.output
 
 
 #: What numba's array functions import only to learn whether BLAS is there.

@@ -122,12 +122,13 @@ def learn(
         _report(summary)
     if summary.status == "not_learned":  # flctool.runs.NOT_LEARNED (kept lazy)
         from flctool.learners.baselines import not_learned_message
+        from flctool.runs import BASELINE_FILE  # loaded already: the run is one
 
         verdict = (summary.selection or {}).get("baseline") or {}
         commands = list(behaviour.output.commands)
         err_console.print(f"[yellow]not learned:[/] "
                           f"{escape(not_learned_message(verdict, commands))}", highlight=False)
-        baseline_file = run.path / "baseline.yaml"  # flctool.runs.BASELINE_FILE (kept lazy)
+        baseline_file = run.path / BASELINE_FILE
         if baseline_file.is_file():
             err_console.print(f"  the baseline, to evaluate or deploy instead: "
                               f"{escape(str(baseline_file))}", highlight=False)

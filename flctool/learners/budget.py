@@ -163,12 +163,14 @@ class BudgetPlan:
             least = s["generations"].value
             fresh = (f", then fresh attempts of {least} while they fit" if self.attempts
                      else "")
+            if self.most_given is None:
+                why = "from the problem's size unless extend.most is given"
+            elif self.most_given == most:
+                why = "from extend.most"
+            else:
+                why = f"since extend.most {self.most_given} is below generations"
             generations = (f"{least} to {most} generations (on past {least} until {patience} "
-                           f"pass without a better selected controller{fresh}; {most} "
-                           + ("from the problem's size unless extend.most is given)"
-                              if self.most_given is None else "from extend.most)"
-                              if self.most_given == most else
-                              f"since extend.most {self.most_given} is below generations)"))
+                           f"pass without a better selected controller{fresh}; {most} {why})")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
