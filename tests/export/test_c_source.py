@@ -68,6 +68,35 @@ int main(int argc, char **argv)
     return program
 
 
+def decide_each(files: list[Path], prefix: str, states: np.ndarray, program: Path,
+                wrong: str, extra: tuple[str, ...] | list[str] = ()) -> list[list[str]]:
+    """Each state's ``<prefix>decide`` as text: (command, its *output, ``<prefix>output``), from
+    a program built with the exported header and source ``files``; it stops with exit code 9
+    where the C condition ``wrong`` (over ``s``, ``command`` and ``out``) holds."""
+    n = states.shape[1]
+    driver = program.with_suffix(".c")
+    driver.write_text(f"""#include <stdio.h>
+#include "{files[0].name}"
+int main(void)
+{{
+    double s[{n}], out;
+    int i, command;
+    for (;;) {{
+        for (i = 0; i < {n}; ++i) if (scanf("%lf", &s[i]) != 1) return 0;
+        command = {prefix}decide(s, &out);
+        if ({wrong}) return 9;
+        printf("%d %.17g %.17g\\n", command, out, {prefix}output(s));
+    }}
+}}
+""")
+    assert CC is not None
+    subprocess.run([CC, *FLAGS, *extra, "-o", str(program), str(driver), str(files[1])],
+                   check=True, capture_output=True, text=True)
+    result = subprocess.run([str(program)], check=True, capture_output=True, text=True,
+                            input="\n".join(" ".join(map(repr, row)) for row in states.tolist()))
+    return [line.split() for line in result.stdout.splitlines()]
+
+
 def run(program: Path, which: int, states: np.ndarray) -> np.ndarray:
     lines = [str(len(states))] + [" ".join(repr(float(v)) for v in row) for row in states]
     result = subprocess.run([str(program), str(which)], input="\n".join(lines) + "\n",
@@ -202,33 +231,13 @@ def test_command_is_the_nearest_singleton_and_the_header_gives_the_range(tmp_pat
     assert f"#define R_OUTPUT_MIN ({min(values)!r})" in header
     assert f"#define R_OUTPUT_MAX ({max(values)!r})" in header
     assert f"#define R_N_COMMANDS {len(values)}" in header
-    n = len(behaviour.inputs)
-    driver = tmp_path / "main.c"
-    driver.write_text(f"""#include <stdio.h>
-#include "ctl.h"
-int main(void)
-{{
-    double s[{n}], out;
-    int i, command;
-    for (;;) {{
-        for (i = 0; i < {n}; ++i) if (scanf("%lf", &s[i]) != 1) return 0;
-        command = r_decide(s, &out);  /* one inference: the output and its command */
-        if (command != r_command(s) || !(out == r_output(s) || out != out)) return 9;
-        printf("%d %.17g\\n", command, out);
-    }}
-}}
-""")
-    assert CC is not None
-    subprocess.run([CC, *FLAGS, "-o", str(tmp_path / "main"), str(driver), str(files[1])],
-                   check=True, capture_output=True, text=True)
     states = random_states(behaviour, 2_000, seed=1)
-    result = subprocess.run([str(tmp_path / "main")], check=True, capture_output=True,
-                            text=True, input="\n".join(" ".join(map(repr, row))
-                                                       for row in states.tolist()))
-    rows = [line.split() for line in result.stdout.splitlines()]
-    got = np.array([int(command) for command, _ in rows])
+    # one inference: the output and its command
+    rows = decide_each(files, "r_", states, tmp_path / "main",
+                       "command != r_command(s) || !(out == r_output(s) || out != out)")
+    got = np.array([int(command) for command, _, _ in rows])
     outputs = compile_behaviour(behaviour).output(states)
-    assert np.array_equal(np.array([float(out) for _, out in rows]), outputs)
+    assert np.array_equal(np.array([float(out) for _, out, _ in rows]), outputs)
     order = np.argsort(values, kind="stable")  # a tie goes to the smaller singleton
     nearest = np.argmin(np.abs(np.array(values)[order][None, :] - outputs[:, None]), axis=1)
     assert np.array_equal(got, order[nearest])
@@ -285,32 +294,10 @@ def test_a_behaviour_that_acts_by_vote_exports_its_vote_as_the_command(tmp_path:
     for index, behaviour in enumerate(behaviours):
         files = CExporter(ExportOptions(prefix="v_")).to_file(behaviour, tmp_path / f"v{index}")
         assert "action: vote" in files[0].read_text()
-        n = len(behaviour.inputs)
-        driver = tmp_path / f"main{index}.c"
-        driver.write_text(f"""#include <stdio.h>
-#include "v{index}.h"
-int main(void)
-{{
-    double s[{n}], out;
-    int i, command;
-    for (;;) {{
-        for (i = 0; i < {n}; ++i) if (scanf("%lf", &s[i]) != 1) return 0;
-        command = v_decide(s, &out);
-        if (command != v_command(s)) return 9;
-        printf("%d %.17g %.17g\\n", command, out, v_output(s));
-    }}
-}}
-""")
-        assert CC is not None
-        program = tmp_path / f"main{index}"
-        subprocess.run([CC, *FLAGS, *SANITIZE, "-o", str(program), str(driver), str(files[1])],
-                       check=True, capture_output=True, text=True)
         states = random_states(behaviour, 3_000, seed=index)
         states[0, 0] = np.nan
-        result = subprocess.run([str(program)], check=True, capture_output=True, text=True,
-                                input="\n".join(" ".join(map(repr, row))
-                                                for row in states.tolist()))
-        rows = [line.split() for line in result.stdout.splitlines()]
+        rows = decide_each(files, "v_", states, tmp_path / f"main{index}",
+                           "command != v_command(s)", SANITIZE)
         assert len(rows) == len(states)
         controller = compile_behaviour(behaviour)
         acted = vote_output(controller, states[1:])
