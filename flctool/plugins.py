@@ -80,6 +80,7 @@ BUILTIN: dict[str, tuple[Plugin, ...]] = {
         Plugin("fuzzy_q", "flctool.learners.fuzzy_q:FuzzyQLearner",
                f"{_LEARNING}:FuzzyQConfig"),
         Plugin("hybrid", "flctool.learners.genetic:HybridLearner", f"{_LEARNING}:HybridConfig"),
+        Plugin("credit", "flctool.learners.credit:CreditLearner", f"{_LEARNING}:CreditConfig"),
     ),
     "environment": (
         Plugin("ballchase-sim", "flctool.envs.ballchase:BallchaseSim",

@@ -296,6 +296,8 @@ EQUATIONS: dict[str, str] = {
                         "which an extended run ends"),
     "extend.most": ("an addition: the most generations an extended run has; unset: 30 for "
                     "every 30 units of M log2 K, at least twice `generations`"),
+    "prior": ("an addition, the credit learner: pseudo-episodes of no credit each rule and "
+              "command starts with, before its Thompson draws follow the evidence"),
     "crossover": "GA exploration: crossover probability p_c (experiments: 0.2)",
     "mutation": "GA exploration: mutation probability p_m per gene (experiments: 0.1)",
     "pitt_crossover": ("GA exploration: the standard crossover of the Pitt GA (the hybrid takes, "
@@ -412,10 +414,13 @@ def learners_reference(schema: dict[str, Any]) -> str:
         "reading of eq. 9 that is implemented, run directories and measured results are in",
         "[Learning](../learning.md).",
         "",
-        "The three learners: `pitt` is the genetic algorithm over whole rule tables (Sec. IV,",
+        "The learners: `pitt` is the genetic algorithm over whole rule tables (Sec. IV,",
         "chromosome = the M consequent indices); `fuzzy_q` is fuzzy Q-learning (eq. 4-9) of one",
         "controller; `hybrid`, the paper's method, is the GA whose crossover and mutation are",
-        "guided by the rule strengths q_m^k that fuzzy Q-learning updates during every trial.",
+        "guided by the rule strengths q_m^k that fuzzy Q-learning updates during every trial;",
+        "`credit`, an addition, tries whole tables drawn from each rule's credit, every",
+        "episode's outcome shared among the rules that fired (the Michigan approach's credit",
+        "over the Pitt approach's trials).",
         "Each learner reads only its own keys (\"used by\"); another learner's key is an error",
         "that names the learner reading it.",
         "",

@@ -185,6 +185,9 @@ class LearningConfig(Section):
     default_race: ClassVar[int] = 60
     #: ``trials`` in the budget a file without one gets (with ``extend``): 1, the paper's.
     sized_trials: ClassVar[int] = 1
+    #: Whether a run with ``extend`` runs all its ``extend.most`` generations instead of
+    #: stopping once it no longer improves (a learner whose evidence only accumulates).
+    runs_to_most: ClassVar[bool] = False
 
     @model_validator(mode="before")
     @classmethod
@@ -299,6 +302,31 @@ class HybridConfig(GeneticConfig):
     # Measured (docs/learning.md): restarts lift the hybrid's worst seeds, whose q-guided
     # operators can lock a population onto a poor table; they lower Pitt's.
     default_restart_after: ClassVar[int] = 5
+
+
+class CreditConfig(LearningConfig):
+    """``learner: credit``: rule tables drawn from each rule's credit, every episode's outcome
+    shared among the rules that fired (:mod:`flctool.learners.credit`)."""
+
+    learner: Literal["credit"] = Field("credit", description=(
+        "rule-wise credit: tables drawn by Thompson sampling from each rule's credit, pooled "
+        "over every episode of every table"))
+    population: int = Field(100, ge=2, description=(
+        "rule tables drawn per generation, each run for trials episodes"))
+    prior: float = Field(1.0, gt=0, description=(
+        "pseudo-episodes of no credit every rule and command starts with: how much evidence "
+        "a command needs before its credit counts"))
+
+    default_race: ClassVar[int] = 0
+    runs_to_most: ClassVar[bool] = True
+
+    @field_validator("sets")
+    @classmethod
+    def _consequents_only(cls, sets: SetLearningConfig | None) -> SetLearningConfig | None:
+        if sets is not None:
+            raise ValueError("the credit learner learns rule consequents only, not sets; learn "
+                             "the sets with hybrid, pitt or fuzzy_q")
+        return sets
 
 
 def learner_keys(model: type[BaseModel]) -> tuple[str, ...]:

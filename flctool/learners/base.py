@@ -122,7 +122,8 @@ class Learner(ABC):
         most = (extend.most if extend is not None and extend.most is not None else
                 most_generations(len(behaviour.missing_rules()), self.controller.n_commands,
                                  config.generations))
-        self.extension = Extension(extend, config.generations, most, self.fresh_attempts)
+        self.extension = Extension(extend, config.generations, most, self.fresh_attempts,
+                                   config.runs_to_most)
         self.budget = Budget(config.stop, self.selection, self.confirmation, self.usage,
                              reserve=self.episodes_at_end)
         check_target(behaviour, env)

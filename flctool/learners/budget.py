@@ -138,6 +138,8 @@ class BudgetPlan:
     attempts: bool = False
     #: ``extend.most`` as given (None: it follows from the problem's size).
     most_given: int | None = None
+    #: Whether the run has all of its most generations (LearningConfig.runs_to_most).
+    to_most: bool = False
 
     @property
     def most(self) -> int:
@@ -171,6 +173,9 @@ class BudgetPlan:
                 why = f"since extend.most {self.most_given} is below generations"
             generations = (f"{least} to {most} generations (on past {least} until {patience} "
                            f"pass without a better selected controller{fresh}; {most} {why})")
+            if self.to_most:
+                generations = (f"{most} generations ({why}; its credit only grows with more "
+                               "episodes, so the run has them all)")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
@@ -264,7 +269,8 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
                       baseline_episodes(commands, baselines, confirming) if confirming >= 2
                       else 0, config.stop.episodes, extension,
                       isinstance(config, GeneticConfig),
-                      None if config.extend is None else config.extend.most)
+                      None if config.extend is None else config.extend.most,
+                      config.runs_to_most)
 
 
 def describe_budget(behaviour: Behaviour, baselines: int = 0) -> str:

@@ -20,8 +20,9 @@ a run at ``extend.most`` ends.
 :class:`Extension` is the run callback that keeps this count. It runs after model selection
 (which validates each generation's leader) and before the budget, which reads the planned
 generations from it; its state is part of every checkpoint, so a resumed run ends where an
-uninterrupted one would. A run without ``extend`` (``protocol: paper``, or ``generations``
-given) has exactly its generations, as before.
+uninterrupted one would. A learner whose evidence only accumulates (``credit``) does not
+stop early: with ``extend`` it runs all of ``extend.most``. A run without ``extend``
+(``protocol: paper``, or ``generations`` given) has exactly its generations, as before.
 """
 
 from __future__ import annotations
@@ -66,12 +67,14 @@ class Extension(RunCallback[ExtendedRun]):
     controller improves, up to ``most``."""
 
     def __init__(self, config: ExtendConfig | None, least: int, most: int,
-                 attempts: bool = False) -> None:
+                 attempts: bool = False, to_most: bool = False) -> None:
         self.config = config
         self.least = least
         self.most = max(most, least)
         #: Whether the learner can start afresh, so the room left goes to fresh attempts.
         self.attempts = attempts
+        #: Whether the run has all of ``most`` (a learner whose evidence only accumulates).
+        self.to_most = to_most
         self.best_seen = -math.inf  # the selected controller's validated figure
         self.improved_at = -1  # the generation after which it last improved
         self.starts = [0]  # the generation each attempt began at
@@ -98,9 +101,12 @@ class Extension(RunCallback[ExtendedRun]):
 
     def planned(self) -> int:
         """The generations the run has, as things stand: ``least``, or with ``extend``
-        until ``patience`` generations without improvement, within ``[least, most]``."""
+        until ``patience`` generations without improvement, within ``[least, most]``;
+        ``most`` for a learner that runs to it."""
         if self.config is None:
             return self.least
+        if self.to_most:
+            return self.most
         start = self.starts[-1]
         return min(self.most, max(start + self.least, self.improved_at + 1 + self.config.patience))
 

@@ -1,6 +1,6 @@
 """One trial (episode) of one controller: the hot loop every learner shares.
 
-All three learners spend nearly all their time here, so the loop works on plain Python floats
+Every learner spends nearly all its time here, so the loop works on plain Python floats
 and lists: with overlapping trapezoids only 2-4 of the M rules fire per state, and numpy's
 per-call overhead (and array conversions) on lists that small costs more than the arithmetic.
 Everything the loop needs is passed in explicitly, so it can be replaced by a compiled version
@@ -50,7 +50,7 @@ class Trial:
 
 def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int] | None,
               chooser: Chooser | None = None, td: TemporalDifference | None = None,
-              acted: set[int] | None = None) -> Trial:
+              acted: set[int] | None = None, credit: list[float] | None = None) -> Trial:
     """Run one episode from ``seed`` on a batch-of-one ``env``.
 
     The commands come from the fixed ``consequents (M,)`` (pitt, hybrid) or, step by step, from
@@ -58,12 +58,14 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
     trial, never summed over simultaneous episodes. A terminal step does not bootstrap; a
     truncated one does (the time limit is not part of the task). ``acted`` collects the rules
     that fired in a state the controller acted on: only their commands shaped the episode.
+    ``credit (M,)`` adds up each rule's normalised activation phi_m (eq. 7) over the states
+    the controller acted on: how much of the episode each rule's command shaped.
     """
     if chooser is None:
         if consequents is None:
             raise ValueError("run_trial needs consequents or a chooser")
         if td is None and not env.votes:
-            return _fixed_trial(env, rules, seed, consequents, acted)
+            return _fixed_trial(env, rules, seed, consequents, acted, credit)
     if td is not None:
         td.reset_traces()
     # The B = 1 fast path of the adapter protocol: the same results as reset/step on arrays
@@ -77,6 +79,8 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
     while True:
         if acted is not None:
             acted.update(active)
+        if credit is not None:
+            _add_credit(credit, active, alphas, total)
         if chooser is not None:
             commands = chooser.choose(active)
         else:
@@ -101,18 +105,20 @@ def run_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[in
 
 
 def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list[int],
-                 acted: set[int] | None) -> Trial:
+                 acted: set[int] | None, credit: list[float] | None) -> Trial:
     """:func:`run_trial` with fixed consequents, no q update and eq. 3 (pitt's trials and
     every validation episode): the same operations with less bookkeeping per step."""
     # each rule's command singleton, so eq. 3 needs no command list
     singleton = [rules.singletons[k] for k in consequents].__getitem__
     clip = rules.clip
-    active, alphas, _ = rules.activations(env.reset_one(seed).tolist())
+    active, alphas, total = rules.activations(env.reset_one(seed).tolist())
     ret = 0.0
     steps = 0
     while True:
         if acted is not None:
             acted.update(active)
+        if credit is not None:
+            _add_credit(credit, active, alphas, total)
         action = clip(centre_of_area(zip(alphas, map(singleton, active), strict=True), 0.0))
         observation, reward, terminal, truncated = env.step_one(action)
         ret += reward
@@ -120,6 +126,14 @@ def _fixed_trial(env: BatchEnv, rules: SparseRules, seed: int, consequents: list
         if terminal:
             return Trial(ret, steps, bool(env.success()[0]))
         # a truncated episode's last state is fired too, as run_trial does (its errors count)
-        active, alphas, _ = rules.activations(observation.tolist())
+        active, alphas, total = rules.activations(observation.tolist())
         if truncated:
             return Trial(ret, steps, bool(env.success()[0]))
+
+
+def _add_credit(credit: list[float], active: list[int], alphas: list[float],
+                total: float) -> None:
+    if total <= 0.0:  # no rule fired: no command shaped this step
+        return
+    for m, alpha in zip(active, alphas, strict=True):
+        credit[m] += alpha / total
