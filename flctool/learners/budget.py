@@ -20,6 +20,7 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Protocol
 
 from flctool.behaviour.learning import GeneticConfig, LearningConfig, StopConfig
+from flctool.learners.baselines import SETTLING_ROUNDS
 from flctool.learners.confirmation import ConfirmedRun
 from flctool.learners.metrics import GenerationResult, Usage
 from flctool.learners.run_callback import RunCallback
@@ -195,7 +196,9 @@ class BudgetPlan:
             lines.append(f"  selection: none ({s['selection.candidates'].text()})")
         lines.append(f"  confirmation: {s['selection.confirmation'].text()}; the comparison "
                      f"with baselines runs every constant command and random table on 10 of "
-                     f"its episodes, the strongest on the rest")
+                     f"its episodes, the strongest on the rest, and while the learned "
+                     f"controller leads it but not clearly, both on as many again (at most "
+                     f"{SETTLING_ROUNDS} times)")
         if self.limit is not None:
             lines.append(f"  limit: {s['stop.episodes'].text()}")
         return lines
@@ -217,7 +220,7 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     elites validated (a run usually meets fewer distinct leaders), and the race
     (:func:`~flctool.learners.selection.race_cost`) over all of them."""
     from flctool.behaviour.located import source_of
-    from flctool.learners.baselines import baseline_episodes
+    from flctool.learners.baselines import baseline_episodes, settling_episodes
     from flctool.learners.extension import most_generations
     from flctool.learners.selection import race_cost
 
@@ -266,8 +269,9 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     return BudgetPlan(settings, rules, commands,
                       generations * config.population * config.trials, most_selection,
                       confirming,
-                      baseline_episodes(commands, baselines, confirming) if confirming >= 2
-                      else 0, config.stop.episodes, extension,
+                      baseline_episodes(commands, baselines, confirming)
+                      + settling_episodes(confirming) if confirming >= 2 else 0,
+                      config.stop.episodes, extension,
                       isinstance(config, GeneticConfig),
                       None if config.extend is None else config.extend.most,
                       config.runs_to_most)

@@ -33,8 +33,9 @@ def test_the_paper_s_protocol_is_one_key_away() -> None:
     assert race == 60 and selection.race is None  # unset: the hybrid's reading
     assert plan.selection == validated * selection.episodes + race_cost(
         validated, selection.episodes, race)
-    assert (plan.confirmation, plan.baselines) == (50, (5 + 3) * 10 + 40)
-    assert plan.most == 300 + plan.selection + 50 + 120 and plan.limit is None
+    # the screening, the strongest on the rest, and at most two settling rounds (50, 100)
+    assert (plan.confirmation, plan.baselines) == (50, (5 + 3) * 10 + 40 + 2 * (50 + 100))
+    assert plan.most == 300 + plan.selection + 50 + 420 and plan.limit is None
     lines = plan.lines()
     assert lines[0].startswith(f"budget: at most {plan.most:,} episodes: 300 training")
     assert "30 generations x 10 individuals x 1 trial (the paper's protocol" in lines[1]
@@ -113,7 +114,8 @@ def test_each_setting_says_where_it_came_from() -> None:
     assert settings["population"].source == "default"
     assert settings["stop.episodes"].value == 900 and plan.most == 900
     assert plan.training == behaviour.learning.generations * 10 * 2
-    assert plan.baselines == (3 + 3 + 1) * 10 + 40  # the given table is a baseline too
+    # the given table is a baseline too; at most two settling rounds after
+    assert plan.baselines == (3 + 3 + 1) * 10 + 40 + 300
     text = "\n".join(plan.lines())
     assert "trials from overrides (trials)" in text and "limit: stop.episodes 900" in text
     no_selection = resolve_behaviour(load_behaviour(path), {"selection.candidates": 0})

@@ -241,3 +241,43 @@ def test_the_confirmation_interval_allows_for_outcomes_too_rare_to_have_shown() 
     assert 0.0 <= every.low <= every.value <= every.high <= 2.0
     unbounded = fitness_interval(fitness, np.ones(50, dtype=bool), (-np.inf, np.inf))
     assert (unbounded.low, unbounded.high) == (plain.low, plain.high)
+
+
+def test_an_undecided_comparison_is_settled_on_fresh_episodes() -> None:
+    """The hand-made shoot controller (0.37 success) against walking straight at the goal
+    (about 0.2): 10 confirmation episodes cannot tell them apart, so both run on 10 more,
+    then 20 more, on seeds the confirmation's draw continues with."""
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "shoot.yaml"),
+                                  {"population": 4, "generations": 1,
+                                   "selection.candidates": 0, "selection.confirmation": 10})
+    handmade = load_behaviour(BEHAVIOURS / "shoot-handmade.yaml")
+    learner = make_learner(behaviour)
+    train(learner)
+    names = list(handmade.output.commands)
+    table = np.array([names.index(rule.then) for rule in handmade.rules], dtype=np.intp)
+    check = learner.baseline_check
+    before = learner.usage.baseline_episodes
+    learner.confirmation.confirm(learner, table, 0, 0)
+    check.on_finish(learner)
+    assert check.verdict is not None
+    difference = check.verdict.difference
+    settled = difference.n - 10
+    assert settled in (10, 30)  # one round or two
+    screened = 10 * len(check.verdict.screened)
+    assert learner.usage.baseline_episodes - before == screened + 2 * settled
+    assert difference.low > 0 or settled == 30  # decided, or out of rounds
+    # and the settling seeds are the confirmation draw's next ones: fresh, disjoint
+    seeds = confirmation_seeds(behaviour.learning.seed, 40)
+    assert len(set(seeds)) == 40 and set(learner.confirmation.seeds) == set(seeds[:10])
+
+
+def test_a_trailing_controller_is_decided_at_once() -> None:
+    learner = make_learner(ballchase(seed=0, generations=1, population=2,
+                                     **{"selection.confirmation": 20}), None)
+    train(learner)
+    learner.confirmation.confirm(learner, np.zeros(15, dtype=np.intp), 0, 0)  # always right
+    before = learner.usage.baseline_episodes
+    learner.baseline_check.on_finish(learner)
+    verdict = learner.baseline_check.verdict
+    assert verdict is not None and verdict.difference.n == 20 and not verdict.learned
+    assert learner.usage.baseline_episodes - before == 10 * len(verdict.screened) + 10
