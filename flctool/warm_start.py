@@ -33,6 +33,10 @@ from flctool.learners.base import Learner
 
 #: Mixed with the run's seed for the warm start's own draws (the GA's stream is left as is).
 _STREAM = 0x5EED_1417
+#: How far a first generation strays from the controller it starts around, for a learner
+#: without a mutation rate of its own (credit): the paper's p_m. Its tables need to differ
+#: for the first episodes to credit anything.
+_AROUND = 0.1
 
 
 @dataclass(frozen=True)
@@ -129,7 +133,7 @@ def warm_start(learner: Learner, behaviour: Behaviour, source: Behaviour, label:
     # fuzzy_q's one controller is its q table's greedy one: it starts from the table alone
     takes_population = learner.name != "fuzzy_q"
     population = seeded_population(genes, known, config.population, len(commands),
-                                   float(getattr(config, "mutation", 0.0)), rng)
+                                   float(getattr(config, "mutation", _AROUND)), rng)
     table = None
     carried = 0
     if strengths is not None and getattr(learner, "fuzzy_q", None) is not None:

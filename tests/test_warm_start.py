@@ -92,3 +92,16 @@ def test_init_is_refused_with_resume_and_from_a_controller_that_does_not_match(
                                                                   match="no rule of"):
         warm_start_from_path(training.learner, training.run.behaviour,
                              BEHAVIOURS / "face-goal-handmade.yaml")
+
+
+def test_the_credit_learner_starts_from_tables_around_the_controller(tmp_path: Path) -> None:
+    """Its first generation's tables must differ for the episodes to credit anything: the
+    controller, then tables with about 10 % of its commands redrawn."""
+    source = BEHAVIOURS / "ballchase-handmade.yaml"
+    handmade = rule_consequents(load_behaviour(source))
+    with start_run(BEHAVIOURS / "ballchase.yaml", {"learner": "credit", "population": 20,
+                                                   "generations": 1}, tmp_path / "run") as training:
+        warm_start_from_path(training.learner, training.run.behaviour, source)
+        first = training.learner.population
+        assert first.shape == (20, 15) and first[0].tolist() == handmade
+        assert 0 < (first[1:] != np.array(handmade)).mean() < 0.2

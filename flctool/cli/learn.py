@@ -125,9 +125,9 @@ def learn(
         from flctool.runs import BASELINE_FILE  # loaded already: the run is one
 
         verdict = (summary.selection or {}).get("baseline") or {}
-        commands = list(behaviour.output.commands)
-        err_console.print(f"[yellow]not learned:[/] "
-                          f"{escape(not_learned_message(verdict, commands))}", highlight=False)
+        message = not_learned_message(verdict, list(behaviour.output.commands),
+                                      behaviour.learning.learner)
+        err_console.print(f"[yellow]not learned:[/] {escape(message)}", highlight=False)
         baseline_file = run.path / BASELINE_FILE
         if baseline_file.is_file():
             err_console.print(f"  the baseline, to evaluate or deploy instead: "

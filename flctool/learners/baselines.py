@@ -88,14 +88,23 @@ class Verdict:
 #: What to try when a run did not learn: more budget, another learner, fewer rules.
 # (extend.most keeps a sized budget's extension and trials; --generations would replace them)
 _BUDGET = "give it more budget (--set extend.most=200, --set trials=3, --set population=20)"
-_OTHERS = ("try another learner (--learner fuzzy_q or pitt), or use coarser sets (fewer "
-           "rules to learn)")
-NOT_LEARNED_HINT = f"{_BUDGET}, {_OTHERS}"
+_COARSER = "or use coarser sets (fewer rules to learn)"
 
 
-def not_learned_message(verdict: Mapping[str, Any], commands: Sequence[str]) -> str:
+def _other_learners(learner: str) -> str:
+    """Another learner to try: the credit learner first, which on the task suite matched or
+    beat the others everywhere and alone learned where one trial says little (shoot)."""
+    if learner == "credit":
+        return f"try another learner (--learner hybrid or fuzzy_q), {_COARSER}"
+    return ("try the credit learner (--learner credit: it pools every episode's outcome rule by "
+            f"rule, for tasks where one trial says little), {_COARSER}")
+
+
+def not_learned_message(verdict: Mapping[str, Any], commands: Sequence[str],
+                        learner: str = "hybrid") -> str:
     """What a user reads when a run did not learn: the verdict (``Verdict.record()``, as
-    run.json holds it) and what to try, which depends on the baseline that was as good.
+    run.json holds it) and what to try, which depends on the baseline that was as good (and
+    on the run's ``learner``, for which other one to try).
 
     - A **constant command** as good as the learned controller often means the task as
       written does not need its rules (docs/environments.md: the striker's ``always
@@ -112,17 +121,18 @@ def not_learned_message(verdict: Mapping[str, Any], commands: Sequence[str]) -> 
     head = (f"the learned controller is not clearly better than the baseline '{name}' (mean "
             f"fitness {_number(verdict.get('baseline_fitness'))}; difference "
             f"{difference_text(difference)} over the same {difference.get('n')} episodes)")
+    others = _other_learners(learner)
     if name in {f"always {command}" for command in commands}:
         advice = (f"a controller that always commands '{name.removeprefix('always ')}' "
                   f"{does}: if that is good enough, the task as written may not need these "
-                  f"rules (check its outcomes and starts); to learn more, {NOT_LEARNED_HINT}")
+                  f"rules (check its outcomes and starts); to learn more, {_BUDGET}, {others}")
     elif name.startswith("random table "):
         advice = (f"a random rule table {does}, so the trials did not tell controllers apart: "
                   "measure each on more episodes (--set trials=3, --set "
-                  f"selection.episodes=100), {_OTHERS}")
+                  f"selection.episodes=100), {others}")
     else:
         advice = (f"your controller '{name}' {does}: start from it (--init with that file) "
-                  f"and {NOT_LEARNED_HINT}")
+                  f"and {_BUDGET}, {others}")
     return f"{head}\n  try: {advice}"
 
 

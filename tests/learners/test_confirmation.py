@@ -152,6 +152,18 @@ def test_not_learned_advice_follows_the_baseline_that_was_as_good(baseline: str,
                                                   ["approach", "dribble"])
 
 
+@pytest.mark.parametrize(("learner", "other"), [
+    ("hybrid", "try the credit learner (--learner credit"),
+    ("fuzzy_q", "try the credit learner (--learner credit"),
+    ("credit", "try another learner (--learner hybrid or fuzzy_q)"),
+])
+def test_not_learned_advice_names_another_learner_than_the_run_s(learner: str,
+                                                                 other: str) -> None:
+    for baseline in ("always approach", "random table 1", "handmade.yaml"):
+        message = not_learned_message(verdict(baseline, -0.1, 0.2), ["approach"], learner)
+        assert other in message, message
+
+
 def test_a_given_baseline_named_like_a_constant_of_other_commands_is_a_given_one() -> None:
     # "always kick" is not a constant here: the behaviour has no command "kick"
     message = not_learned_message(verdict("always kick", -0.1, 0.2), ["approach"])
