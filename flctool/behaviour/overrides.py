@@ -84,6 +84,13 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
     if isinstance(learner, str):  # switching learner: the old one's keys were not for it
         learning = data["learning"] = keep_keys_read_by(learning, learner)
         model = section_model("learning", {"learner": learner})
+        # a key at the old learner's default was not chosen for it: the new one's default
+        # (credit draws 100 tables a generation where the GAs breed 10 individuals)
+        for key, field in type(config).model_fields.items():
+            new = getattr(model, "model_fields", {}).get(key)
+            if (key in learning and new is not None and learning[key] == field.default
+                    and new.default != field.default and _plain(field.default)):
+                del learning[key]
         if sized_trials and "trials" in learning:  # the new learner's sized trials
             learning["trials"] = getattr(model, "sized_trials", 1)
     if _gives_the_budget(given) and sized:
@@ -95,6 +102,11 @@ def resolve_behaviour(behaviour: Behaviour, overrides: Overrides) -> Behaviour:
             learning.pop("trials", None)
     places = apply_overrides(data, given)
     return behaviour_from_data(data, source_of(behaviour).with_overrides(places))
+
+
+def _plain(value: object) -> bool:
+    """Whether a default is a number or word as a file writes it (not a section)."""
+    return isinstance(value, (int, float, str, bool))
 
 
 def _gives_the_budget(overrides: list[Override]) -> bool:

@@ -202,6 +202,18 @@ def test_switching_learner_by_override_drops_the_old_learners_keys() -> None:
     assert isinstance(back.learning, PittConfig) and back.learning.pitt_crossover == "uniform"
 
 
+def test_a_switched_learner_takes_its_own_default_for_a_key_left_at_the_old_one_s() -> None:
+    hybrid = parse_behaviour(_with_learning("learner: hybrid\nseed: 4"))
+    credit = resolve_behaviour(hybrid, {"learner": "credit"})
+    assert credit.learning.population == 100  # credit's default, not the hybrid's 10
+    chosen = resolve_behaviour(hybrid, {"learner": "credit", "population": 10})
+    assert chosen.learning.population == 10
+    given = parse_behaviour(_with_learning("learner: hybrid\npopulation: 24"))
+    assert resolve_behaviour(given, {"learner": "credit"}).learning.population == 24
+    back = resolve_behaviour(credit, {"learner": "pitt"})
+    assert back.learning.population == 10 and back.learning.seed == 4
+
+
 def test_an_override_of_another_learners_key_is_an_error() -> None:
     pitt = parse_behaviour(_with_learning("learner: pitt"))
     with pytest.raises(SpecError, match="'pitt_crossover' is read by the pitt learner only"):
