@@ -63,7 +63,9 @@ def test_learnable_version_shares_the_handmade_partitions(path: Path) -> None:
     learned = load_behaviour(path.with_name(path.name.replace("-handmade", "")))
     assert learned.inputs == handmade.inputs and learned.output == handmade.output
     assert learned.environment == handmade.environment
-    assert not learned.rules and learned.learning.learner == "hybrid"
+    # the paper's hybrid, but where a single trial says too little (docs/learning.md)
+    learner = "credit" if learned.name == "shoot" else "hybrid"
+    assert not learned.rules and learned.learning.learner == learner
 
 
 def test_ballchase_pair_share_their_partitions() -> None:
