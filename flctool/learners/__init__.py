@@ -1,4 +1,4 @@
-"""Learners of rule consequents: ``pitt``, ``fuzzy_q`` and the paper's ``hybrid``.
+"""Learners of rule consequents: ``pitt``, ``fuzzy_q``, the paper's ``hybrid``, and ``credit``.
 
 Each is registered by the name that ``learning.learner`` takes in a behaviour file; all run
 the same training loop (:func:`train`) with callbacks, and know environments only through
