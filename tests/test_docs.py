@@ -220,11 +220,24 @@ PAGES_WITH_CODE = [p for p in PAGES if any(b.runnable() for b in extract_blocks(
                          ids=[str(p.relative_to(ROOT)) for p in PAGES_WITH_CODE])
 @pytest.mark.slow
 def test_page_code_blocks_run(page: Path, tmp_path: Path) -> None:
-    """A page's blocks run in order in one folder, so a block sees what earlier ones made."""
-    cwd = _workspace(tmp_path)
-    for block in extract_blocks(page):
-        if block.runnable():
-            run_block(block, cwd)
+    """A page's blocks run in order in one folder, so a block sees what earlier ones made.
+
+    docs/ros2.md's blocks start ROS 2 processes that must find each other: late in a loaded
+    CI run a served robot's first inputs have twice not reached the learner within its 60 s
+    reset timeout (never on a quiet machine), so that page alone runs once more, in a fresh
+    folder, before it fails; both failures are reported."""
+    attempts = 2 if page.name == "ros2.md" else 1
+    failures: list[str] = []
+    for attempt in range(attempts):
+        cwd = _workspace(tmp_path / f"attempt{attempt}")
+        try:
+            for block in extract_blocks(page):
+                if block.runnable():
+                    run_block(block, cwd)
+            return
+        except (AssertionError, subprocess.SubprocessError) as failure:
+            failures.append(f"attempt {attempt + 1}: {failure}")
+    pytest.fail("\n".join(failures))
 
 
 # -- the harness itself ----------------------------------------------------------------------
