@@ -20,7 +20,11 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Protocol
 
 from flctool.behaviour.learning import GeneticConfig, LearningConfig, StopConfig
-from flctool.learners.baselines import SETTLING_ROUNDS
+from flctool.learners.baselines import (
+    SETTLING_ROUNDS,
+    baseline_episodes,
+    settling_episodes,
+)
 from flctool.learners.confirmation import ConfirmedRun
 from flctool.learners.metrics import GenerationResult, Usage
 from flctool.learners.run_callback import RunCallback
@@ -164,19 +168,21 @@ class BudgetPlan:
         if self.extension is not None:
             most, patience = self.extension
             least = s["generations"].value
-            fresh = (f", then fresh attempts of {least} while they fit" if self.attempts
-                     else "")
             if self.most_given is None:
                 why = "from the problem's size unless extend.most is given"
             elif self.most_given == most:
                 why = "from extend.most"
             else:
                 why = f"since extend.most {self.most_given} is below generations"
-            generations = (f"{least} to {most} generations (on past {least} until {patience} "
-                           f"pass without a better selected controller{fresh}; {most} {why})")
             if self.to_most:
                 generations = (f"{most} generations ({why}; its credit only grows with more "
                                "episodes, so the run has them all)")
+            else:
+                fresh = (f", then fresh attempts of {least} while they fit" if self.attempts
+                         else "")
+                generations = (f"{least} to {most} generations (on past {least} until "
+                               f"{patience} pass without a better selected controller{fresh}; "
+                               f"{most} {why})")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
@@ -220,7 +226,6 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     elites validated (a run usually meets fewer distinct leaders), and the race
     (:func:`~flctool.learners.selection.race_cost`) over all of them."""
     from flctool.behaviour.located import source_of
-    from flctool.learners.baselines import baseline_episodes, settling_episodes
     from flctool.learners.extension import most_generations
     from flctool.learners.selection import race_cost
 
