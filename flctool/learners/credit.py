@@ -162,22 +162,21 @@ class CreditLearner(Learner):
             tables = self.given_first
         else:  # the first generation's draws, with no credit yet, are uniformly random
             tables = self.keep_fixed(self.credit.draw(self.rngs["ga"], config.population))
-        seeds = self.episode_seeds(tables.shape[0], config.trials, common=False)
+        seeds = self.episode_seeds(tables.shape[0], config.trials, common=False).ravel()
+        tried = np.repeat(tables, config.trials, axis=0)  # the table of each episode (E, M)
         episodes = seeds.size
         returns = np.empty(episodes)
         lengths = np.empty(episodes, dtype=np.int64)
         success = np.empty(episodes, dtype=np.bool_)
         activation = np.zeros((episodes, self.controller.n_rules))
-        for i, (consequents, row) in enumerate(zip(tables.tolist(), seeds.tolist(),
-                                                   strict=True)):
-            for j, seed in enumerate(row):
-                e = i * config.trials + j
-                shaped = [0.0] * self.controller.n_rules
-                trial = run_trial(self.env, self.rules, seed, consequents, credit=shaped)
-                returns[e], lengths[e], success[e] = trial.ret, trial.length, trial.success
-                activation[e] = shaped
+        for e, (consequents, seed) in enumerate(zip(tried.tolist(), seeds.tolist(),
+                                                    strict=True)):
+            shaped = [0.0] * self.controller.n_rules
+            trial = run_trial(self.env, self.rules, seed, consequents, credit=shaped)
+            returns[e], lengths[e], success[e] = trial.ret, trial.length, trial.success
+            activation[e] = shaped
         fitness = self.env.episode_fitness(returns, lengths, success)
-        self.credit.learn(np.repeat(tables, config.trials, axis=0), activation, fitness)
+        self.credit.learn(tried, activation, fitness)
         self.population = self.greedy()
         self.fitness = np.array([float(np.mean(fitness))])
         return GenerationResult(fitness, episodes, int(lengths.sum()))
