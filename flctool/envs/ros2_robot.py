@@ -37,8 +37,13 @@ from flctool.ros2.fields import message_class
 from flctool.ros2.graph import RosGraph
 
 #: s the robot waits, before answering a reset, for a subscriber on each topic it publishes
-#: (a reply published before the client's subscription is matched would be lost).
+#: (a reply published before the client's subscription is matched would be lost) once one of
+#: them has a subscriber: a client need not read every topic.
 MATCH_WAIT = 2.0
+#: s a robot reset by a client waits, before answering, for the first subscriber on any topic
+#: it publishes: the client's subscriptions are discovered apart from its reset publisher, and
+#: on a loaded machine seconds later.
+CLIENT_WAIT = 30.0
 #: s between republished observations while an auto-reset robot waits for a command.
 HEARTBEAT = 0.02
 
@@ -144,11 +149,15 @@ class SimRobot:
                 self._publish_observation(self._observation)
 
     def _await_subscribers(self) -> None:
-        deadline = time.monotonic() + MATCH_WAIT
+        """Wait for the client's subscriptions before answering: a lockstep robot answers
+        once, so its first reply must not go out before anyone listens. A deployment node
+        (``auto_reset``) republishes its observations, so it waits only briefly."""
         publishers = [*self.observation_publishers, self.status_publisher, self.reward_publisher]
-        while any(p.get_subscription_count() == 0 for p in publishers) and \
-                time.monotonic() < deadline:
-            time.sleep(0.01)
+        if not self.auto_reset:
+            _wait_until(lambda: any(p.get_subscription_count() > 0 for p in publishers),
+                        CLIENT_WAIT)
+        _wait_until(lambda: all(p.get_subscription_count() > 0 for p in publishers),
+                    MATCH_WAIT)
 
     def _publish(self, observation: Any, reward: float, status: str) -> None:
         """Observations, odometry and reward, then the status (clients wait for all)."""
@@ -191,3 +200,9 @@ class SimRobot:
     def close(self) -> None:
         self.graph.close()
 
+
+def _wait_until(ready: Callable[[], bool], timeout: float) -> None:
+    """Poll ``ready()`` every 10 ms until it is true or ``timeout`` s have passed."""
+    deadline = time.monotonic() + timeout
+    while not ready() and time.monotonic() < deadline:
+        time.sleep(0.01)

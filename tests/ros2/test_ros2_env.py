@@ -57,6 +57,29 @@ def test_episodes_over_ros2_are_bit_for_bit_the_simulators() -> None:
     assert np.array_equal(over.fitness, direct.fitness)
 
 
+def test_the_robot_answers_a_reset_whose_client_subscribes_late() -> None:
+    """A client's subscriptions can be discovered seconds after its reset reaches the robot
+    (late in a loaded CI run, a learner waited out its reset timeout so); the lockstep robot
+    answers a reset once, so it waits for them before answering."""
+    from flctool.behaviour.ros2 import Qos
+    from flctool.envs.ros2_robot import MATCH_WAIT
+    from flctool.ros2.fields import message_class
+    from flctool.ros2.graph import RosGraph
+
+    with sim_robot("/late"):
+        client = RosGraph("late_client")
+        try:
+            reset = client.publisher("/late/reset", "std_msgs/Int64", Qos())
+            assert wait_until(lambda: reset.get_subscription_count() > 0, 30.0)
+            reset.publish(message_class("std_msgs/Int64")(data=3))
+            time.sleep(MATCH_WAIT + 1.0)  # past what the robot once waited for anyone
+            status = client.subscribe("/late/status", "std_msgs/String", Qos())
+            assert client.wait(lambda: status.count > 0, 30.0), "the reset went unanswered"
+            assert status.text == "running"
+        finally:
+            client.close()
+
+
 class _Spy:
     """Records every command on a topic: (time, linear.x, angular.z)."""
 
