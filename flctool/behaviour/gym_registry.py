@@ -131,12 +131,20 @@ def discrete_actions(env_id: str) -> int | None:
         return int(space.n) if isinstance(space, gym.spaces.Discrete) else None
 
 
+#: The hint for an environment whose id Gymnasium knows but whose package is not installed.
+MISSING_PACKAGE_HINT = ("the id is known but its environment needs a package that is not "
+                        "installed: install what Gymnasium names, in the Python flctool runs in")
+
+
 @contextmanager
 def _made(gym: Any, env_id: str, options: Mapping[str, Any]) -> Iterator[Any]:
     """The environment ``env_id`` made with ``options`` (a :class:`SpecError` at
     ``environment.id`` if Gymnasium cannot; make_env reports it in full), closed after."""
     try:
         env = gym.make(env_id, disable_env_checker=True, **dict(options))
+    except gym.error.DependencyNotInstalled as error:
+        raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
+                                 f"'{env_id}': {error}", MISSING_PACKAGE_HINT)]) from None
     except (gym.error.Error, TypeError) as error:
         raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
                                  f"'{env_id}': {error}")]) from None

@@ -133,8 +133,9 @@ def _gymnasium_actions(env_id: str) -> int | None:
     except MissingDependencyError:
         return 0
     except SpecError as error:
-        raise FlcError(error.problems[0].message,
-                       hint="check the id: flctool new --env gymnasium:ID") from None
+        problem = error.problems[0]
+        hint = problem.hint or "check the id: flctool new --env gymnasium:ID"
+        raise FlcError(problem.message, hint=hint) from None
 
 
 def _pitch_things_read(channels: list[str]) -> list[str]:

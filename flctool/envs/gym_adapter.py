@@ -26,7 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from flctool.behaviour.environment import GymnasiumConfig, ObservationFeature
-from flctool.behaviour.gym_registry import id_module_problem, import_gymnasium, option_problems
+from flctool.behaviour.gym_registry import (
+    MISSING_PACKAGE_HINT,
+    id_module_problem,
+    import_gymnasium,
+    option_problems,
+)
 from flctool.behaviour.models import Behaviour
 from flctool.envs.base import BatchEnv, BoolArray, FloatArray, Step
 from flctool.errors import EnvError, Problem, SpecError
@@ -89,6 +94,10 @@ class GymnasiumEnv(BatchEnv):
             raise SpecError(problems)
         try:
             return gym.make(config.id, disable_env_checker=True, **config.options)
+        except gym.error.DependencyNotInstalled as error:
+            raise _spec_error(("environment", "id"),
+                              f"Gymnasium cannot make '{config.id}': {error}",
+                              MISSING_PACKAGE_HINT) from None
         except gym.error.Error as error:
             raise _spec_error(
                 ("environment", "id"),

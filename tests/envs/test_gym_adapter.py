@@ -315,3 +315,32 @@ def test_options_are_checked_against_the_registered_environment() -> None:
         result = CliRunner().invoke(cli_app, ["validate", path])
     assert result.exit_code == 1 and "not a render mode" in result.output
     assert "WARN" not in result.output  # Gymnasium's own warning never shows
+
+
+def _needs_a_package(**kwargs: object) -> gymnasium.Env:  # type: ignore[type-arg]
+    raise gymnasium.error.DependencyNotInstalled("Box2D is not installed, pip install box2d")
+
+
+def test_an_environment_whose_package_is_missing_says_to_install_it() -> None:
+    """Gymnasium knows the id but not its package: the fix is an install, not another id."""
+    from flctool.behaviour.gym_registry import MISSING_PACKAGE_HINT
+    from flctool.behaviour.scaffold import parse_command, parse_input, scaffold_behaviour
+    from flctool.errors import FlcError
+
+    env_id = "flctool-test/NeedsPackage-v0"
+    if env_id not in gymnasium.envs.registry:
+        gymnasium.register(env_id, entry_point=_needs_a_package)
+    behaviour = parse_behaviour(_cartpole_env(
+        f"environment: {{adapter: gymnasium, id: '{env_id}', actions: {{push_left: 0, "
+        "push_right: 1}}\n"))
+    with pytest.raises(SpecError) as caught:
+        make_env(behaviour)
+    (problem,) = caught.value.problems
+    assert problem.message == (f"Gymnasium cannot make '{env_id}': Box2D is not installed, "
+                               "pip install box2d")
+    assert problem.hint == MISSING_PACKAGE_HINT
+    with pytest.raises(FlcError, match="Box2D is not installed") as scaffolded:
+        scaffold_behaviour("lander", [parse_input("x:-1:1:3")],
+                           [parse_command("left:-1"), parse_command("right:1")],
+                           adapter=f"gymnasium:{env_id}")
+    assert scaffolded.value.hint == MISSING_PACKAGE_HINT
