@@ -43,6 +43,13 @@ FloatArray = NDArray[np.float64]
 
 TRACE_FLOOR = 1e-12
 _BLOCK = 1024  # uniforms drawn per refill of an exploration stream
+#: A run's Boltzmann exploration has locked in when its greedy controller has not changed for
+#: this many generations while a rule's strengths differ (median) by at least
+#: :data:`LOCKED_RATIO` temperatures, where the docs' rule of thumb wants about one: a command
+#: that far below the strongest is tried with probability below e^-10, so it keeps the
+#: strength it had when last tried (docs/learning.md, "Why fuzzy_q misses Acrobot").
+LOCKED_GENERATIONS = 5
+LOCKED_RATIO = 10.0
 
 
 class FuzzyQ:
@@ -208,6 +215,46 @@ def new_fuzzy_q(config: QConfig, n_rules: int, n_commands: int) -> FuzzyQ:
                   config.lambda_)
 
 
+def boltzmann_greediness(table: FloatArray, temperature: float,
+                         initial: float) -> tuple[float, float] | None:
+    """How greedy Boltzmann exploration at ``temperature`` is over the rules whose strengths
+    have moved from ``initial`` (None if none has): the mean probability that such a rule picks
+    its strongest command, and the median difference between its strongest and weakest
+    command's strength (what the docs' rule of thumb sets the temperature to)."""
+    moved = table[np.any(table != initial, axis=1)]
+    if moved.shape[0] == 0:
+        return None
+    weights = np.exp((moved - moved.max(axis=1, keepdims=True)) / temperature)
+    share = float(np.mean(1.0 / weights.sum(axis=1)))  # the strongest command's weight is 1
+    gap = float(np.median(moved.max(axis=1) - moved.min(axis=1)))
+    return share, gap
+
+
+def locked_text(record: dict[str, Any]) -> str:
+    """What ``flctool learn`` says of a run whose exploration locked in (its
+    :meth:`FuzzyQLearner.exploration_record`)."""
+    gap = record["strength_gap"]
+    return (f"the greedy controller has not changed since generation {record['greedy_since']}, "
+            f"and a rule's strengths differ by {gap:.3g} (median) against a temperature of "
+            f"{record['level']:g}, so rules pick their strongest command "
+            f"{record['greedy_share']:.1%} of the time on average and the commands rarely "
+            "tried keep the strengths they had when last tried. If the controller falls short, "
+            f"raise learning.q.temperature towards {gap:.2g} (with more generations), or try "
+            "--learner credit")
+
+
+def unrewarded_text(record: dict[str, Any]) -> str:
+    """What ``flctool learn`` says of a run whose training episodes have all scored the same
+    for :data:`LOCKED_GENERATIONS` generations (its :meth:`FuzzyQLearner.exploration_record`)."""
+    since = ("in the whole run" if record["varied_at"] < 0
+             else f"since generation {record['varied_at'] + 1}")
+    return (f"every training episode {since} scored the same (fitness {record['fitness']:g}): "
+            "exploring one step at a time never reached what the reward pays for, so the "
+            "strengths have nothing to tell the commands apart by, and best.yaml is the greedy "
+            "controller that validated best. Try --learner credit or hybrid (they try whole "
+            "rule tables, whose episodes differ), or a reward that pays for progress")
+
+
 def greedy_consequents(table: FloatArray) -> NDArray[np.intp]:
     """Each rule's strongest command (M,), ties to the lowest index: the learned controller."""
     consequents: NDArray[np.intp] = np.argmax(table, axis=1).astype(np.intp)
@@ -247,6 +294,11 @@ class FuzzyQLearner(Learner):
         self.fixed = dict(zip(self.fixed_rules.tolist(), self.fixed_commands.tolist(),
                               strict=True))
         self.population = self.greedy()
+        #: The generation whose q table first gave the current greedy controller.
+        self.greedy_since = 0
+        #: The last generation whose training episodes did not all score what every earlier
+        #: one scored (-1: none has yet).
+        self.varied_at = -1
         # Learning the sets too: a GA over set genomes whose every trial is a fuzzy
         # Q-learning episode (see the class docstring).
         self.set_operators: SetOperators | None = None
@@ -307,7 +359,12 @@ class FuzzyQLearner(Learner):
             trial = run_trial(self.env, rules, seed, None, chooser=chooser, td=self.fuzzy_q)
             returns[i], lengths[i], success[i] = trial.ret, trial.length, trial.success
         fitness = self.env.episode_fitness(returns, lengths, success)
-        self.population = self.greedy()
+        if fitness.max() > fitness.min() or (generation > 0 and fitness[0] != self.fitness[0]):
+            self.varied_at = generation
+        greedy = self.greedy()
+        if not np.array_equal(greedy, self.population):
+            self.greedy_since = generation
+        self.population = greedy
         self.fitness = np.array([float(np.mean(fitness))])
         if self.set_population is not None:
             self.set_fitness = fitness.reshape(-1, trials).mean(axis=1)
@@ -328,8 +385,34 @@ class FuzzyQLearner(Learner):
         assert genes is not None
         self.set_population = genes
 
+    def exploration_record(self) -> dict[str, Any]:
+        """What run.json shows of the exploration: its policy and level in the last generation,
+        the generation the greedy controller last changed at, and, under Boltzmann exploration,
+        how greedy it has become and whether it has locked in (:data:`LOCKED_GENERATIONS`)."""
+        policy = self.config.exploration.policy
+        level = self.exploration(max(self.generation, 0))
+        record: dict[str, Any] = {
+            "policy": policy, "level": level, "greedy_since": self.greedy_since,
+            "varied_at": self.varied_at, "fitness": float(self.fitness[0]),
+            "unrewarded": self.generation - self.varied_at >= LOCKED_GENERATIONS,
+            "locked": False}
+        if policy != "boltzmann" or level <= 0.0:
+            return record
+        greediness = boltzmann_greediness(self.fuzzy_q.table(), level, self.config.q.initial)
+        if greediness is None:
+            return record
+        share, gap = greediness
+        unchanged = self.generation - self.greedy_since
+        record.update(greedy_share=share, strength_gap=gap,
+                      locked=unchanged >= LOCKED_GENERATIONS and gap >= LOCKED_RATIO * level)
+        return record
+
+    def selection_record(self) -> dict[str, Any]:
+        return {**super().selection_record(), "exploration": self.exploration_record()}
+
     def extra_state(self) -> dict[str, Any]:
-        state = super().extra_state()
+        state = {**super().extra_state(), "greedy_since": self.greedy_since,
+                 "varied_at": self.varied_at}
         if self.set_population is not None and self.set_fitness is not None:
             state["set_population"] = self.set_population.tolist()
             state["set_fitness"] = self.set_fitness.tolist()
@@ -337,6 +420,14 @@ class FuzzyQLearner(Learner):
 
     def load_extra_state(self, state: dict[str, Any]) -> None:
         super().load_extra_state(state)
+        # a checkpoint of a version that kept neither: count from the resumed generation
+        for key in ("greedy_since", "varied_at"):
+            value = state.get(key, self.generation)
+            if isinstance(value, bool) or not isinstance(value, int) or not (
+                    -1 <= value <= self.generation):
+                raise damaged(f"is damaged: its {key} is not a generation of the run")
+        self.greedy_since = state.get("greedy_since", self.generation)
+        self.varied_at = state.get("varied_at", self.generation)
         if self.set_population is None:
             return
         shape = self.set_population.shape

@@ -288,3 +288,30 @@ def test_learn_loads_neither_scipy_nor_numba(tmp_path: Path) -> None:
         capture_output=True, text=True, env=env, check=False)
     assert result.returncode == 0, result.stderr
     assert result.stderr.strip().splitlines()[-1] == "[]"
+
+
+ACROBOT_FUZZY_Q = ROOT / "benchmarks" / "tasks" / "acrobot-fuzzy-q.yaml"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("seed", "told"), [
+    # at temperature 1 the greedy table stops changing at generation 25 while a rule's
+    # strengths differ by about 30
+    (610, ["exploration locked in: the greedy controller has not changed since generation 25",
+           "raise learning.q.temperature towards 30 (with more generations)"]),
+    # no exploring episode ever reaches the goal: every one times out at -500
+    (611, ["no reward signal: every training episode in the whole run scored the same "
+           "(fitness -500)", "Try --learner credit or hybrid"]),
+])
+def test_a_fuzzy_q_run_that_could_not_learn_by_exploring_is_told_what_to_try(
+        tmp_path: Path, seed: int, told: list[str]) -> None:
+    """acrobot-fuzzy-q (docs/learning.md, "Why fuzzy_q misses Acrobot")."""
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["learn", str(ACROBOT_FUZZY_Q), "--seed", str(seed),
+                                 "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.stdout.split())
+    for sentence in told:
+        assert sentence in text
+    record = json.loads((out / "run.json").read_text())["selection"]["exploration"]
+    assert record["locked"] == (seed == 610) and record["unrewarded"] == (seed == 611)

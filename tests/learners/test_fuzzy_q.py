@@ -5,14 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flctool.errors import LearnError
 from flctool.learners import make_learner, train
 from flctool.learners.fuzzy_q import (
+    LOCKED_GENERATIONS,
+    LOCKED_RATIO,
     BoltzmannChooser,
     EpsilonGreedyChooser,
     FuzzyQ,
     FuzzyQLearner,
     UniformStream,
+    boltzmann_greediness,
     greedy_consequents,
+    locked_text,
+    unrewarded_text,
 )
 from tests.learners.line_env import LineEnv, line_behaviour
 
@@ -127,3 +133,66 @@ def test_fuzzy_q_learns_to_go_up(policy: str) -> None:
     # "up" wins in the rules the episodes visit most: mid and high
     assert list(learner.population[0, 1:]) == [2, 2]
     assert history[-1].mean > history[0].mean
+
+
+def test_greediness_counts_the_rules_whose_strengths_moved() -> None:
+    table = np.array([[0.0, -10.0, -10.0],   # moved: strongest 0, gap 10
+                      [0.0, 0.0, 0.0],       # never updated (initial 0): left out
+                      [-1.0, -3.0, -2.0]])   # moved: gap 2
+    share, gap = boltzmann_greediness(table, 1.0, 0.0)  # type: ignore[misc]
+    expected = (1 / (1 + 2 * np.exp(-10.0)) + 1 / (1 + np.exp(-2.0) + np.exp(-1.0))) / 2
+    assert share == pytest.approx(expected) and gap == pytest.approx(6.0)
+    assert boltzmann_greediness(np.zeros((2, 3)), 1.0, 0.0) is None
+
+
+def _line_run(temperature: float) -> FuzzyQLearner:
+    behaviour = line_behaviour(learner="fuzzy_q", generations=15, population=10)
+    q = behaviour.learning.q.model_copy(update={"temperature": temperature})
+    behaviour = behaviour.model_copy(update={"learning": behaviour.learning.model_copy(
+        update={"q": q})})
+    learner = make_learner(behaviour, LineEnv())
+    assert isinstance(learner, FuzzyQLearner)
+    train(learner)
+    return learner
+
+
+def test_a_run_whose_exploration_locked_in_says_so_and_one_exploring_does_not() -> None:
+    locked = _line_run(0.001).exploration_record()
+    assert locked["locked"] and locked["policy"] == "boltzmann" and locked["level"] == 0.001
+    assert locked["greedy_since"] <= 14 - LOCKED_GENERATIONS
+    assert locked["strength_gap"] >= LOCKED_RATIO * 0.001 and locked["greedy_share"] > 0.99
+    assert f"since generation {locked['greedy_since']}" in locked_text(locked)
+    assert "raise learning.q.temperature towards" in locked_text(locked)
+    exploring = _line_run(10.0).exploration_record()
+    assert not exploring["locked"] and exploring["strength_gap"] < LOCKED_RATIO * 10.0
+
+
+def test_greedy_since_resumes_and_a_damaged_one_is_refused() -> None:
+    learner = _line_run(0.001)
+    state = learner.state_dict()
+    assert state["greedy_since"] == learner.greedy_since
+    again = _line_run(10.0)
+    again.load_state_dict(state)
+    assert again.greedy_since == learner.greedy_since
+    for key in ("greedy_since", "varied_at"):
+        for damaged in ("x", True, 99, -2):
+            with pytest.raises(LearnError, match=key):
+                again.load_state_dict({**state, key: damaged})
+    old = {key: value for key, value in state.items()
+           if key not in ("greedy_since", "varied_at")}
+    again.load_state_dict(old)  # a checkpoint from before: counted from the resumed generation
+    assert again.greedy_since == again.varied_at == state["generation"]
+
+
+def test_a_run_whose_episodes_all_score_the_same_says_it_had_nothing_to_learn_from() -> None:
+    # one step from x in [2, 8] never reaches 9 or 1: every episode is truncated, return 0
+    learner = make_learner(line_behaviour(learner="fuzzy_q", generations=8, population=5),
+                           LineEnv(max_steps=1))
+    assert isinstance(learner, FuzzyQLearner)
+    train(learner)
+    record = learner.exploration_record()
+    assert record["unrewarded"] and record["varied_at"] == -1
+    assert unrewarded_text(record).startswith(
+        "every training episode in the whole run scored the same (fitness 0)")
+    rewarded = _line_run(10.0).exploration_record()
+    assert not rewarded["unrewarded"] and rewarded["varied_at"] == 14
