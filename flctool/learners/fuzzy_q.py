@@ -391,10 +391,15 @@ class FuzzyQLearner(Learner):
         how greedy it has become and whether it has locked in (:data:`LOCKED_GENERATIONS`)."""
         policy = self.config.exploration.policy
         level = self.exploration(max(self.generation, 0))
+        # Episodes that all score the same say nothing of the commands -- unless they all score
+        # as well as the greedy controllers validate (CartPole balanced for all 500 steps).
+        best = self.selection.best
+        fitness = float(self.fitness[0])
         record: dict[str, Any] = {
             "policy": policy, "level": level, "greedy_since": self.greedy_since,
-            "varied_at": self.varied_at, "fitness": float(self.fitness[0]),
-            "unrewarded": self.generation - self.varied_at >= LOCKED_GENERATIONS,
+            "varied_at": self.varied_at, "fitness": fitness,
+            "unrewarded": (self.generation - self.varied_at >= LOCKED_GENERATIONS
+                           and best is not None and best.validation_value() > fitness),
             "locked": False}
         if policy != "boltzmann" or level <= 0.0:
             return record

@@ -315,3 +315,18 @@ def test_a_fuzzy_q_run_that_could_not_learn_by_exploring_is_told_what_to_try(
         assert sentence in text
     record = json.loads((out / "run.json").read_text())["selection"]["exploration"]
     assert record["locked"] == (seed == 610) and record["unrewarded"] == (seed == 611)
+
+
+@pytest.mark.slow
+def test_a_fuzzy_q_run_whose_episodes_all_balance_to_the_end_is_not_told_anything(
+        tmp_path: Path) -> None:
+    """CartPole, seed 901: every training episode of its last generations scores the full 500,
+    as its greedy controllers do -- the same score, but no lack of signal."""
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["learn", str(BEHAVIOURS / "cartpole.yaml"), "--seed", "901",
+                                 "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    record = json.loads((out / "run.json").read_text())["selection"]["exploration"]
+    assert record["fitness"] == 500.0 and record["varied_at"] <= 25
+    assert not record["unrewarded"] and not record["locked"]
+    assert "no reward signal" not in result.stdout and "locked in" not in result.stdout
