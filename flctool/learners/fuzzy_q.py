@@ -43,11 +43,14 @@ FloatArray = NDArray[np.float64]
 
 TRACE_FLOOR = 1e-12
 _BLOCK = 1024  # uniforms drawn per refill of an exploration stream
-#: A run's Boltzmann exploration has locked in when its greedy controller has not changed for
-#: this many generations while a rule's strengths differ (median) by at least
-#: :data:`LOCKED_RATIO` temperatures, where the docs' rule of thumb wants about one: a command
-#: that far below the strongest is tried with probability below e^-10, so it keeps the
-#: strength it had when last tried (docs/learning.md, "Why fuzzy_q misses Acrobot").
+#: How a fuzzy_q run that could not learn by exploring is told (docs/learning.md, "Why fuzzy_q
+#: misses Acrobot"): it has had no reward signal when every training episode of this many
+#: generations scored the same, below what its greedy controllers validate; its Boltzmann
+#: exploration has locked in when its greedy controller has not changed for this many
+#: generations while a rule's strengths differ (median) by at least :data:`LOCKED_RATIO`
+#: temperatures, where the docs' rule of thumb wants about one: a command that far below the
+#: strongest is tried with probability below e^-10, so it keeps the strength it had when last
+#: tried.
 LOCKED_GENERATIONS = 5
 LOCKED_RATIO = 10.0
 
@@ -386,9 +389,11 @@ class FuzzyQLearner(Learner):
         self.set_population = genes
 
     def exploration_record(self) -> dict[str, Any]:
-        """What run.json shows of the exploration: its policy and level in the last generation,
-        the generation the greedy controller last changed at, and, under Boltzmann exploration,
-        how greedy it has become and whether it has locked in (:data:`LOCKED_GENERATIONS`)."""
+        """What run.json shows of the exploration (:data:`LOCKED_GENERATIONS`): its policy and
+        level in the last generation, the generation the greedy controller last changed at,
+        the last one whose training episodes scored differently and whether the run has had
+        no reward signal since, and, under Boltzmann exploration, how greedy it has become and
+        whether it has locked in."""
         policy = self.config.exploration.policy
         level = self.exploration(max(self.generation, 0))
         # Episodes that all score the same say nothing of the commands -- unless they all score
