@@ -136,6 +136,13 @@ MISSING_PACKAGE_HINT = ("the id is known but its environment needs a package tha
                         "installed: install what Gymnasium names, in the Python flctool runs in")
 
 
+def missing_package(env_id: str, error: Exception) -> SpecError:
+    """The error at ``environment.id`` for an id Gymnasium knows whose environment needs a
+    package that is not installed (its message names the package)."""
+    return SpecError([Problem(("environment", "id"), f"Gymnasium cannot make '{env_id}': "
+                              f"{error}", MISSING_PACKAGE_HINT)])
+
+
 @contextmanager
 def _made(gym: Any, env_id: str, options: Mapping[str, Any]) -> Iterator[Any]:
     """The environment ``env_id`` made with ``options`` (a :class:`SpecError` at
@@ -143,8 +150,7 @@ def _made(gym: Any, env_id: str, options: Mapping[str, Any]) -> Iterator[Any]:
     try:
         env = gym.make(env_id, disable_env_checker=True, **dict(options))
     except gym.error.DependencyNotInstalled as error:
-        raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
-                                 f"'{env_id}': {error}", MISSING_PACKAGE_HINT)]) from None
+        raise missing_package(env_id, error) from None
     except (gym.error.Error, TypeError) as error:
         raise SpecError([Problem(("environment", "id"), f"Gymnasium cannot make "
                                  f"'{env_id}': {error}")]) from None

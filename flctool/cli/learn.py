@@ -233,14 +233,10 @@ def _report(summary: RunSummary) -> None:
                           f"{difference_text(verdict['difference'])} mean fitness on the same "
                           f"episodes")
         exploration = (summary.selection or {}).get("exploration")
-        if exploration and exploration.get("unrewarded"):
-            from flctool.learners.fuzzy_q import unrewarded_text
+        if exploration:
+            from flctool.learners.fuzzy_q import exploration_advice
 
-            console.print(f"  [yellow]no reward signal:[/] "
-                          f"{escape(unrewarded_text(exploration))}", highlight=False)
-        elif exploration and exploration.get("locked"):
-            from flctool.learners.fuzzy_q import locked_text
-
-            console.print(f"  [yellow]exploration locked in:[/] {escape(locked_text(exploration))}",
-                          highlight=False)
+            advice = exploration_advice(exploration)
+            if advice is not None:
+                console.print(f"  [yellow]{advice[0]}:[/] {escape(advice[1])}", highlight=False)
         console.print(f"next: flctool evaluate {escape(str(summary.path / 'best.yaml'))}")

@@ -27,9 +27,9 @@ from numpy.typing import NDArray
 
 from flctool.behaviour.environment import GymnasiumConfig, ObservationFeature
 from flctool.behaviour.gym_registry import (
-    MISSING_PACKAGE_HINT,
     id_module_problem,
     import_gymnasium,
+    missing_package,
     option_problems,
 )
 from flctool.behaviour.models import Behaviour
@@ -95,9 +95,7 @@ class GymnasiumEnv(BatchEnv):
         try:
             return gym.make(config.id, disable_env_checker=True, **config.options)
         except gym.error.DependencyNotInstalled as error:
-            raise _spec_error(("environment", "id"),
-                              f"Gymnasium cannot make '{config.id}': {error}",
-                              MISSING_PACKAGE_HINT) from None
+            raise missing_package(config.id, error) from None
         except gym.error.Error as error:
             raise _spec_error(
                 ("environment", "id"),

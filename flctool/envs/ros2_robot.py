@@ -154,10 +154,10 @@ class SimRobot:
         (``auto_reset``) republishes its observations, so it waits only briefly."""
         publishers = [*self.observation_publishers, self.status_publisher, self.reward_publisher]
         if not self.auto_reset:
-            _wait_until(lambda: any(p.get_subscription_count() > 0 for p in publishers),
-                        CLIENT_WAIT)
-        _wait_until(lambda: all(p.get_subscription_count() > 0 for p in publishers),
-                    MATCH_WAIT)
+            self.graph.wait(lambda: any(p.get_subscription_count() > 0 for p in publishers),
+                            CLIENT_WAIT, poll=0.01)
+        self.graph.wait(lambda: all(p.get_subscription_count() > 0 for p in publishers),
+                        MATCH_WAIT, poll=0.01)
 
     def _publish(self, observation: Any, reward: float, status: str) -> None:
         """Observations, odometry and reward, then the status (clients wait for all)."""
@@ -199,10 +199,3 @@ class SimRobot:
 
     def close(self) -> None:
         self.graph.close()
-
-
-def _wait_until(ready: Callable[[], bool], timeout: float) -> None:
-    """Poll ``ready()`` every 10 ms until it is true or ``timeout`` s have passed."""
-    deadline = time.monotonic() + timeout
-    while not ready() and time.monotonic() < deadline:
-        time.sleep(0.01)

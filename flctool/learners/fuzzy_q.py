@@ -258,6 +258,16 @@ def unrewarded_text(record: dict[str, Any]) -> str:
             "rule tables, whose episodes differ), or a reward that pays for progress")
 
 
+def exploration_advice(record: dict[str, Any]) -> tuple[str, str] | None:
+    """What ``flctool learn`` tells a run by its exploration record, as (what happened, the
+    text), if anything: no reward signal first, since it explains a lock-in too."""
+    if record.get("unrewarded"):
+        return "no reward signal", unrewarded_text(record)
+    if record.get("locked"):
+        return "exploration locked in", locked_text(record)
+    return None
+
+
 def greedy_consequents(table: FloatArray) -> NDArray[np.intp]:
     """Each rule's strongest command (M,), ties to the lowest index: the learned controller."""
     consequents: NDArray[np.intp] = np.argmax(table, axis=1).astype(np.intp)
@@ -431,13 +441,12 @@ class FuzzyQLearner(Learner):
     def load_extra_state(self, state: dict[str, Any]) -> None:
         super().load_extra_state(state)
         # a checkpoint of a version that kept neither: count from the resumed generation
-        for key in ("greedy_since", "varied_at"):
-            value = state.get(key, self.generation)
+        counts = {key: state.get(key, self.generation) for key in ("greedy_since", "varied_at")}
+        for key, value in counts.items():
             if isinstance(value, bool) or not isinstance(value, int) or not (
                     -1 <= value <= self.generation):
                 raise damaged(f"is damaged: its {key} is not a generation of the run")
-        self.greedy_since = state.get("greedy_since", self.generation)
-        self.varied_at = state.get("varied_at", self.generation)
+        self.greedy_since, self.varied_at = counts["greedy_since"], counts["varied_at"]
         if self.set_population is None:
             return
         shape = self.set_population.shape
