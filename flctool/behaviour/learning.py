@@ -7,7 +7,7 @@ names that model, so ``learning:`` is the union of the models of every learner t
 
 from __future__ import annotations
 
-from typing import Any, ClassVar, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
@@ -38,6 +38,13 @@ class ExplorationConfig(Section):
     decay: float = Field(1.0, gt=0, le=1, description=(
         "multiplies temperature (boltzmann) or epsilon (epsilon_greedy) after each generation"))
     minimum: float = Field(0.0, ge=0, description="floor of the decayed temperature or epsilon")
+    hold: Annotated[int, Field(ge=1, strict=True)] | Literal["zeta", "auto"] | None = Field(
+        None, description=(
+            "how many of its firings a rule keeps a command it drew: 1 draws afresh every "
+            "step (Glorennec & Jouffe's fuzzy Q-learning); n keeps it n firings; zeta keeps it "
+            "a heavy-tailed number, n or more with probability 1/n (temporally-extended "
+            "exploration); auto draws every step until the run has had no reward signal, then "
+            "zeta; unset: auto, and 1 under protocol: paper"))
 
 
 class SelectionConfig(Section):
@@ -288,6 +295,15 @@ class FuzzyQConfig(LearningConfig):
     exploration: ExplorationConfig = ExplorationConfig()
 
     default_race: ClassVar[int] = 0
+
+    @property
+    def hold(self) -> int | Literal["zeta", "auto"]:
+        """``exploration.hold`` as the run reads it: the file's, else ``auto`` (measured in
+        docs/learning.md, "How long a rule holds an explored command"), or a fresh draw every
+        step under the paper's protocol, as published."""
+        if self.exploration.hold is not None:
+            return self.exploration.hold
+        return 1 if self.protocol == "paper" else "auto"
 
 
 class HybridConfig(GeneticConfig):

@@ -234,8 +234,11 @@ def _report(summary: RunSummary) -> None:
                           f"episodes")
         exploration = (summary.selection or {}).get("exploration")
         if exploration:
-            from flctool.learners.fuzzy_q import exploration_advice
+            from flctool.learners.fuzzy_q import exploration_advice, held_text
 
+            held = held_text(exploration)
+            if held is not None:
+                console.print(f"  exploration held: {escape(held)}", highlight=False)
             advice = exploration_advice(exploration)
             if advice is not None:
                 console.print(f"  [yellow]{advice[0]}:[/] {escape(advice[1])}", highlight=False)

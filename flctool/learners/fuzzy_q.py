@@ -37,7 +37,7 @@ from flctool.learners.base import GenerationResult, Learner
 from flctool.learners.checkpoint import damaged
 from flctool.learners.ga import GeneticAlgorithm
 from flctool.learners.set_genes import SetOperators, initial_set_genes
-from flctool.learners.trial import add_in_order, run_trial
+from flctool.learners.trial import Chooser, add_in_order, run_trial
 
 FloatArray = NDArray[np.float64]
 
@@ -171,6 +171,37 @@ class BoltzmannChooser:
         return choices
 
 
+class HeldChooser:
+    """Another chooser, except that each rule keeps the command it drew for ``hold`` of its
+    firings, or with ``hold=None`` for a heavy-tailed number of them: n or more with
+    probability 1/n (temporally-extended exploration, after Dabney, Ostrovski & Barreto's
+    ez-greedy, whose zeta-distributed durations have the same tail). One per episode.
+
+    A fresh draw every step makes an exploring episode a random walk around the greedy
+    controller, which a task needing one command kept up for a while (Acrobot's swing)
+    hardly ever sees done; a held draw plays it out (docs/learning.md, "How long a rule
+    holds an explored command").
+    """
+
+    def __init__(self, chooser: Chooser, hold: int | None, uniform: UniformStream) -> None:
+        self.chooser = chooser
+        self.hold = hold
+        self.uniform = uniform
+        self.command: dict[int, int] = {}
+        self.left: dict[int, int] = {}  # firings each rule keeps its command for
+
+    def choose(self, rules: list[int]) -> list[int]:
+        left, command = self.left, self.command
+        fresh = [m for m in rules if not left.get(m)]
+        if fresh:
+            for m, k in zip(fresh, self.chooser.choose(fresh), strict=True):
+                command[m] = k
+                left[m] = self.hold or int(1.0 / (1.0 - self.uniform()))
+        for m in rules:
+            left[m] -= 1
+        return [command[m] for m in rules]
+
+
 class FixedChooser:
     """Another chooser, except that rules the file gives always fire their given command
     (they are never explored)."""
@@ -251,11 +282,28 @@ def unrewarded_text(record: dict[str, Any]) -> str:
     for :data:`LOCKED_GENERATIONS` generations (its :meth:`FuzzyQLearner.exploration_record`)."""
     since = ("in the whole run" if record["varied_at"] < 0
              else f"since generation {record['varied_at'] + 1}")
+    per_step = record.get("hold") == 1
+    exploring = "exploring one step at a time" if per_step else "exploring"
+    held = ("learning.exploration.hold: zeta (each rule keeps a drawn command for a while), "
+            if per_step else "")
     return (f"every training episode {since} scored the same (fitness {record['fitness']:g}): "
-            "exploring one step at a time never reached what the reward pays for, so the "
-            "strengths have nothing to tell the commands apart by, and best.yaml is the greedy "
-            "controller that validated best. Try --learner credit or hybrid (they try whole "
-            "rule tables, whose episodes differ), or a reward that pays for progress")
+            f"{exploring} never reached what the reward pays for, so the strengths have "
+            "nothing to tell the commands apart by, and best.yaml is the greedy controller "
+            f"that validated best. Try {held}--learner credit or hybrid (they try whole rule "
+            "tables, whose episodes differ), or a reward that pays for progress")
+
+
+def held_text(record: dict[str, Any]) -> str | None:
+    """What ``flctool learn`` says of a run that ``exploration.hold: auto`` began to hold the
+    draws of (its :meth:`FuzzyQLearner.exploration_record`), if it did."""
+    if record.get("held_from") is None:
+        return None
+    start = record["held_from"]
+    return (f"exploring one step at a time, every training episode of the {LOCKED_GENERATIONS}"
+            f" or more generations before generation {start} scored the same, below what the "
+            f"greedy controllers validate (no reward signal), so from generation {start} each "
+            "rule held the commands it drew for a while, its strengths started afresh "
+            "(learning.exploration.hold: auto)")
 
 
 def exploration_advice(record: dict[str, Any]) -> tuple[str, str] | None:
@@ -275,7 +323,9 @@ def greedy_consequents(table: FloatArray) -> NDArray[np.intp]:
 
 
 class FuzzyQLearner(Learner):
-    """Pure fuzzy Q-learning: one controller, its commands chosen per step by exploration.
+    """Pure fuzzy Q-learning: one controller, each rule's command drawn by exploration and
+    held for ``exploration.hold`` of its firings (:class:`HeldChooser`; every step under the
+    paper's protocol).
 
     A generation is ``population x trials`` episodes, so a generation costs what the GAs'
     does; ``common_starts`` does not apply. After each generation the exploration parameter
@@ -312,6 +362,8 @@ class FuzzyQLearner(Learner):
         #: The last generation whose training episodes did not all score what every earlier
         #: one scored (-1: none has yet).
         self.varied_at = -1
+        #: The generation from which ``exploration.hold: auto`` holds the draws (None: not yet).
+        self.held_from: int | None = None
         # Learning the sets too: a GA over set genomes whose every trial is a fuzzy
         # Q-learning episode (see the class docstring).
         self.set_operators: SetOperators | None = None
@@ -361,6 +413,7 @@ class FuzzyQLearner(Learner):
             chooser = EpsilonGreedyChooser(self.fuzzy_q, epsilon, uniform)
         if self.fixed:
             chooser = FixedChooser(chooser, self.fixed)
+        hold = self.hold_now()
         returns = np.empty(episodes)
         lengths = np.empty(episodes, dtype=np.int64)
         success = np.empty(episodes, dtype=np.bool_)
@@ -369,7 +422,10 @@ class FuzzyQLearner(Learner):
             # with learned sets, set genome i // trials acts in its trials
             rules = (self.rules if self.set_population is None
                      else self.rules_for(self.set_population[i // trials]))
-            trial = run_trial(self.env, rules, seed, None, chooser=chooser, td=self.fuzzy_q)
+            # a fresh draw every step needs no holding (and draws as it always has)
+            episode_chooser = chooser if hold == 1 else HeldChooser(chooser, hold, uniform)
+            trial = run_trial(self.env, rules, seed, None, chooser=episode_chooser,
+                              td=self.fuzzy_q)
             returns[i], lengths[i], success[i] = trial.ret, trial.length, trial.success
         fitness = self.env.episode_fitness(returns, lengths, success)
         if fitness.max() > fitness.min() or (generation > 0 and fitness[0] != self.fitness[0]):
@@ -385,9 +441,36 @@ class FuzzyQLearner(Learner):
             self.set_genes = self.set_population[best : best + 1].copy()
         return GenerationResult(fitness, episodes, int(lengths.sum()))
 
+    def hold_now(self) -> int | None:
+        """How many firings a drawn command is held for in the next generation (None: a
+        heavy-tailed number, see :class:`HeldChooser`)."""
+        hold = self.config.hold
+        if hold == "auto":
+            return 1 if self.held_from is None else None
+        return None if hold == "zeta" else hold
+
+    def unrewarded(self) -> bool:
+        """Whether every training episode of the last :data:`LOCKED_GENERATIONS` generations
+        or more scored the same, below what the greedy controllers validate. Episodes that
+        all score the same say nothing of the commands -- unless they all score as well as
+        the greedy controllers validate (CartPole balanced for all 500 steps)."""
+        best = self.selection.best
+        return (self.generation - self.varied_at >= LOCKED_GENERATIONS and best is not None
+                and best.validation_value() > float(self.fitness[0]))
+
     def advance(self) -> None:
-        """Breed the set genomes, if the run learns the sets; the exploration schedule
-        follows the generation number."""
+        """Under ``exploration.hold: auto``, hold the draws from now on, with the strengths
+        started afresh from ``q.initial``, if the run has had no reward signal; breed the set
+        genomes, if the run learns the sets. The exploration schedule follows the generation
+        number."""
+        if self.config.hold == "auto" and self.held_from is None and self.unrewarded():
+            # Exploring one step at a time has not reached what the reward pays for; commands
+            # held for a while may (the GAs' restarts answer a stalled search alike). The
+            # strengths start afresh: they have all fallen alike, and the first commands held
+            # to the goal would rise so far above the rest that exploration locked in at once.
+            self.held_from = self.generation + 1
+            self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
+                                       self.controller.n_commands)
         if self.set_population is None or self.set_fitness is None:
             return
         # The GA of the genetic learners on set genomes alone (no consequents to breed).
@@ -399,23 +482,18 @@ class FuzzyQLearner(Learner):
         self.set_population = genes
 
     def exploration_record(self) -> dict[str, Any]:
-        """What run.json shows of the exploration (:data:`LOCKED_GENERATIONS`): its policy and
-        level in the last generation, the generation the greedy controller last changed at,
+        """What run.json shows of the exploration (:data:`LOCKED_GENERATIONS`): its policy,
+        level in the last generation and hold, the generation the greedy controller last changed at,
         the last one whose training episodes scored differently and whether the run has had
         no reward signal since, and, under Boltzmann exploration, how greedy it has become and
         whether it has locked in."""
         policy = self.config.exploration.policy
         level = self.exploration(max(self.generation, 0))
-        # Episodes that all score the same say nothing of the commands -- unless they all score
-        # as well as the greedy controllers validate (CartPole balanced for all 500 steps).
-        best = self.selection.best
-        fitness = float(self.fitness[0])
         record: dict[str, Any] = {
-            "policy": policy, "level": level, "greedy_since": self.greedy_since,
-            "varied_at": self.varied_at, "fitness": fitness,
-            "unrewarded": (self.generation - self.varied_at >= LOCKED_GENERATIONS
-                           and best is not None and best.validation_value() > fitness),
-            "locked": False}
+            "policy": policy, "level": level, "hold": self.config.hold,
+            "held_from": self.held_from, "greedy_since": self.greedy_since,
+            "varied_at": self.varied_at, "fitness": float(self.fitness[0]),
+            "unrewarded": self.unrewarded(), "locked": False}
         if policy != "boltzmann" or level <= 0.0:
             return record
         greediness = boltzmann_greediness(self.fuzzy_q.table(), level, self.config.q.initial)
@@ -432,7 +510,7 @@ class FuzzyQLearner(Learner):
 
     def extra_state(self) -> dict[str, Any]:
         state = {**super().extra_state(), "greedy_since": self.greedy_since,
-                 "varied_at": self.varied_at}
+                 "varied_at": self.varied_at, "held_from": self.held_from}
         if self.set_population is not None and self.set_fitness is not None:
             state["set_population"] = self.set_population.tolist()
             state["set_fitness"] = self.set_fitness.tolist()
@@ -447,6 +525,11 @@ class FuzzyQLearner(Learner):
                     -1 <= value <= self.generation):
                 raise damaged(f"is damaged: its {key} is not a generation of the run")
         self.greedy_since, self.varied_at = counts["greedy_since"], counts["varied_at"]
+        held_from = state.get("held_from")  # absent from older checkpoints: not yet held
+        if held_from is not None and (isinstance(held_from, bool) or not isinstance(
+                held_from, int) or not 0 < held_from <= self.generation + 1):
+            raise damaged("is damaged: its held_from is not a generation of the run")
+        self.held_from = held_from
         if self.set_population is None:
             return
         shape = self.set_population.shape

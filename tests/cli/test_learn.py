@@ -301,20 +301,44 @@ ACROBOT_FUZZY_Q = ROOT / "benchmarks" / "tasks" / "acrobot-fuzzy-q.yaml"
            "raise learning.q.temperature towards 30 (with more generations)"]),
     # no exploring episode ever reaches the goal: every one times out at -500
     (611, ["no reward signal: every training episode in the whole run scored the same "
-           "(fitness -500)", "Try --learner credit or hybrid"]),
+           "(fitness -500)", "exploring one step at a time never reached",
+           "Try learning.exploration.hold: zeta"]),
 ])
 def test_a_fuzzy_q_run_that_could_not_learn_by_exploring_is_told_what_to_try(
         tmp_path: Path, seed: int, told: list[str]) -> None:
-    """acrobot-fuzzy-q (docs/learning.md, "Why fuzzy_q misses Acrobot")."""
+    """acrobot-fuzzy-q exploring one step at a time (docs/learning.md, "Why fuzzy_q misses
+    Acrobot")."""
     out = tmp_path / "run"
     result = runner.invoke(app, ["learn", str(ACROBOT_FUZZY_Q), "--seed", str(seed),
-                                 "-o", str(out)])
+                                 "-o", str(out), "--set", "exploration.hold=1"])
     assert result.exit_code == 0, result.output
     text = " ".join(result.stdout.split())
     for sentence in told:
         assert sentence in text
     record = json.loads((out / "run.json").read_text())["selection"]["exploration"]
     assert record["locked"] == (seed == 610) and record["unrewarded"] == (seed == 611)
+    assert record["hold"] == 1
+
+
+@pytest.mark.slow
+def test_held_exploration_finds_the_reward_that_exploring_one_step_at_a_time_missed(
+        tmp_path: Path) -> None:
+    """acrobot-fuzzy-q seed 611 with ``exploration.hold: auto`` (docs/learning.md, "How long a
+    rule holds an explored command"): no episode reached the goal exploring one step at a
+    time, so the run held its draws, and its training episodes reached the goal."""
+    out = tmp_path / "run"
+    result = runner.invoke(app, ["learn", str(ACROBOT_FUZZY_Q), "--seed", "611",
+                                 "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    run = json.loads((out / "run.json").read_text())
+    record = run["selection"]["exploration"]
+    assert record["hold"] == "auto" and not record["unrewarded"]
+    assert 5 <= record["held_from"] < record["varied_at"] == run["generations"] - 1
+    assert "no reward signal" not in result.stdout
+    assert (f"so from generation {record['held_from']} each rule held the commands it drew"
+            in " ".join(result.stdout.split()))
+    metrics = (out / "metrics.csv").read_text().splitlines()
+    assert max(float(line.split(",")[3]) for line in metrics[1:]) > -500  # the goal reached
 
 
 @pytest.mark.slow
@@ -324,7 +348,7 @@ def test_a_fuzzy_q_run_whose_episodes_all_balance_to_the_end_is_not_told_anythin
     as its greedy controllers do -- the same score, but no lack of signal."""
     out = tmp_path / "run"
     result = runner.invoke(app, ["learn", str(BEHAVIOURS / "cartpole.yaml"), "--seed", "901",
-                                 "-o", str(out)])
+                                 "-o", str(out), "--set", "exploration.hold=1"])
     assert result.exit_code == 0, result.output
     record = json.loads((out / "run.json").read_text())["selection"]["exploration"]
     assert record["fitness"] == 500.0 and record["varied_at"] <= 25

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flctool.behaviour.learning import FuzzyQConfig
 from flctool.errors import LearnError
 from flctool.learners import make_learner, train
 from flctool.learners.fuzzy_q import (
@@ -14,9 +15,11 @@ from flctool.learners.fuzzy_q import (
     EpsilonGreedyChooser,
     FuzzyQ,
     FuzzyQLearner,
+    HeldChooser,
     UniformStream,
     boltzmann_greediness,
     greedy_consequents,
+    held_text,
     locked_text,
     unrewarded_text,
 )
@@ -105,6 +108,39 @@ def test_epsilon_greedy_explores_at_rate_epsilon_and_breaks_ties_evenly() -> Non
     assert (picks != 1).mean() == pytest.approx(0.3 * 2 / 3, abs=0.015)
 
 
+class _Counting:
+    """A chooser whose every draw is a new number: shows when a rule draws."""
+
+    def __init__(self) -> None:
+        self.draws = 0
+
+    def choose(self, rules: list[int]) -> list[int]:
+        self.draws += len(rules)
+        return list(range(self.draws - len(rules), self.draws))
+
+
+def test_a_held_command_is_kept_for_hold_firings_of_its_rule() -> None:
+    held = HeldChooser(_Counting(), 3, UniformStream(np.random.default_rng(0)))
+    # rule 0 fires every step, rule 1 on some: each counts its own firings
+    picks = [held.choose(rules) for rules in ([0, 1], [0], [0, 1], [0], [0, 1], [1], [0])]
+    assert [p[0] for p in picks[:5]] + [picks[6][0]] == [0, 0, 0, 2, 2, 2]
+    assert [picks[0][1], picks[2][1], picks[4][1], picks[5][0]] == [1, 1, 1, 3]
+
+
+def test_zeta_holds_are_n_or_longer_with_probability_one_in_n() -> None:
+    held = HeldChooser(_Counting(), None, UniformStream(np.random.default_rng(3)))
+    commands = np.array([held.choose([0])[0] for _ in range(200_000)])
+    lengths = np.bincount(commands)[:-1]  # the last hold may be cut short
+    for n in (1, 2, 5, 20):
+        assert (lengths >= n).mean() == pytest.approx(1 / n, rel=0.05)
+
+
+def test_auto_holds_are_the_default_and_the_paper_protocol_draws_every_step() -> None:
+    assert FuzzyQConfig().hold == "auto"
+    assert FuzzyQConfig(protocol="paper").hold == 1
+    assert FuzzyQConfig.model_validate({"protocol": "paper", "exploration": {"hold": 7}}).hold == 7
+
+
 def test_greedy_consequents_take_the_strongest_command() -> None:
     assert list(greedy_consequents(np.array([[0.0, 1.0], [2.0, 2.0]]))) == [1, 0]
 
@@ -120,10 +156,11 @@ def test_exploration_decays_to_its_floor() -> None:
 
 
 @pytest.mark.parametrize("policy", ["boltzmann", "epsilon_greedy"])
-def test_fuzzy_q_learns_to_go_up(policy: str) -> None:
+@pytest.mark.parametrize("hold", [1, 5, "zeta"])
+def test_fuzzy_q_learns_to_go_up(policy: str, hold: int | str) -> None:
     behaviour = line_behaviour(learner="fuzzy_q", generations=15, population=10)
     explore = behaviour.learning.exploration.model_copy(update={"policy": policy,
-                                                                "epsilon": 0.5})
+                                                                "epsilon": 0.5, "hold": hold})
     behaviour = behaviour.model_copy(update={"learning": behaviour.learning.model_copy(
         update={"exploration": explore})})
     learner = make_learner(behaviour, LineEnv())
@@ -201,3 +238,26 @@ def test_episodes_that_all_score_the_same_count_as_no_signal_only_below_the_gree
         "every training episode in the whole run scored the same (fitness 0)")
     rewarded = _line_run(10.0).exploration_record()
     assert not rewarded["unrewarded"] and rewarded["varied_at"] == 14
+
+
+def test_auto_holds_the_draws_once_a_run_has_had_no_reward_signal() -> None:
+    learner = make_learner(line_behaviour(learner="fuzzy_q", generations=8, population=5),
+                           LineEnv(max_steps=1))
+    assert isinstance(learner, FuzzyQLearner)
+    train(learner)  # every episode scores 0, as the greedy controllers validate: a signal
+    learner.advance()
+    assert learner.held_from is None and learner.hold_now() == 1
+    learner.fitness = np.array([-1.0])  # the same score, now below the validated 0: none
+    assert learner.unrewarded()
+    learner.advance()
+    assert learner.held_from == learner.generation + 1 and learner.hold_now() is None
+    assert f"so from generation {learner.held_from} each rule held" in held_text(
+        learner.exploration_record()) and held_text({"held_from": None}) is None
+    state = learner.state_dict()
+    again = make_learner(line_behaviour(learner="fuzzy_q", generations=8, population=5),
+                         LineEnv(max_steps=1))
+    again.load_state_dict(state)
+    assert isinstance(again, FuzzyQLearner) and again.held_from == learner.held_from
+    for damaged in ("x", True, 0, learner.generation + 2):
+        with pytest.raises(LearnError, match="held_from"):
+            again.load_state_dict({**state, "held_from": damaged})
