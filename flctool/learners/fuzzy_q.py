@@ -282,7 +282,8 @@ def unrewarded_text(record: dict[str, Any]) -> str:
     for :data:`LOCKED_GENERATIONS` generations (its :meth:`FuzzyQLearner.exploration_record`)."""
     since = ("in the whole run" if record["varied_at"] < 0
              else f"since generation {record['varied_at'] + 1}")
-    per_step = record.get("hold") == 1
+    hold = record.get("hold")
+    per_step = hold == 1 or (hold == "auto" and record.get("held_from") is None)
     exploring = "exploring one step at a time" if per_step else "exploring"
     held = ("learning.exploration.hold: zeta (each rule keeps a drawn command for a while), "
             if per_step else "")
