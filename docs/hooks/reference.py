@@ -326,6 +326,8 @@ EQUATIONS: dict[str, str] = {
     "exploration.epsilon": "ε of ε-greedy",
     "exploration.decay": "multiplies T (or ε) after every generation",
     "exploration.minimum": "floor of the decayed T or ε",
+    "exploration.hold": ("an addition: how many of its firings a rule keeps a drawn command "
+                         "(1: a fresh draw every step, as the paper's protocol runs)"),
     "selection": ("an addition to the paper: which controller the run returns, chosen on "
                   "validation episodes instead of one noisy trial"),
     "selection.candidates": "an addition: the best distinct controllers kept for validation",
