@@ -95,6 +95,13 @@ class Extension(RunCallback[ExtendedRun]):
                 and following + self.least <= self.most):
             self.starts.append(following)  # this attempt ends; a fresh one fits
 
+    def begin_attempt(self, generation: int) -> None:
+        """Count ``generation`` as the first of a fresh attempt, if one fits: for a learner
+        that starts afresh of its own accord (fuzzy_q's strengths, once it holds its draws)."""
+        if (self.config is not None and generation > self.starts[-1]
+                and generation + self.least <= self.most):
+            self.starts.append(generation)
+
     def begins_attempt(self, generation: int) -> bool:
         """Whether ``generation`` is the first of a fresh attempt (not the run's first)."""
         return generation > 0 and generation in self.starts

@@ -472,6 +472,8 @@ class FuzzyQLearner(Learner):
             self.held_from = self.generation + 1
             self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
                                        self.controller.n_commands)
+            # a fresh attempt, with the generations of one (as the genetic learners' are)
+            self.extension.begin_attempt(self.held_from)
         if self.set_population is None or self.set_fitness is None:
             return
         # The GA of the genetic learners on set genomes alone (no consequents to breed).

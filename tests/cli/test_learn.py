@@ -333,11 +333,14 @@ def test_held_exploration_finds_the_reward_that_exploring_one_step_at_a_time_mis
     run = json.loads((out / "run.json").read_text())
     record = run["selection"]["exploration"]
     assert record["hold"] == "auto" and not record["unrewarded"]
-    assert 5 <= record["held_from"] < record["varied_at"] == run["generations"] - 1
+    metrics = (out / "metrics.csv").read_text().splitlines()
+    last_generation = int(metrics[-1].split(",")[0])
+    assert 5 <= record["held_from"] < record["varied_at"] == last_generation
+    # a fresh attempt began where the draws began to be held
+    assert run["selection"]["extension"]["attempts"] == [0, record["held_from"]]
     assert "no reward signal:" not in result.stdout  # the warning's label
     assert (f"so from generation {record['held_from']} each rule held the commands it drew"
             in " ".join(result.stdout.split()))
-    metrics = (out / "metrics.csv").read_text().splitlines()
     assert max(float(line.split(",")[3]) for line in metrics[1:]) > -500  # the goal reached
 
 

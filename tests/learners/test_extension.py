@@ -80,6 +80,18 @@ def test_an_extended_run_never_passes_its_most() -> None:
     assert len(train(learner)) == 5
 
 
+def test_a_learner_that_starts_afresh_begins_an_attempt_only_where_one_fits() -> None:
+    extension = Extension(ExtendConfig(patience=3, most=40), least=30, most=40)
+    extension.begin_attempt(5)
+    assert extension.starts == [0, 5] and extension.planned() == 35
+    extension.begin_attempt(5)  # the same attempt again: nothing new
+    extension.begin_attempt(11)  # 11 + 30 > 40: no room for a whole attempt
+    assert extension.starts == [0, 5]
+    exact = Extension(None, least=30, most=60)
+    exact.begin_attempt(5)  # without extend a run has exactly its generations
+    assert exact.starts == [0] and exact.planned() == 30
+
+
 def test_without_extend_a_run_has_exactly_its_generations() -> None:
     learner = make_learner(line_behaviour(generations=4), LineEnv())
     assert len(train(learner)) == 4 and not learner.extension.enabled
