@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -23,7 +25,7 @@ from flctool.learners.fuzzy_q import (
     locked_text,
     unrewarded_text,
 )
-from tests.learners.line_env import LineEnv, line_behaviour
+from tests.learners.line_env import LineEnv, cut_and_resumed, line_behaviour
 
 Q0 = np.array([[0.0, 0.5],
                [0.2, -0.1]])
@@ -261,3 +263,31 @@ def test_auto_holds_the_draws_once_a_run_has_had_no_reward_signal() -> None:
     for damaged in ("x", True, 0, learner.generation + 2):
         with pytest.raises(LearnError, match="held_from"):
             again.load_state_dict({**state, "held_from": damaged})
+
+
+@pytest.mark.parametrize("hold", [5, "zeta"])
+def test_a_run_that_holds_its_draws_resumes_bit_for_bit(hold: int | str) -> None:
+    behaviour = line_behaviour(learner="fuzzy_q", generations=8, population=5,
+                               exploration={"hold": hold})
+    whole = make_learner(behaviour, LineEnv())
+    history = train(whole)
+    resumed, rest = cut_and_resumed(behaviour, after=3)
+    assert [m.mean for m in rest] == [m.mean for m in history[4:]]
+    assert np.array_equal(resumed.fuzzy_q.table(), whole.fuzzy_q.table())  # type: ignore[attr-defined]
+
+
+def test_a_run_that_began_to_hold_goes_on_holding_after_a_resume() -> None:
+    behaviour = line_behaviour(learner="fuzzy_q", generations=4, population=5)
+    learner = make_learner(behaviour, LineEnv())
+    assert isinstance(learner, FuzzyQLearner)
+    train(learner)
+    learner.held_from = learner.generation + 1  # as auto does once a run has had no signal
+    again = make_learner(behaviour, LineEnv())
+    assert isinstance(again, FuzzyQLearner)
+    again.load_state_dict(json.loads(json.dumps(learner.state_dict())))
+    assert again.hold_now() is None
+    for run in (learner, again):
+        run.advance()
+    assert np.array_equal(learner.evaluate(4).fitness, again.evaluate(4).fitness)
+    assert np.array_equal(learner.fuzzy_q.table(), again.fuzzy_q.table())
+
