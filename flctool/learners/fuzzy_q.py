@@ -300,11 +300,11 @@ def held_text(record: dict[str, Any]) -> str | None:
     if record.get("held_from") is None:
         return None
     start = record["held_from"]
-    return (f"exploring one step at a time, every training episode of the {LOCKED_GENERATIONS}"
-            f" or more generations before generation {start} scored the same, below what the "
-            f"greedy controllers validate (no reward signal), so from generation {start} each "
-            "rule held the commands it drew for a while, its strengths started afresh "
-            "(learning.exploration.hold: auto)")
+    return ("exploring one step at a time, every training episode of the "
+            f"{LOCKED_GENERATIONS} or more generations before generation {start} scored the "
+            "same, below what the greedy controllers validate (no reward signal), so from "
+            f"generation {start} each rule held the commands it drew for a while, its "
+            "strengths started afresh (learning.exploration.hold: auto)")
 
 
 def exploration_advice(record: dict[str, Any]) -> tuple[str, str] | None:
@@ -486,10 +486,10 @@ class FuzzyQLearner(Learner):
 
     def exploration_record(self) -> dict[str, Any]:
         """What run.json shows of the exploration (:data:`LOCKED_GENERATIONS`): its policy,
-        level in the last generation and hold, the generation the greedy controller last changed at,
-        the last one whose training episodes scored differently and whether the run has had
-        no reward signal since, and, under Boltzmann exploration, how greedy it has become and
-        whether it has locked in."""
+        level in the last generation and hold, the generation it began to hold at, the
+        generation the greedy controller last changed at, the last one whose training episodes
+        scored differently and whether the run has had no reward signal since, and, under
+        Boltzmann exploration, how greedy it has become and whether it has locked in."""
         policy = self.config.exploration.policy
         level = self.exploration(max(self.generation, 0))
         record: dict[str, Any] = {
@@ -521,18 +521,12 @@ class FuzzyQLearner(Learner):
 
     def load_extra_state(self, state: dict[str, Any]) -> None:
         super().load_extra_state(state)
-        # a checkpoint of a version that kept neither: count from the resumed generation
-        counts = {key: state.get(key, self.generation) for key in ("greedy_since", "varied_at")}
-        for key, value in counts.items():
-            if isinstance(value, bool) or not isinstance(value, int) or not (
-                    -1 <= value <= self.generation):
-                raise damaged(f"is damaged: its {key} is not a generation of the run")
-        self.greedy_since, self.varied_at = counts["greedy_since"], counts["varied_at"]
+        # a checkpoint of a version that kept neither count: count from the resumed generation
+        self.greedy_since = self._generation_in(state, "greedy_since", self.generation, -1)
+        self.varied_at = self._generation_in(state, "varied_at", self.generation, -1)
         held_from = state.get("held_from")  # absent from older checkpoints: not yet held
-        if held_from is not None and (isinstance(held_from, bool) or not isinstance(
-                held_from, int) or not 0 < held_from <= self.generation + 1):
-            raise damaged("is damaged: its held_from is not a generation of the run")
-        self.held_from = held_from
+        self.held_from = (None if held_from is None
+                          else self._generation_in(state, "held_from", None, 1, 1))
         if self.set_population is None:
             return
         shape = self.set_population.shape
@@ -547,6 +541,16 @@ class FuzzyQLearner(Learner):
             raise damaged(f"is damaged: its set population is not {shape[0]} x {shape[1]} "
                           "genes in [-1, 1] with a finite fitness each")
         self.set_population, self.set_fitness = genes, fitness
+
+    def _generation_in(self, state: dict[str, Any], key: str, default: int | None,
+                       lowest: int, past: int = 0) -> int:
+        """``state[key]`` (``default`` if absent), checked to be a generation from ``lowest``
+        to ``past`` after the checkpoint's."""
+        value = state.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or not (
+                lowest <= value <= self.generation + past):
+            raise damaged(f"is damaged: its {key} is not a generation of the run")
+        return value
 
 
 #: The set genomes' GA under fuzzy_q (paper Sec. IV's crossover probability and one elite).
