@@ -19,7 +19,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any, Protocol
 
-from flctool.behaviour.learning import GeneticConfig, LearningConfig, StopConfig
+from flctool.behaviour.learning import (
+    FuzzyQConfig,
+    GeneticConfig,
+    LearningConfig,
+    StopConfig,
+)
 from flctool.learners.baselines import (
     SETTLING_ROUNDS,
     baseline_episodes,
@@ -145,6 +150,9 @@ class BudgetPlan:
     most_given: int | None = None
     #: Whether the run has all of its most generations (LearningConfig.runs_to_most).
     to_most: bool = False
+    #: fuzzy_q under ``exploration.hold: auto``: the most generations once the run holds its
+    #: draws, with room for fresh attempts (None: not such a run).
+    held_most: int | None = None
 
     @property
     def most(self) -> int:
@@ -180,9 +188,12 @@ class BudgetPlan:
             else:
                 fresh = (f", then fresh attempts of {least} while they fit" if self.attempts
                          else "")
+                held = ("" if self.held_most is None else
+                        f"; if its exploration begins to hold (no reward signal), fresh "
+                        f"attempts of {least} from there, up to {self.held_most}")
                 generations = (f"{least} to {most} generations (on past {least} until "
                                f"{patience} pass without a better selected controller{fresh}; "
-                               f"{most} {why})")
+                               f"{most} {why}{held})")
         lines = [f"budget: at most {self.most:,} episodes: {self.training:,} training, up to "
                  f"{self.selection:,} selection, {self.confirmation} confirmation and "
                  f"{self.baselines} against baselines, for {self.rules} rules to learn x "
@@ -226,7 +237,7 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     elites validated (a run usually meets fewer distinct leaders), and the race
     (:func:`~flctool.learners.selection.race_cost`) over all of them."""
     from flctool.behaviour.located import source_of
-    from flctool.learners.extension import most_generations
+    from flctool.learners.extension import HELD_ATTEMPTS, held_most, most_generations
     from flctool.learners.selection import race_cost
 
     config = behaviour.learning
@@ -261,10 +272,16 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
     rules, commands = len(behaviour.missing_rules()), len(behaviour.output.commands)
     extension = None
     generations = config.generations
+    held = None
     if config.extend is not None:
         generations = config.extend.most or most_generations(rules, commands, generations)
         generations = max(generations, config.generations)
         extension = (generations, config.extend.patience)
+        if (isinstance(config, FuzzyQConfig) and config.hold == "auto"
+                and config.extend.most is None and not config.runs_to_most):
+            # room a run gets once it holds its draws (FuzzyQLearner.advance)
+            held = held_most(generations, config.generations, HELD_ATTEMPTS)
+            generations = held
     validated = (generations + selection.candidates + int(getattr(config, "elites", 1))
                  if selection.candidates else 0)
     most_selection = validated * selection.episodes
@@ -279,7 +296,7 @@ def plan_budget(behaviour: Behaviour, baselines: int = 0) -> BudgetPlan:
                       config.stop.episodes, extension,
                       isinstance(config, GeneticConfig),
                       None if config.extend is None else config.extend.most,
-                      config.runs_to_most)
+                      config.runs_to_most, held)
 
 
 def describe_budget(behaviour: Behaviour, baselines: int = 0) -> str:

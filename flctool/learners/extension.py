@@ -40,12 +40,26 @@ from flctool.learners.selection import ModelSelection
 _PER_UNIT, _UNIT = 30, 30.0
 
 
+#: Fresh attempts a fuzzy_q run has room for once ``exploration.hold: auto`` holds its draws:
+#: an attempt at held exploration ended on a controller at Acrobot's threshold about half the
+#: time, and selection returned it whenever one did (docs/learning.md, "Fresh attempts once a
+#: run holds"), so three give a run about seven chances in eight.
+HELD_ATTEMPTS = 3
+
+
 def most_generations(rules: int, commands: int, least: int) -> int:
     """``extend.most`` when unset: 30 generations for every 30 units of M log2 K (a problem's
     rules to learn M times the bits of a choice among K commands), and at least twice the
     run's ``generations``: room to grow with the problem, a bound on what patience costs."""
     size = max(rules, 1) * math.log2(max(commands, 2))
     return max(2 * least, _PER_UNIT * math.ceil(size / _UNIT))
+
+
+def held_most(most: int, least: int, attempts: int) -> int:
+    """The most generations a run may have once :meth:`Extension.open_attempts` opens
+    ``attempts`` fresh attempts, where ``most`` and ``least`` were its room and generations:
+    they open no later than the last generation a fresh attempt fits in."""
+    return max(most, most - least + attempts * least)
 
 
 class ExtendedRun(Protocol):
@@ -94,6 +108,17 @@ class Extension(RunCallback[ExtendedRun]):
         if (self.config is not None and self.attempts and following >= self.planned()
                 and following + self.least <= self.most):
             self.starts.append(following)  # this attempt ends; a fresh one fits
+
+    def open_attempts(self, start: int, attempts: int) -> None:
+        """From ``start`` on, the room goes to fresh attempts, and unless ``extend.most``
+        bounds the run there is room for ``attempts`` of them: for a learner that starts
+        afresh part-way (fuzzy_q, once it holds its draws: :func:`held_most`). Nothing opens
+        where not one fresh attempt fits in the run's room."""
+        if self.config is None or start + self.least > self.most:
+            return
+        self.attempts = True
+        if self.config.most is None:
+            self.most = max(self.most, start + attempts * self.least)
 
     def begin_attempt(self, generation: int) -> None:
         """Count ``generation`` as the first of a fresh attempt, if one fits: for a learner

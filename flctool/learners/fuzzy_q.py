@@ -35,6 +35,7 @@ from flctool.envs.base import BatchEnv
 from flctool.errors import LearnError
 from flctool.learners.base import GenerationResult, Learner
 from flctool.learners.checkpoint import damaged
+from flctool.learners.extension import HELD_ATTEMPTS
 from flctool.learners.ga import GeneticAlgorithm
 from flctool.learners.set_genes import SetOperators, initial_set_genes
 from flctool.learners.trial import Chooser, add_in_order, run_trial
@@ -461,9 +462,10 @@ class FuzzyQLearner(Learner):
 
     def advance(self) -> None:
         """Under ``exploration.hold: auto``, hold the draws from now on, with the strengths
-        started afresh from ``q.initial``, if the run has had no reward signal; breed the set
-        genomes, if the run learns the sets. The exploration schedule follows the generation
-        number."""
+        started afresh from ``q.initial`` and room for :data:`HELD_ATTEMPTS` fresh attempts,
+        if the run has had no reward signal; start the strengths afresh when a held run
+        begins a fresh attempt; breed the set genomes, if the run learns the sets. The
+        exploration schedule follows the generation number."""
         if self.config.hold == "auto" and self.held_from is None and self.unrewarded():
             # Exploring one step at a time has not reached what the reward pays for; commands
             # held for a while may (the GAs' restarts answer a stalled search alike). The
@@ -472,8 +474,14 @@ class FuzzyQLearner(Learner):
             self.held_from = self.generation + 1
             self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
                                        self.controller.n_commands)
-            # a fresh attempt, with the generations of one (as the genetic learners' are)
+            # a fresh attempt, with the generations of one, and room for more after it: each
+            # ends on a good controller by luck about half the time (HELD_ATTEMPTS)
+            self.extension.open_attempts(self.held_from, HELD_ATTEMPTS)
             self.extension.begin_attempt(self.held_from)
+        elif self.held_from is not None and self.extension.begins_attempt(self.generation + 1):
+            # the attempt ended without a better selected controller: start afresh, holding
+            self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
+                                       self.controller.n_commands)
         if self.set_population is None or self.set_fitness is None:
             return
         # The GA of the genetic learners on set genomes alone (no consequents to breed).
@@ -527,6 +535,8 @@ class FuzzyQLearner(Learner):
         held_from = state.get("held_from")  # absent from older checkpoints: not yet held
         self.held_from = (None if held_from is None
                           else self._generation_in(state, "held_from", None, 1, 1))
+        if self.held_from is not None:
+            self.extension.open_attempts(self.held_from, HELD_ATTEMPTS)
         if self.set_population is None:
             return
         shape = self.set_population.shape

@@ -71,6 +71,23 @@ def test_a_file_without_a_budget_is_extended_up_to_a_bound_from_its_size() -> No
     assert "60 from the problem's size unless extend.most is given" in plan.lines()[1]
 
 
+def test_a_fuzzy_q_budget_bounds_the_room_a_held_run_gets() -> None:
+    # exploration.hold: auto may open fresh attempts part-way (FuzzyQLearner.advance): the
+    # bound counts them, as many as fit from the last generation one may open at
+    behaviour = resolve_behaviour(load_behaviour(BEHAVIOURS / "ballchase.yaml"),
+                                  {"learner": "fuzzy_q"})
+    plan = plan_budget(behaviour)
+    assert plan.extension == (60, 10) and plan.held_most == 60 - 30 + 3 * 30
+    assert plan.training == 120 * 10 * 1
+    assert ("60 from the problem's size unless extend.most is given; if its exploration "
+            "begins to hold (no reward signal), fresh attempts of 30 from there, up to "
+            "120)") in " ".join(plan.lines())
+    # a hold given, the paper's protocol, or extend.most given: no room beyond most
+    for overrides in ({"exploration.hold": "zeta"}, {"protocol": "paper"},
+                      {"extend.most": 70}):
+        assert plan_budget(resolve_behaviour(behaviour, overrides)).held_most is None
+
+
 def test_sized_trials_are_the_learner_s_and_a_file_s_trials_stay() -> None:
     behaviour = load_behaviour(BEHAVIOURS / "ballchase.yaml")
     # fuzzy_q's sized budget keeps one trial: its generation is population x trials episodes

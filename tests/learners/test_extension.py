@@ -14,7 +14,7 @@ from flctool import load_behaviour
 from flctool.behaviour.learning import ExtendConfig
 from flctool.errors import LearnError, SpecError
 from flctool.learners import Callback, GenerationMetrics, make_learner, train
-from flctool.learners.extension import Extension, most_generations
+from flctool.learners.extension import Extension, held_most, most_generations
 from flctool.runs import resolve_behaviour
 from flctool.training import resume_run, start_run
 from tests.conftest import BEHAVIOURS
@@ -90,6 +90,36 @@ def test_a_learner_that_starts_afresh_begins_an_attempt_only_where_one_fits() ->
     exact = Extension(None, least=30, most=60)
     exact.begin_attempt(5)  # without extend a run has exactly its generations
     assert exact.starts == [0] and exact.planned() == 30
+
+
+def test_a_learner_that_begins_to_start_afresh_part_way_gets_room_for_its_attempts() -> None:
+    # fuzzy_q once it holds its draws: three attempts of 30 from generation 5
+    extension = Extension(ExtendConfig(patience=3), least=30, most=60)
+    assert not extension.attempts
+    extension.open_attempts(5, 3)
+    assert extension.attempts and extension.most == 95
+    # the latest they open is where one attempt still fits: the plan's bound
+    latest = Extension(ExtendConfig(patience=3), least=30, most=60)
+    latest.open_attempts(30, 3)
+    assert latest.most == held_most(60, 30, 3) == 120
+    late = Extension(ExtendConfig(patience=3), least=30, most=60)
+    late.open_attempts(31, 3)  # 31 + 30 > 60: not one fresh attempt fits
+    assert not late.attempts and late.most == 60
+    given = Extension(ExtendConfig(patience=3, most=70), least=30, most=70)
+    given.open_attempts(5, 3)  # extend.most bounds the run: attempts within it
+    assert given.attempts and given.most == 70
+    exact = Extension(None, least=30, most=60)
+    exact.open_attempts(5, 3)  # without extend a run has exactly its generations
+    assert not exact.attempts and exact.planned() == 30
+
+
+@given(st.integers(1, 50), st.integers(0, 100), st.integers(0, 150), st.integers(1, 5))
+def test_attempts_opened_part_way_stay_within_the_plans_bound(least: int, extra: int,
+                                                              start: int, attempts: int) -> None:
+    most = least + extra
+    extension = Extension(ExtendConfig(patience=3), least=least, most=most)
+    extension.open_attempts(start, attempts)
+    assert most <= extension.most <= held_most(most, least, attempts)
 
 
 def test_without_extend_a_run_has_exactly_its_generations() -> None:

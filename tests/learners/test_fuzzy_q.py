@@ -10,6 +10,7 @@ import pytest
 from flctool.behaviour.learning import FuzzyQConfig
 from flctool.errors import LearnError
 from flctool.learners import make_learner, train
+from flctool.learners.extension import HELD_ATTEMPTS
 from flctool.learners.fuzzy_q import (
     LOCKED_GENERATIONS,
     LOCKED_RATIO,
@@ -263,6 +264,32 @@ def test_auto_holds_the_draws_once_a_run_has_had_no_reward_signal() -> None:
     for damaged in ("x", True, 0, learner.generation + 2):
         with pytest.raises(LearnError, match="held_from"):
             again.load_state_dict({**state, "held_from": damaged})
+
+
+def test_a_run_that_holds_its_draws_starts_afresh_in_each_fresh_attempt() -> None:
+    behaviour = line_behaviour(learner="fuzzy_q", generations=3, population=5,
+                               extend={"patience": 1})
+    learner = make_learner(behaviour, LineEnv(max_steps=1))
+    assert isinstance(learner, FuzzyQLearner)
+    train(learner)
+    extension = learner.extension
+    assert not extension.attempts and extension.starts == [0]  # a step at a time: one attempt
+    most = extension.most
+    learner.held_from = learner.generation + 1  # as auto does once a run has had no signal
+    extension.open_attempts(learner.held_from, HELD_ATTEMPTS)
+    assert extension.attempts and extension.most == max(most, learner.held_from
+                                                        + HELD_ATTEMPTS * 3)
+    learner.fuzzy_q.q[0] = 7.0
+    learner.advance()  # no attempt begins next: the strengths go on
+    assert learner.fuzzy_q.q[0] == 7.0
+    extension.starts.append(learner.generation + 1)  # the attempt ended; a fresh one fits
+    learner.advance()
+    assert np.all(learner.fuzzy_q.table() == learner.config.q.initial)
+    # a resumed run has the same room and attempts
+    again = make_learner(behaviour, LineEnv(max_steps=1))
+    again.load_state_dict(json.loads(json.dumps(learner.state_dict())))
+    assert again.extension.attempts and again.extension.most == extension.most
+    assert again.extension.starts == extension.starts
 
 
 @pytest.mark.parametrize("hold", [5, "zeta"])
