@@ -44,7 +44,8 @@ class ExplorationConfig(Section):
             "step (Glorennec & Jouffe's fuzzy Q-learning); n keeps it n firings; zeta keeps it "
             "a heavy-tailed number, n or more with probability 1/n (temporally-extended "
             "exploration); auto draws every step until the run has had no reward signal, then "
-            "zeta; unset: auto, and 1 under protocol: paper"))
+            "zeta, in fresh attempts with room for three; unset: auto, and 1 under protocol: "
+            "paper"))
 
 
 class SelectionConfig(Section):

@@ -305,7 +305,8 @@ def held_text(record: dict[str, Any]) -> str | None:
             f"{LOCKED_GENERATIONS} or more generations before generation {start} scored the "
             "same, below what the greedy controllers validate (no reward signal), so from "
             f"generation {start} each rule held the commands it drew for a while, its "
-            "strengths started afresh (learning.exploration.hold: auto)")
+            "strengths started afresh, in fresh attempts while they fit "
+            "(learning.exploration.hold: auto)")
 
 
 def exploration_advice(record: dict[str, Any]) -> tuple[str, str] | None:
