@@ -318,3 +318,35 @@ def test_a_run_that_began_to_hold_goes_on_holding_after_a_resume() -> None:
     assert np.array_equal(learner.evaluate(4).fitness, again.evaluate(4).fitness)
     assert np.array_equal(learner.fuzzy_q.table(), again.fuzzy_q.table())
 
+
+
+@pytest.mark.slow
+def test_a_run_in_its_held_attempts_resumes_bit_for_bit() -> None:
+    """acrobot-fuzzy-q seed 611 has had no reward signal by generation 4, holds from 5 and
+    begins a fresh attempt at 35 (docs/learning.md, "Fresh attempts once a run holds"): cut
+    after generation 20, in its first held attempt, and resumed from its checkpoint as a file
+    holds it, it ends as the whole run does."""
+    from flctool import load_behaviour
+    from flctool.learners import Callback, GenerationMetrics
+    from flctool.runs import resolve_behaviour
+    from tests.conftest import ROOT
+
+    behaviour = resolve_behaviour(
+        load_behaviour(ROOT / "benchmarks" / "tasks" / "acrobot-fuzzy-q.yaml"), {"seed": 611})
+
+    class StopAfter(Callback):
+        def on_generation(self, metrics: GenerationMetrics) -> bool:
+            return metrics.generation < 20
+
+    whole = make_learner(behaviour)
+    history = train(whole)
+    first = make_learner(behaviour)
+    train(first, [StopAfter()])
+    resumed = make_learner(behaviour)
+    resumed.load_state_dict(json.loads(json.dumps(first.state_dict())))
+    rest = train(resumed)
+    assert [m.mean for m in rest] == [m.mean for m in history[21:]]
+    record = whole.selection_record()
+    assert len(record["extension"]["attempts"]) >= 3  # the resumed part began one afresh
+    for key in ("extension", "exploration", "usage", "best", "confirmation"):
+        assert resumed.selection_record()[key] == record[key], key
