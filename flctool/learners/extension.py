@@ -15,7 +15,9 @@ start afresh (the genetic learners), the room left up to ``extend.most`` goes to
 attempts**: a new random population (and, for the hybrid, a new q table), ``generations``
 long and extended the same way while it improves on the run's best. The hall of fame and
 its validations are the run's, so the run returns the best controller of all its attempts;
-a run at ``extend.most`` ends.
+a run at ``extend.most`` ends. fuzzy_q starts afresh only once it holds its draws (no reward
+signal); from then its room goes to fresh attempts too, with room for :data:`HELD_ATTEMPTS`
+of them (:meth:`Extension.open_attempts`).
 
 :class:`Extension` is the run callback that keeps this count. It runs after model selection
 (which validates each generation's leader) and before the budget, which reads the planned

@@ -328,7 +328,8 @@ def greedy_consequents(table: FloatArray) -> NDArray[np.intp]:
 class FuzzyQLearner(Learner):
     """Pure fuzzy Q-learning: one controller, each rule's command drawn by exploration and
     held for ``exploration.hold`` of its firings (:class:`HeldChooser`; every step under the
-    paper's protocol).
+    paper's protocol). Under ``auto``, a run that begins to hold starts its strengths afresh,
+    and again in each fresh attempt after (:meth:`advance`).
 
     A generation is ``population x trials`` episodes, so a generation costs what the GAs'
     does; ``common_starts`` does not apply. After each generation the exploration parameter
