@@ -356,8 +356,7 @@ class FuzzyQLearner(Learner):
 
     def __init__(self, behaviour: Behaviour, env: BatchEnv) -> None:
         super().__init__(behaviour, env)
-        self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
-                                   self.controller.n_commands)
+        self.fuzzy_q = self.fresh_strengths()
         self.fixed = dict(zip(self.fixed_rules.tolist(), self.fixed_commands.tolist(),
                               strict=True))
         self.population = self.greedy()
@@ -390,6 +389,10 @@ class FuzzyQLearner(Learner):
                              hint="give strengths: its greedy controller is the first")
         super().start_from(None, strengths)
         self.population = self.greedy()
+
+    def fresh_strengths(self) -> FuzzyQ:
+        """A q table for this run's rules and commands, every strength at ``q.initial``."""
+        return new_fuzzy_q(self.config.q, self.controller.n_rules, self.controller.n_commands)
 
     def greedy(self) -> NDArray[np.intp]:
         """The greedy controller (1, M): each rule's strongest command, given rules as given."""
@@ -474,16 +477,14 @@ class FuzzyQLearner(Learner):
             # strengths start afresh: they have all fallen alike, and the first commands held
             # to the goal would rise so far above the rest that exploration locked in at once.
             self.held_from = self.generation + 1
-            self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
-                                       self.controller.n_commands)
+            self.fuzzy_q = self.fresh_strengths()
             # a fresh attempt, with the generations of one, and room for more after it: each
             # ends on a good controller by luck about half the time (HELD_ATTEMPTS)
             self.extension.open_attempts(self.held_from, HELD_ATTEMPTS)
             self.extension.begin_attempt(self.held_from)
         elif self.held_from is not None and self.extension.begins_attempt(self.generation + 1):
             # the attempt ended without a better selected controller: start afresh, holding
-            self.fuzzy_q = new_fuzzy_q(self.config.q, self.controller.n_rules,
-                                       self.controller.n_commands)
+            self.fuzzy_q = self.fresh_strengths()
         if self.set_population is None or self.set_fitness is None:
             return
         # The GA of the genetic learners on set genomes alone (no consequents to breed).
